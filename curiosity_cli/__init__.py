@@ -1,0 +1,8 @@
+"""curiosity: curiosity-driven exploration experiments on map mosaics (Girdhar & Dudek)."""
+
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("curiosity")
+except PackageNotFoundError:  # running from a source tree that was never installed
+    __version__ = "0+unknown"

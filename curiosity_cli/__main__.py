@@ -1,0 +1,3 @@
+from curiosity_cli.cli import main
+
+main()

@@ -1,0 +1,93 @@
+"""``curiosity datasets``: list the registered maps, show one with its legend and a preview."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from curiosity_cli.cli import app
+
+datasets_app = typer.Typer(help="List and preview the maps (embedded or your own).", no_args_is_help=True)
+app.add_typer(datasets_app, name="datasets")
+
+
+def _table(header: list[str], rows: list[list[str]]) -> str:
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip() for row in [header, *rows]]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+@datasets_app.command("list")
+def list_datasets() -> None:
+    """The maps registered in configs/datasets/, with size, grid and provenance."""
+    from curiosity_cli.data import dataset_names, load_map
+
+    rows = []
+    for name in dataset_names():
+        m = load_map(name)
+        grid = m.grid_shape
+        rows.append(
+            [
+                name,
+                f"{m.image.shape[0]} x {m.image.shape[1]}",
+                str(m.config.cell_width),
+                f"{grid[0] * grid[1]} ({grid[0]} x {grid[1]})",
+                str(len(m.legend)),
+                m.config.source,
+                m.config.licence,
+            ]
+        )
+    typer.echo(_table(["name", "size (px)", "cell width", "cells", "classes", "source", "licence"], rows))
+
+
+@datasets_app.command("show")
+def show(
+    datasets: list[str] = typer.Argument(..., help="Registered names or paths to dataset YAMLs."),
+    out: Path = typer.Option(
+        None,
+        "--out",
+        help="Preview PNG or PDF to write; default results/datasets/NAME.png "
+        "(results/datasets/overview.png for several maps).",
+    ),
+) -> None:
+    """Print each map's legend and write a preview: the image beside its colour-coded labels."""
+    import numpy as np
+
+    from curiosity_cli.data import load_map
+    from curiosity_cli.files import display_path
+    from curiosity_cli.plots.preview import write_preview
+
+    maps = [load_map(d) for d in datasets]
+    for m in maps:
+        rows, cols = m.grid_shape
+        typer.echo(
+            f"{m.config.name}: {m.image.shape[0]} x {m.image.shape[1]} px, {m.config.cell_width} px cells "
+            f"({rows} x {cols} = {rows * cols}), words every {m.config.word_stride} px"
+        )
+        if m.labels is None:
+            typer.echo("  no labels\n")
+            continue
+        counts = np.bincount(m.labels.ravel(), minlength=max(c.id for c in m.legend) + 1)
+        typer.echo(
+            _table(
+                ["id", "name", "colour", "pixels", "description"],
+                [
+                    [
+                        str(c.id),
+                        c.name,
+                        "#{:02x}{:02x}{:02x}".format(*c.colour),
+                        f"{100 * counts[c.id] / m.labels.size:.2f}%",
+                        c.description,
+                    ]
+                    for c in m.legend
+                ],
+            )
+        )
+        typer.echo("")
+    if out is None:
+        stem = maps[0].config.name if len(maps) == 1 else "overview"
+        out = Path("results") / "datasets" / f"{stem}.png"
+    write_preview(maps, out)
+    typer.echo(f"wrote {display_path(out)}")

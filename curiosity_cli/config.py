@@ -1,0 +1,450 @@
+"""YAML configs → validated, frozen dataclasses.
+
+An experiment config names its ``base`` (usually ``paper.yaml``, which holds the paper's
+parameters) and overrides keys of it; ``--set KEY=VALUE`` options override on top. Every
+leaf remembers which file (or ``--set``) gave it, so an error names the file, the key,
+what was given and what was expected, in one line.
+
+The dataclasses carry no defaults on purpose: the paper's values live in one place,
+``configs/paper.yaml``, and a config that misses a key says so instead of silently
+picking up a second copy of a default.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+import types
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from curiosity_cli.errors import ConfigError
+from curiosity_cli.files import display_path, read_yaml
+
+#: The source checkout this package runs from; configs and data live beside the package.
+PROJECT_ROOT = Path(__file__).resolve().parent.parent
+CONFIG_DIR = PROJECT_ROOT / "configs"
+DATASET_CONFIG_DIR = CONFIG_DIR / "datasets"
+
+#: The paper's four weight functions (section 4), in the order the paper's plots use.
+WEIGHT_FUNCTIONS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity")
+
+#: Where a value given on the command line with ``--set KEY=VALUE`` "comes from".
+_OVERRIDE = "--set"
+
+_NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+
+
+def _spec(
+    *,
+    min: float | None = None,
+    max: float | None = None,
+    min_exclusive: bool = False,
+    max_exclusive: bool = False,
+    choices: tuple | None = None,
+    must_exist: bool = False,
+):
+    """A dataclass field with the checks the validator applies to it (no default)."""
+    return field(
+        metadata=dict(
+            min=min,
+            max=max,
+            min_exclusive=min_exclusive,
+            max_exclusive=max_exclusive,
+            choices=choices,
+            must_exist=must_exist,
+        )
+    )
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    """The ROST topic model (paper section 3)."""
+
+    topics: int = _spec(min=2, max=127)
+    alpha: float = _spec(min=0, min_exclusive=True)
+    beta: float = _spec(min=0, min_exclusive=True)
+    eta: float = _spec(min=0, max=1)
+    spatial_neighbours: int = _spec(choices=(0, 4))
+
+
+@dataclass(frozen=True)
+class WordsConfig:
+    """Visual words (paper section 5.1)."""
+
+    orb_vocabulary: int = _spec(min=2, max=65535)
+    texton_vocabulary: int = _spec(min=2, max=65535)
+    colour_words: bool = _spec()
+
+
+@dataclass(frozen=True)
+class ExploreConfig:
+    """Exploration runs on the simulated 2-D grid (paper sections 4 and 5.1)."""
+
+    weight_functions: tuple[str, ...] = _spec(choices=WEIGHT_FUNCTIONS)
+    restarts: int = _spec(min=1)
+    path_length: int = _spec(min=1)
+    checkpoints: tuple[int, ...] = _spec(min=1)
+    samples_per_step: int = _spec(min=1)
+    step_seconds: float | None = _spec(min=0, min_exclusive=True)
+    min_d2: float = _spec(min=0, min_exclusive=True)
+
+
+@dataclass(frozen=True)
+class DriveConfig:
+    """The live robot driver (paper section 5.2)."""
+
+    gamma: float = _spec(min=0, max=1, max_exclusive=True)
+    temporal_neighbours: int = _spec(choices=(0, 2))
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """One experiment: which maps, which seed, and every parameter of the pipeline."""
+
+    name: str = _spec()
+    seed: int = _spec(min=0, max=2**32 - 1)
+    datasets: tuple[str, ...] = _spec()
+    model: ModelConfig = _spec()
+    words: WordsConfig = _spec()
+    explore: ExploreConfig = _spec()
+    drive: DriveConfig = _spec()
+
+
+@dataclass(frozen=True)
+class DatasetConfig:
+    """A map: an image, optional ground-truth labels with their legend, and its grid."""
+
+    name: str = _spec()
+    description: str = _spec()
+    image: Path = _spec(must_exist=True)
+    labels: Path | None = _spec(must_exist=True)
+    legend: Path | None = _spec(must_exist=True)
+    cell_width: int = _spec(min=1)
+    word_stride: int = _spec(min=1)
+    size: tuple[int, ...] | None = _spec(min=1)
+    source: str = _spec()
+    licence: str = _spec()
+
+
+# --------------------------------------------------------------------------- loading
+
+
+class _Raw:
+    """A merged YAML mapping plus, for every key path, the file (or option) that set it."""
+
+    def __init__(self, top: str):
+        self.data: dict = {}
+        self.origins: dict[tuple, str] = {}
+        self.top = top
+
+    def origin(self, keys: tuple) -> str:
+        # The deepest recorded prefix: a whole section set by one file names that file.
+        for n in range(len(keys), 0, -1):
+            if keys[:n] in self.origins:
+                return self.origins[keys[:n]]
+        return self.top
+
+    def merge(self, mapping: dict, source: str, prefix: tuple = ()) -> None:
+        target = self.data
+        for key in prefix:
+            target = target.setdefault(key, {})
+        for key, value in mapping.items():
+            keys = prefix + (key,)
+            if isinstance(value, dict) and isinstance(target.get(key), dict):
+                self.merge(value, source, keys)
+            else:
+                target[key] = value
+                self.origins[keys] = source
+
+
+def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
+    """Merge ``path`` and, first, the chain of ``base`` files it names."""
+    path = path.resolve()
+    if path in seen:
+        raise ConfigError(f"{display_path(path)}: base: the chain of base configs loops back here")
+    data = read_yaml(path, "config file")
+    base = data.pop("base", None)
+    if base is not None:
+        if not isinstance(base, str):
+            raise ConfigError(
+                f"{display_path(path)}: base: got {base!r}, expected a path to a YAML config"
+            )
+        base_path = path.parent / base
+        if not base_path.is_file():
+            raise ConfigError(f"{display_path(path)}: base: file not found: {display_path(base_path)}")
+        _load_chain(base_path, raw, seen + (path,))
+    raw.merge(data, str(path))
+
+
+def _parse_override(text: str) -> tuple[tuple[str, ...], Any]:
+    import yaml
+
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise ConfigError(f"--set {text!r}: expected KEY=VALUE, e.g. explore.restarts=5")
+    try:
+        parsed = yaml.safe_load(value)
+    except yaml.YAMLError:
+        parsed = value
+    return tuple(key.strip().split(".")), parsed
+
+
+def _apply_overrides(raw: _Raw, overrides: typing.Iterable[str]) -> None:
+    for text in overrides:
+        keys, value = _parse_override(text)
+        nested: Any = value
+        for key in reversed(keys[1:]):
+            nested = {key: nested}
+        raw.merge({keys[0]: nested}, _OVERRIDE)
+
+
+def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> ExperimentConfig:
+    """Load an experiment config, its chain of ``base`` configs and ``--set`` overrides.
+
+    Parameters
+    ----------
+    path : str or Path
+        The experiment YAML, e.g. ``configs/quick.yaml``.
+    overrides : iterable of str
+        ``KEY=VALUE`` strings with dotted keys (``explore.restarts=5``); values are YAML.
+
+    Returns
+    -------
+    ExperimentConfig
+
+    Raises
+    ------
+    ConfigError
+        One line naming the file (or ``--set``), the key, the value and what was expected.
+    """
+    path = Path(path)
+    raw = _Raw(str(path.resolve()))
+    _load_chain(path, raw)
+    _apply_overrides(raw, overrides)
+    return _check_experiment(_build(ExperimentConfig, raw.data, (), raw), raw)
+
+
+def load_dataset_config(path: str | Path) -> DatasetConfig:
+    """Load a dataset YAML; relative paths in it are relative to the YAML file.
+
+    Raises
+    ------
+    ConfigError
+        The file, key, value and expectation, in one line.
+    """
+    path = Path(path)
+    raw = _Raw(str(path.resolve()))
+    raw.merge(read_yaml(path, "dataset file"), str(path.resolve()))
+    config = _build(DatasetConfig, raw.data, (), raw)
+    if config.labels is not None and config.legend is None:
+        raise ConfigError(
+            f"{display_path(path)}: legend: missing; a dataset with labels needs a legend YAML"
+        )
+    if config.size is not None and len(config.size) != 2:
+        raise ConfigError(
+            f"{display_path(path)}: size: got {list(config.size)}, expected [rows, cols]"
+        )
+    return config
+
+
+def dataset_names() -> list[str]:
+    """Names of the datasets in ``configs/datasets/``, sorted."""
+    return sorted(p.stem for p in DATASET_CONFIG_DIR.glob("*.yaml"))
+
+
+def dataset_path(name_or_path: str | Path, relative_to: Path | None = None) -> Path:
+    """The dataset YAML for a registered name or a path to a YAML file.
+
+    Raises
+    ------
+    ConfigError
+        When it is neither.
+    """
+    text = str(name_or_path)
+    registered = DATASET_CONFIG_DIR / f"{text}.yaml"
+    if _NAME_PATTERN.match(text) and not text.endswith((".yaml", ".yml")) and registered.is_file():
+        return registered
+    candidate = (relative_to or Path.cwd()) / text
+    if candidate.is_file():
+        return candidate.resolve()
+    raise ConfigError(
+        f"no dataset {text!r}: expected one of {', '.join(dataset_names())} "
+        "or a path to a dataset YAML"
+    )
+
+
+def to_dict(config) -> dict:
+    """A config as plain YAML-ready data (paths as strings, tuples as lists)."""
+
+    def plain(value):
+        if dataclasses.is_dataclass(value):
+            return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        if isinstance(value, tuple):
+            return [plain(v) for v in value]
+        if isinstance(value, Path):
+            return str(value)
+        return value
+
+    return plain(config)
+
+
+def to_yaml(config) -> str:
+    """The resolved config as YAML, as a run saves it next to its results."""
+    import yaml
+
+    return yaml.safe_dump(to_dict(config), sort_keys=False)
+
+
+# --------------------------------------------------------------------------- validation
+
+
+def _where(raw: _Raw, keys: tuple) -> str:
+    source = raw.origin(keys)
+    label = source if source == _OVERRIDE else display_path(Path(source))
+    key = "".join(f"[{k}]" if isinstance(k, int) else f".{k}" for k in keys).lstrip(".")
+    return f"{label}: {key}" if key else label
+
+
+def _expected(tp) -> str:
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        inner = [a for a in typing.get_args(tp) if a is not type(None)]
+        return f"{_expected(inner[0])} or null"
+    if origin is tuple:
+        return f"a list of {_expected(typing.get_args(tp)[0])}s"
+    return {
+        int: "an integer",
+        float: "a number",
+        bool: "true or false",
+        str: "a string",
+        Path: "a file path",
+    }.get(tp, "a mapping")
+
+
+def _range_text(meta: dict) -> str:
+    parts = []
+    if meta["min"] is not None:
+        parts.append(f"{'>' if meta['min_exclusive'] else '>='} {meta['min']:g}")
+    if meta["max"] is not None:
+        parts.append(f"{'<' if meta['max_exclusive'] else '<='} {meta['max']:g}")
+    return " and ".join(parts)
+
+
+def _build(cls, data: Any, keys: tuple, raw: _Raw):
+    if not isinstance(data, dict):
+        raise ConfigError(f"{_where(raw, keys)}: got {data!r} ({type(data).__name__}), expected a mapping of keys")
+    hints = typing.get_type_hints(cls)
+    names = [f.name for f in dataclasses.fields(cls)]
+    for key in data:
+        if key not in names:
+            raise ConfigError(
+                f"{_where(raw, keys + (key,))}: unknown key; expected one of {', '.join(names)}"
+            )
+    values = {}
+    for f in dataclasses.fields(cls):
+        if f.name not in data:
+            raise ConfigError(f"{_where(raw, keys + (f.name,))}: missing key")
+        values[f.name] = _convert(hints[f.name], f.metadata, data[f.name], keys + (f.name,), raw)
+    return cls(**values)
+
+
+def _convert(tp, meta: dict, value: Any, keys: tuple, raw: _Raw):
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        if value is None:
+            return None
+        (inner,) = [a for a in typing.get_args(tp) if a is not type(None)]
+        tp, origin = inner, typing.get_origin(inner)
+
+    def refuse(expected: str):
+        shown = f"{value!r} ({type(value).__name__})" if not isinstance(value, dict) else "a mapping"
+        raise ConfigError(f"{_where(raw, keys)}: got {shown}, expected {expected}")
+
+    if dataclasses.is_dataclass(tp):
+        return _build(tp, value, keys, raw)
+    if origin is tuple:
+        if not isinstance(value, list) or not value:
+            refuse(f"a non-empty {_expected(tp)[2:]}")
+        item_type = typing.get_args(tp)[0]
+        return tuple(
+            _convert(item_type, meta, item, keys + (i,), raw) for i, item in enumerate(value)
+        )
+    if tp is bool:
+        if not isinstance(value, bool):
+            refuse("true or false")
+        return value
+    if tp is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            refuse(_expected(int) + (f" {_range_text(meta)}" if _range_text(meta) else ""))
+        result = value
+    elif tp is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            refuse("a finite number" + (f" {_range_text(meta)}" if _range_text(meta) else ""))
+        result = float(value)
+    elif tp is str:
+        if not isinstance(value, str):
+            refuse("a string")
+        result = value
+    elif tp is Path:
+        if not isinstance(value, str) or not value:
+            refuse("a file path")
+        result = _resolve_path(value, keys, raw)
+        if meta["must_exist"] and not result.is_file():
+            raise ConfigError(f"{_where(raw, keys)}: file not found: {display_path(result)}")
+        return result
+    else:  # pragma: no cover - a field type the validator does not know is a bug here
+        raise TypeError(f"unsupported config field type {tp!r}")
+
+    if meta["choices"] is not None and result not in meta["choices"]:
+        refuse(f"one of {', '.join(str(c) for c in meta['choices'])}")
+    if isinstance(result, (int, float)):
+        low, high = meta["min"], meta["max"]
+        too_low = low is not None and (result <= low if meta["min_exclusive"] else result < low)
+        too_high = high is not None and (result >= high if meta["max_exclusive"] else result > high)
+        if too_low or too_high:
+            refuse(f"{'an integer' if tp is int else 'a number'} {_range_text(meta)}")
+    return result
+
+
+def _resolve_path(value: str, keys: tuple, raw: _Raw) -> Path:
+    """Relative paths count from the YAML file that wrote them (from the cwd for --set)."""
+    path = Path(value).expanduser()
+    if path.is_absolute():
+        return path
+    source = raw.origin(keys)
+    base = Path.cwd() if source == _OVERRIDE else Path(source).parent
+    return (base / path).resolve()
+
+
+def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:
+    """Rules that tie keys together; dataset paths become absolute so a saved config travels."""
+    if not _NAME_PATTERN.match(config.name):
+        raise ConfigError(
+            f"{_where(raw, ('name',))}: got {config.name!r}, expected letters, digits, '-', '_' or '.'"
+        )
+    datasets = []
+    for i, entry in enumerate(config.datasets):
+        source = raw.origin(("datasets", i))
+        relative_to = None if source == _OVERRIDE else Path(source).parent
+        try:
+            path = dataset_path(entry, relative_to)
+        except ConfigError as exc:
+            raise ConfigError(f"{_where(raw, ('datasets', i))}: {exc}") from None
+        datasets.append(entry if path.parent == DATASET_CONFIG_DIR else str(path))
+    explore = config.explore
+    if len(set(explore.weight_functions)) != len(explore.weight_functions):
+        raise ConfigError(
+            f"{_where(raw, ('explore', 'weight_functions'))}: got {list(explore.weight_functions)}, "
+            "expected each weight function once"
+        )
+    checkpoints = list(explore.checkpoints)
+    if checkpoints != sorted(set(checkpoints)) or checkpoints[-1] > explore.path_length:
+        raise ConfigError(
+            f"{_where(raw, ('explore', 'checkpoints'))}: got {checkpoints}, expected increasing "
+            f"path lengths no longer than explore.path_length ({explore.path_length})"
+        )
+    return dataclasses.replace(config, datasets=tuple(datasets))

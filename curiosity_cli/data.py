@@ -1,0 +1,204 @@
+"""Datasets: the registry of map YAMLs, and loading a map's image, labels and legend.
+
+A dataset is a YAML file (schema: :class:`curiosity_cli.config.DatasetConfig`). The three
+embedded maps are registered in ``configs/datasets/``; a user's own map is any YAML file
+passed by path. Loading checks everything a later stage would trip over, and says what
+is wrong in one line naming the file.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from curiosity_cli.config import DatasetConfig, dataset_names, dataset_path, load_dataset_config
+from curiosity_cli.errors import ConfigError, DatasetError
+from curiosity_cli.files import display_path, read_yaml
+
+_COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
+
+
+@dataclass(frozen=True)
+class MapClass:
+    """One class of a label map."""
+
+    id: int
+    name: str
+    colour: tuple[int, int, int]
+    description: str
+
+
+@dataclass(frozen=True)
+class MapData:
+    """A loaded map.
+
+    Attributes
+    ----------
+    config : DatasetConfig
+    image : (H, W, 3) uint8 ndarray
+        RGB.
+    labels : (H, W) integer ndarray or None
+        Class ids, each one of ``legend``'s.
+    legend : tuple of MapClass
+        Empty when the dataset has no labels.
+    """
+
+    config: DatasetConfig
+    image: np.ndarray
+    labels: np.ndarray | None
+    legend: tuple[MapClass, ...]
+
+    @property
+    def grid_shape(self) -> tuple[int, int]:
+        """Cells per column and per row of the map (rows, cols); see :func:`grid_shape`."""
+        return grid_shape(self.image.shape[:2], self.config.cell_width)
+
+
+def grid_shape(image_shape: tuple[int, int], cell_width: int) -> tuple[int, int]:
+    """Rows and columns of cells covering an image.
+
+    A partial cell at the bottom or right border counts as a cell, as in the paper
+    (2500 px at 32 px cells gives 79 x 79 = 6241 cells, its Table 1).
+
+    Parameters
+    ----------
+    image_shape : (int, int)
+        Image rows and columns in pixels.
+    cell_width : int
+        Cell side in pixels.
+
+    Returns
+    -------
+    (int, int)
+    """
+    rows, cols = image_shape
+    return -(-rows // cell_width), -(-cols // cell_width)
+
+
+def load_legend(path: Path) -> tuple[MapClass, ...]:
+    """Read a legend YAML: ``classes: [{id, name, colour: "#rrggbb", description}, …]``.
+
+    Raises
+    ------
+    DatasetError
+        A missing or malformed key, a duplicate id or name, a colour not in ``#rrggbb``.
+    """
+    try:
+        data = read_yaml(path, "legend file")
+    except ConfigError as exc:
+        raise DatasetError(str(exc)) from None
+    where = display_path(path)
+    entries = data.get("classes")
+    if not isinstance(entries, list) or not entries:
+        raise DatasetError(f"{where}: classes: expected a non-empty list of classes")
+    classes = []
+    for i, entry in enumerate(entries):
+        key = f"classes[{i}]"
+        if not isinstance(entry, dict):
+            raise DatasetError(f"{where}: {key}: got {entry!r}, expected a mapping with id, name, colour")
+        unknown = set(entry) - {"id", "name", "colour", "description"}
+        if unknown:
+            raise DatasetError(
+                f"{where}: {key}.{sorted(unknown)[0]}: unknown key; expected id, name, colour, description"
+            )
+        class_id, name, colour = entry.get("id"), entry.get("name"), entry.get("colour")
+        if isinstance(class_id, bool) or not isinstance(class_id, int) or not 0 <= class_id <= 65535:
+            raise DatasetError(f"{where}: {key}.id: got {class_id!r}, expected an integer 0..65535")
+        if not isinstance(name, str) or not name:
+            raise DatasetError(f"{where}: {key}.name: got {name!r}, expected a non-empty string")
+        if not isinstance(colour, str) or not _COLOUR.match(colour):
+            raise DatasetError(f"{where}: {key}.colour: got {colour!r}, expected \"#rrggbb\"")
+        description = entry.get("description", "")
+        if not isinstance(description, str):
+            raise DatasetError(f"{where}: {key}.description: got {description!r}, expected a string")
+        rgb = tuple(int(colour[j : j + 2], 16) for j in (1, 3, 5))
+        classes.append(MapClass(class_id, name, rgb, description))
+    for attr in ("id", "name"):
+        values = [getattr(c, attr) for c in classes]
+        duplicates = sorted({v for v in values if values.count(v) > 1}, key=str)
+        if duplicates:
+            raise DatasetError(f"{where}: classes: {attr} {duplicates[0]!r} appears more than once")
+    return tuple(sorted(classes, key=lambda c: c.id))
+
+
+def _read_image(path: Path, flags: int, what: str, key: str, dataset_file: Path) -> np.ndarray:
+    import cv2
+
+    where = f"{display_path(dataset_file)}: {key}"
+    if path.stat().st_size == 0:
+        raise DatasetError(f"{where}: {display_path(path)} is empty; expected a PNG, JPEG or TIFF {what}")
+    # imdecode over bytes rather than imread: no warning spam, and a path with any characters works
+    image = cv2.imdecode(np.fromfile(path, dtype=np.uint8), flags)
+    if image is None or image.size == 0:
+        raise DatasetError(f"{where}: cannot read {display_path(path)}; expected a PNG, JPEG or TIFF {what}")
+    return image
+
+
+def load_map(name_or_path: str | Path) -> MapData:
+    """Load a dataset by registered name or YAML path, and check it is usable.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        ``aerial-mosaic`` or ``path/to/my-map.yaml``.
+
+    Returns
+    -------
+    MapData
+
+    Raises
+    ------
+    ConfigError
+        The YAML itself does not validate.
+    DatasetError
+        Unreadable or empty image, labels of another size or not single-channel, label ids
+        missing from the legend, a cell wider than the image, a size other than declared.
+    """
+    import cv2
+
+    yaml_path = dataset_path(name_or_path)
+    config = load_dataset_config(yaml_path)
+    where = display_path(yaml_path)
+
+    image = _read_image(config.image, cv2.IMREAD_COLOR, "image", "image", yaml_path)
+    image = np.ascontiguousarray(image[:, :, ::-1])  # OpenCV decodes BGR; the package speaks RGB
+    rows, cols = image.shape[:2]
+    if config.size is not None and tuple(config.size) != (rows, cols):
+        raise DatasetError(
+            f"{where}: size: declared {list(config.size)} [rows, cols], "
+            f"but {display_path(config.image)} is [{rows}, {cols}]"
+        )
+    if config.cell_width > min(rows, cols):
+        raise DatasetError(
+            f"{where}: cell_width: got {config.cell_width}, expected at most the image's "
+            f"smaller side ({min(rows, cols)} px)"
+        )
+
+    labels, legend = None, ()
+    if config.labels is not None:
+        legend = load_legend(config.legend)
+        labels = _read_image(config.labels, cv2.IMREAD_UNCHANGED, "label image", "labels", yaml_path)
+        if labels.ndim != 2 or labels.dtype.kind != "u":
+            raise DatasetError(
+                f"{where}: labels: {display_path(config.labels)} is {labels.dtype} with "
+                f"{1 if labels.ndim == 2 else labels.shape[2]} channels; expected a single-channel "
+                "8- or 16-bit image of class ids"
+            )
+        if labels.shape != (rows, cols):
+            raise DatasetError(
+                f"{where}: labels: {display_path(config.labels)} is [{labels.shape[0]}, {labels.shape[1]}] "
+                f"[rows, cols]; expected the image's size [{rows}, {cols}]"
+            )
+        missing = np.setdiff1d(np.unique(labels), [c.id for c in legend])
+        if missing.size:
+            raise DatasetError(
+                f"{where}: labels: class ids {missing.tolist()} in {display_path(config.labels)} "
+                f"are missing from the legend {display_path(config.legend)}"
+            )
+    return MapData(config=config, image=image, labels=labels, legend=legend)
+
+
+__all__ = ["MapClass", "MapData", "dataset_names", "grid_shape", "load_legend", "load_map"]

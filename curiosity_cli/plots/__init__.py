@@ -1,0 +1,1 @@
+"""Matplotlib figures. Modules here import matplotlib lazily, inside their functions."""

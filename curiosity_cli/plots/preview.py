@@ -1,0 +1,69 @@
+"""A dataset preview: each map's image beside its colour-coded label map."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from curiosity_cli.data import MapClass, MapData
+from curiosity_cli.errors import CuriosityError
+from curiosity_cli.files import atomic_path
+
+
+def colour_labels(labels: np.ndarray, legend: tuple[MapClass, ...]) -> np.ndarray:
+    """Paint a label map with its legend's colours.
+
+    Parameters
+    ----------
+    labels : (H, W) integer ndarray
+        Class ids, each present in ``legend``.
+    legend : tuple of MapClass
+
+    Returns
+    -------
+    (H, W, 3) uint8 ndarray
+        RGB.
+    """
+    palette = np.zeros((max(c.id for c in legend) + 1, 3), dtype=np.uint8)
+    for c in legend:
+        palette[c.id] = c.colour
+    return palette[labels]
+
+
+def write_preview(maps: list[MapData], path: Path) -> None:
+    """Write one row per map, image left and labels right, with a legend, to PNG or PDF.
+
+    Raises
+    ------
+    CuriosityError
+        ``path`` has a suffix matplotlib cannot write.
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    path = Path(path)
+    if path.suffix.lower() not in (".png", ".pdf"):
+        raise CuriosityError(f"--out: got {str(path)!r}, expected a .png or .pdf file name")
+    fig = Figure(figsize=(11, 5.2 * len(maps)), layout="constrained")
+    axes = fig.subplots(len(maps), 2, squeeze=False)
+    for (ax_image, ax_labels), m in zip(axes, maps):
+        ax_image.imshow(m.image, interpolation="antialiased")
+        ax_image.set_title(f"{m.config.name}: image ({m.image.shape[0]} x {m.image.shape[1]} px)")
+        if m.labels is not None:
+            # nearest keeps thin classes (a trail a few px wide) visible when the map is shrunk
+            ax_labels.imshow(colour_labels(m.labels, m.legend), interpolation="nearest")
+            ax_labels.set_title("labels")
+            ax_labels.legend(
+                handles=[Patch(color=np.array(c.colour) / 255, label=c.name) for c in m.legend],
+                loc="center left",
+                bbox_to_anchor=(1.01, 0.5),
+                frameon=False,
+            )
+        else:
+            ax_labels.text(0.5, 0.5, "no labels", ha="center", va="center")
+        for ax in (ax_image, ax_labels):
+            ax.set_xticks([])
+            ax.set_yticks([])
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format=path.suffix.lower()[1:])

@@ -1,0 +1,150 @@
+"""One CliRunner test (or more) per command: exit code and text."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from conftest import edit_yaml
+from typer.testing import CliRunner
+
+from curiosity_cli.cli import app
+from curiosity_cli.cli.planned import _PLANNED
+from curiosity_cli.config import CONFIG_DIR
+
+runner = CliRunner()
+
+
+def run(*args: str):
+    return runner.invoke(app, list(args))
+
+
+def test_help_in_a_subprocess_lists_every_command():
+    console_script = str(Path(sys.executable).parent / "curiosity")
+    for command in ([console_script, "--help"], [sys.executable, "-m", "curiosity_cli", "--help"]):
+        result = subprocess.run(command, capture_output=True, text=True, check=False)
+        assert result.returncode == 0, result.stderr
+        for name in ("extract", "explore", "label", "evaluate", "plot", "reproduce", "drive", "datasets"):
+            assert name in result.stdout
+
+
+def test_help_imports_no_heavy_library():
+    code = (
+        "import sys\n"
+        "from curiosity_cli.cli import app\n"
+        "try:\n    app(['--help'])\nexcept SystemExit:\n    pass\n"
+        "heavy = [m for m in ('numpy', 'numba', 'cv2', 'matplotlib', 'pandas', 'serial') if m in sys.modules]\n"
+        "print('HEAVY', heavy)\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert "HEAVY []" in result.stdout
+
+
+def test_version():
+    result = run("--version")
+    assert result.exit_code == 0 and result.stdout.startswith("curiosity ")
+
+
+def test_datasets_list_shows_the_three_maps():
+    result = run("datasets", "list")
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert lines[0].split()[:3] == ["name", "size", "(px)"]
+    rows = {line.split()[0]: line for line in lines[2:]}
+    assert sorted(rows) == ["aerial-mosaic", "reef-mosaic", "sentinel-coast"]
+    assert "1024 x 1024" in rows["aerial-mosaic"] and "4096 (64 x 64)" in rows["aerial-mosaic"]
+    assert "2500 x 2500" in rows["reef-mosaic"] and "6241 (79 x 79)" in rows["reef-mosaic"]
+
+
+def test_datasets_show_prints_legend_and_writes_a_preview(tmp_path):
+    out = tmp_path / "preview.png"
+    result = run("datasets", "show", "aerial-mosaic", "--out", str(out))
+    assert result.exit_code == 0, result.output
+    assert "aerial-mosaic: 1024 x 1024 px, 16 px cells (64 x 64 = 4096)" in result.stdout
+    assert "trail" in result.stdout
+    preview = cv2.imread(str(out))
+    assert preview is not None and preview.shape[1] > 1000
+    assert list(tmp_path.iterdir()) == [out]  # no temporary file left behind
+
+
+def test_datasets_show_defaults_to_results_folder(tmp_path, monkeypatch, own_map):
+    monkeypatch.chdir(tmp_path)
+    result = run("datasets", "show", str(own_map))
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "results" / "datasets" / "own.png").is_file()
+    assert "sand" in result.stdout and "50.00%" in result.stdout
+
+
+def test_datasets_show_several_maps_in_one_figure(tmp_path, own_map):
+    out = tmp_path / "both.pdf"
+    result = run("datasets", "show", str(own_map), str(own_map), "--out", str(out))
+    assert result.exit_code == 0, result.output
+    assert out.read_bytes().startswith(b"%PDF")
+
+
+def test_config_show_prints_the_resolved_config():
+    result = run("config", "show", str(CONFIG_DIR / "quick.yaml"), "--set", "explore.restarts=3")
+    assert result.exit_code == 0, result.output
+    assert "name: quick" in result.stdout and "restarts: 3" in result.stdout and "base:" not in result.stdout
+
+
+@pytest.mark.parametrize("name, summary, issue", _PLANNED)
+def test_planned_commands_say_they_are_not_implemented(name, summary, issue):
+    result = run(name, "configs/quick.yaml", "--whatever")
+    assert result.exit_code == 1
+    assert f"`curiosity {name}` is not implemented yet; it arrives with issue #{issue}" in result.stderr
+
+
+def _assert_one_line_error(result, *fragments: str) -> None:
+    assert result.exit_code == 1, result.output
+    assert "Traceback" not in result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("Error: ")
+    for fragment in fragments:
+        assert fragment in lines[0]
+
+
+def test_bad_override_is_one_line_error():
+    result = run("config", "show", str(CONFIG_DIR / "quick.yaml"), "--set", "model.topics=1000")
+    _assert_one_line_error(result, "--set: model.topics: got 1000 (int), expected an integer >= 2 and <= 127")
+
+
+def test_unknown_key_in_config_file_is_one_line_error(tmp_path):
+    path = tmp_path / "exp.yaml"
+    path.write_text((CONFIG_DIR / "quick.yaml").read_text().replace("restarts: 5", "restartz: 5"))
+    path.with_name("paper.yaml").write_text((CONFIG_DIR / "paper.yaml").read_text())
+    _assert_one_line_error(run("config", "show", str(path)), "exp.yaml: explore.restartz: unknown key")
+
+
+def test_missing_config_is_one_line_error():
+    _assert_one_line_error(run("config", "show", "no/such.yaml"), "no/such.yaml: config file not found")
+
+
+def test_unknown_dataset_is_one_line_error():
+    _assert_one_line_error(run("datasets", "show", "atlantis"), "no dataset 'atlantis'")
+
+
+def test_bad_preview_suffix_is_one_line_error(own_map, tmp_path):
+    _assert_one_line_error(run("datasets", "show", str(own_map), "--out", str(tmp_path / "p.gif")), "expected a .png or .pdf")
+
+
+@pytest.mark.parametrize(
+    "break_it, fragment",
+    [
+        (lambda d: (d / "map.png").write_text("garbage"), "image: cannot read"),
+        (lambda d: (d / "map.png").write_bytes(b""), "is empty"),
+        (lambda d: cv2.imwrite(str(d / "labels.png"), np.zeros((10, 10), np.uint8)), "expected the image's size"),
+        (lambda d: cv2.imwrite(str(d / "labels.png"), np.full((96, 128), 9, np.uint8)), "class ids [9]"),
+        (lambda d: edit_yaml(d / "own.yaml", cell_width=500), "cell_width: got 500"),
+        (lambda d: edit_yaml(d / "own.yaml", cell_width="wide"), "cell_width: got 'wide' (str), expected an integer >= 1"),
+        (lambda d: edit_yaml(d / "own.yaml", colour=True), "own.yaml: colour: unknown key"),
+        (lambda d: edit_yaml(d / "own.yaml", image=...), "own.yaml: image: missing key"),
+    ],
+)
+def test_bad_own_map_is_one_line_error(own_map, break_it, fragment):
+    break_it(own_map.parent)
+    _assert_one_line_error(run("datasets", "show", str(own_map)), fragment)

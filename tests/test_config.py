@@ -1,0 +1,189 @@
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+import yaml
+
+from curiosity_cli.config import (
+    CONFIG_DIR,
+    ExperimentConfig,
+    dataset_names,
+    load_config,
+    load_dataset_config,
+    to_yaml,
+)
+from curiosity_cli.errors import ConfigError
+
+EXPERIMENTS = sorted(p for p in CONFIG_DIR.glob("*.yaml") if p.name != "paper.yaml")
+
+
+@pytest.mark.parametrize("path", EXPERIMENTS, ids=lambda p: p.name)
+def test_every_experiment_config_loads_on_top_of_paper_yaml(path):
+    config = load_config(path)
+    assert isinstance(config, ExperimentConfig)
+    assert yaml.safe_load(path.read_text())["base"] == "paper.yaml"
+
+
+def test_paper_yaml_holds_the_papers_parameters():
+    config = load_config(CONFIG_DIR / "paper-grid.yaml")
+    assert (config.model.topics, config.model.alpha, config.model.beta, config.model.eta) == (64, 0.1, 0.1, 0.5)
+    assert config.model.spatial_neighbours == 4 and config.drive.temporal_neighbours == 2
+    assert (config.words.orb_vocabulary, config.words.texton_vocabulary) == (5000, 1000)
+    assert config.explore.restarts == 20 and config.explore.path_length == 320
+    assert config.explore.checkpoints == (10, 20, 40, 80, 160, 320)
+    assert config.explore.weight_functions == (
+        "random-walk",
+        "stochastic-coverage",
+        "word-perplexity",
+        "topic-perplexity",
+    )
+    assert config.drive.gamma == 0.7
+    assert config.datasets == ("aerial-mosaic", "sentinel-coast", "reef-mosaic")
+
+
+def test_quick_config_is_one_map_five_restarts():
+    config = load_config(CONFIG_DIR / "quick.yaml")
+    assert config.datasets == ("aerial-mosaic",) and config.explore.restarts == 5
+
+
+@pytest.mark.parametrize("name", dataset_names())
+def test_every_dataset_config_loads(name):
+    config = load_dataset_config(CONFIG_DIR / "datasets" / f"{name}.yaml")
+    assert config.name == name
+    assert config.image.is_file() and config.labels.is_file() and config.legend.is_file()
+
+
+def test_the_three_embedded_datasets_are_registered():
+    assert dataset_names() == ["aerial-mosaic", "reef-mosaic", "sentinel-coast"]
+
+
+def test_overrides_apply_on_top_and_parse_yaml_values():
+    config = load_config(
+        CONFIG_DIR / "quick.yaml",
+        ["explore.restarts=3", "model.alpha=0.5", "explore.step_seconds=0.2", "datasets=[reef-mosaic]"],
+    )
+    assert config.explore.restarts == 3
+    assert config.model.alpha == 0.5
+    assert config.explore.step_seconds == 0.2
+    assert config.datasets == ("reef-mosaic",)
+
+
+def test_resolved_config_reloads_to_the_same_config(tmp_path):
+    config = load_config(CONFIG_DIR / "quick.yaml", ["explore.restarts=2"])
+    saved = tmp_path / "resolved.yaml"
+    saved.write_text(to_yaml(config))
+    assert load_config(saved) == config
+
+
+def test_an_int_is_accepted_where_a_number_is_expected():
+    config = load_config(CONFIG_DIR / "quick.yaml", ["model.alpha=1"])
+    assert config.model.alpha == 1.0 and isinstance(config.model.alpha, float)
+
+
+def _experiment(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "exp.yaml"
+    path.write_text(f"base: {CONFIG_DIR / 'paper.yaml'}\nname: t\nseed: 1\ndatasets: [aerial-mosaic]\n{text}")
+    return path
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("explore:\n  restart: 3\n", "exp.yaml: explore.restart: unknown key; expected one of weight_functions"),
+        ("explore:\n  restarts: twenty\n", "exp.yaml: explore.restarts: got 'twenty' (str), expected an integer >= 1"),
+        ("explore:\n  restarts: 0\n", "exp.yaml: explore.restarts: got 0 (int), expected an integer >= 1"),
+        ("explore:\n  restarts: 2.5\n", "exp.yaml: explore.restarts: got 2.5 (float), expected an integer >= 1"),
+        ("model:\n  eta: 1.5\n", "exp.yaml: model.eta: got 1.5 (float), expected a number >= 0 and <= 1"),
+        ("model:\n  alpha: 0\n", "exp.yaml: model.alpha: got 0 (int), expected a number > 0"),
+        ("model:\n  alpha: .nan\n", "exp.yaml: model.alpha: got nan (float), expected a finite number > 0"),
+        ("model:\n  spatial_neighbours: 8\n", "exp.yaml: model.spatial_neighbours: got 8 (int), expected one of 0, 4"),
+        ("words:\n  colour_words: 1\n", "exp.yaml: words.colour_words: got 1 (int), expected true or false"),
+        ("drive:\n  gamma: 1.0\n", "exp.yaml: drive.gamma: got 1.0 (float), expected a number >= 0 and < 1"),
+        ("explore:\n  weight_functions: [random-walk, curious]\n", "exp.yaml: explore.weight_functions[1]: got 'curious'"),
+        ("explore:\n  weight_functions: [random-walk, random-walk]\n", "expected each weight function once"),
+        ("explore:\n  weight_functions: []\n", "exp.yaml: explore.weight_functions: got [] (list), expected a non-empty list"),
+        ("explore:\n  checkpoints: [20, 10]\n", "exp.yaml: explore.checkpoints: got [20, 10], expected increasing"),
+        ("explore:\n  checkpoints: [10, 640]\n", "no longer than explore.path_length (320)"),
+        ("model: 3\n", "exp.yaml: model: got 3 (int), expected a mapping of keys"),
+        ("seed: -1\n", "exp.yaml: seed: got -1 (int), expected an integer >= 0"),
+        ("name: 'a b'\n", "exp.yaml: name: got 'a b', expected letters, digits"),
+        ("datasets: [no-such-map]\n", "exp.yaml: datasets[0]: no dataset 'no-such-map': expected one of aerial-mosaic"),
+    ],
+)
+def test_a_bad_experiment_config_names_file_key_value_and_expectation(tmp_path, text, message):
+    with pytest.raises(ConfigError) as info:
+        load_config(_experiment(tmp_path, text))
+    assert message in str(info.value)
+    assert "\n" not in str(info.value)
+
+
+def test_a_missing_key_is_named(tmp_path):
+    path = tmp_path / "exp.yaml"
+    path.write_text(f"base: {CONFIG_DIR / 'paper.yaml'}\nname: t\ndatasets: [aerial-mosaic]\n")
+    with pytest.raises(ConfigError, match=r"exp\.yaml: seed: missing key"):
+        load_config(path)
+
+
+def test_an_error_in_a_base_file_names_the_base_file(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "base.yaml").write_text((CONFIG_DIR / "paper.yaml").read_text().replace("topics: 64", "topics: 500"))
+    path = tmp_path / "exp.yaml"
+    path.write_text("base: base.yaml\nname: t\nseed: 0\ndatasets: [aerial-mosaic]\n")
+    with pytest.raises(ConfigError, match=r"^base\.yaml: model\.topics: got 500 \(int\), expected an integer >= 2 and <= 127$"):
+        load_config(path)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("base: missing.yaml\n", "exp.yaml: base: file not found: missing.yaml"),
+        ("base: exp.yaml\n", "exp.yaml: base: the chain of base configs loops back here"),
+        ("name: [unclosed\n", "exp.yaml: not valid YAML (line 2)"),
+        ("- a list\n", "exp.yaml: expected a mapping of keys at the top level, got list"),
+    ],
+)
+def test_a_broken_config_file_is_refused_in_one_line(tmp_path, monkeypatch, text, message):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "exp.yaml").write_text(text)
+    with pytest.raises(ConfigError) as info:
+        load_config(tmp_path / "exp.yaml")
+    assert message in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_missing_config_file_is_refused(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ConfigError, match="^nope.yaml: config file not found$"):
+        load_config("nope.yaml")
+
+
+def test_a_bad_override_names_the_option():
+    with pytest.raises(ConfigError, match=r"^--set: explore\.restarts: got -2 \(int\), expected an integer >= 1$"):
+        load_config(CONFIG_DIR / "quick.yaml", ["explore.restarts=-2"])
+    with pytest.raises(ConfigError, match=r"^--set 'restarts': expected KEY=VALUE"):
+        load_config(CONFIG_DIR / "quick.yaml", ["restarts"])
+
+
+def test_a_dataset_yaml_missing_its_image_is_refused(own_map):
+    from conftest import edit_yaml
+
+    edit_yaml(own_map, image="gone.png")
+    with pytest.raises(ConfigError, match=r"own\.yaml: image: file not found: .*gone\.png$"):
+        load_dataset_config(own_map)
+
+
+def test_a_dataset_with_labels_needs_a_legend(own_map):
+    from conftest import edit_yaml
+
+    edit_yaml(own_map, legend=None)
+    with pytest.raises(ConfigError, match=r"own\.yaml: legend: missing; a dataset with labels needs a legend"):
+        load_dataset_config(own_map)
+
+
+def test_a_dataset_path_entry_is_stored_absolute(own_map, tmp_path):
+    path = tmp_path / "exp.yaml"
+    path.write_text(f"base: {CONFIG_DIR / 'paper.yaml'}\nname: t\nseed: 0\ndatasets: [own.yaml, aerial-mosaic]\n")
+    config = load_config(path)
+    assert config.datasets == (str(own_map), "aerial-mosaic")
+    assert dataclasses.replace(config) == config

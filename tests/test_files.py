@@ -1,0 +1,38 @@
+from __future__ import annotations
+
+import os
+
+import pytest
+
+from curiosity_cli.errors import ConfigError
+from curiosity_cli.files import atomic_path, read_yaml
+
+
+def test_atomic_path_replaces_only_on_success(tmp_path):
+    target = tmp_path / "out" / "result.txt"
+    with atomic_path(target) as tmp:
+        tmp.write_text("first")
+    assert target.read_text() == "first"
+    with pytest.raises(RuntimeError):
+        with atomic_path(target) as tmp:
+            tmp.write_text("half")
+            raise RuntimeError("killed")
+    assert target.read_text() == "first"
+    assert os.listdir(target.parent) == ["result.txt"]
+
+
+def test_atomic_path_gives_ordinary_permissions(tmp_path):
+    umask = os.umask(0o022)
+    try:
+        with atomic_path(tmp_path / "r.txt") as tmp:
+            tmp.write_text("x")
+    finally:
+        os.umask(umask)
+    assert (tmp_path / "r.txt").stat().st_mode & 0o777 == 0o644
+
+
+def test_read_yaml_refuses_a_binary_file(tmp_path):
+    path = tmp_path / "x.yaml"
+    path.write_bytes(b"\xff\xfe\x00")
+    with pytest.raises(ConfigError, match="x.yaml: not a text file; expected YAML"):
+        read_yaml(path, "config file")

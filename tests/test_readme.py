@@ -1,0 +1,26 @@
+"""The README's two commands are the project's contract with a newcomer and with CI."""
+
+from __future__ import annotations
+
+import re
+
+from curiosity_cli.config import PROJECT_ROOT
+
+README = (PROJECT_ROOT / "README.md").read_text()
+COMMANDS = re.findall(r"```bash\n(.+?)\n```", README)
+
+
+def test_readme_gives_exactly_two_commands():
+    assert len(COMMANDS) == 2
+    assert all("\n" not in c and "python3 -m venv .venv" in c for c in COMMANDS)
+
+
+def test_ci_runs_the_readme_test_command_verbatim():
+    ci_lines = (PROJECT_ROOT / ".ci" / "run").read_text().strip().splitlines()
+    assert ci_lines[-1] == COMMANDS[1]
+    assert "pytest" in COMMANDS[1] and "[test]" in COMMANDS[1]
+
+
+def test_readme_picture_exists():
+    (picture,) = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", README)
+    assert (PROJECT_ROOT / picture).is_file()
