@@ -75,8 +75,12 @@ class ModelConfig:
 class WordsConfig:
     """Visual words (paper section 5.1)."""
 
-    orb_vocabulary: int = _spec(min=2, max=65535)
-    texton_vocabulary: int = _spec(min=2, max=65535)
+    vocabulary_dir: Path = _spec(must_exist=True)
+    orb_vocabulary: int = _spec(min=2, max=30000)
+    texton_vocabulary: int = _spec(min=2, max=30000)
+    orb_tile: int = _spec(min=1)
+    orb_per_tile: int = _spec(min=1)
+    orb_max_features: int | None = _spec(min=1)
     colour_words: bool = _spec()
 
 
@@ -226,6 +230,24 @@ def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> Exper
     _load_chain(path, raw)
     _apply_overrides(raw, overrides)
     return _check_experiment(_build(ExperimentConfig, raw.data, (), raw), raw)
+
+
+def load_words_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> WordsConfig:
+    """Load only the ``words`` section of a config (and its base chain), for ``extract``.
+
+    Raises
+    ------
+    ConfigError
+        As :func:`load_config`; also for an override outside ``words``.
+    """
+    path = Path(path)
+    raw = _Raw(str(path.resolve()))
+    _load_chain(path, raw)
+    for text in overrides:
+        if not _parse_override(text)[0][0] == "words":
+            raise ConfigError(f"--set {text!r}: expected a words.* key; this command reads only words")
+    _apply_overrides(raw, overrides)
+    return _build(WordsConfig, raw.data.get("words"), ("words",), raw)
 
 
 def load_dataset_config(path: str | Path) -> DatasetConfig:
@@ -393,7 +415,7 @@ def _convert(tp, meta: dict, value: Any, keys: tuple, raw: _Raw):
         if not isinstance(value, str) or not value:
             refuse("a file path")
         result = _resolve_path(value, keys, raw)
-        if meta["must_exist"] and not result.is_file():
+        if meta["must_exist"] and not result.exists():
             raise ConfigError(f"{_where(raw, keys)}: file not found: {display_path(result)}")
         return result
     else:  # pragma: no cover - a field type the validator does not know is a bug here

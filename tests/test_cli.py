@@ -115,8 +115,8 @@ def test_bad_override_is_one_line_error():
 
 def test_unknown_key_in_config_file_is_one_line_error(tmp_path):
     path = tmp_path / "exp.yaml"
-    path.write_text((CONFIG_DIR / "quick.yaml").read_text().replace("restarts: 5", "restartz: 5"))
-    path.with_name("paper.yaml").write_text((CONFIG_DIR / "paper.yaml").read_text())
+    text = (CONFIG_DIR / "quick.yaml").read_text().replace("restarts: 5", "restartz: 5")
+    path.write_text(text.replace("base: paper.yaml", f"base: {CONFIG_DIR / 'paper.yaml'}"))
     _assert_one_line_error(run("config", "show", str(path)), "exp.yaml: explore.restartz: unknown key")
 
 
@@ -148,3 +148,44 @@ def test_bad_preview_suffix_is_one_line_error(own_map, tmp_path):
 def test_bad_own_map_is_one_line_error(own_map, break_it, fragment):
     break_it(own_map.parent)
     _assert_one_line_error(run("datasets", "show", str(own_map)), fragment)
+
+
+def test_extract_prints_counts_then_reuses_its_cache(own_map, tmp_path):
+    cache = tmp_path / "cache"
+    first = run("extract", str(own_map), "--cache-dir", str(cache))
+    assert first.exit_code == 0, first.output
+    assert "wrote " in first.stdout and "12,288  ids 5000..5999 (texton-1000)" in first.stdout
+    assert "words per cell: min" in first.stdout and "seconds: texton" in first.stdout
+    second = run("extract", str(own_map), "--cache-dir", str(cache))
+    assert second.exit_code == 0 and "reused " in second.stdout and "seconds" not in second.stdout
+
+
+def test_extract_writes_a_density_png(own_map, tmp_path):
+    out = tmp_path / "density.png"
+    result = run("extract", str(own_map), "--cache-dir", str(tmp_path / "c"), "--density", str(out))
+    assert result.exit_code == 0, result.output
+    assert cv2.imread(str(out)) is not None
+
+
+@pytest.mark.parametrize(
+    "args, fragment",
+    [
+        (["--stride", "0"], "stride: got 0, expected an integer >= 1"),
+        (["--cell-width", "0"], "cell_width: got 0, expected an integer >= 1"),
+        (["--set", "model.topics=3"], "expected a words.* key"),
+        (["--set", "words.texton_vocabulary=77"], "texton-77.npz: vocabulary not found"),
+    ],
+)
+def test_extract_bad_options_are_one_line_errors(own_map, tmp_path, args, fragment):
+    cache = tmp_path / "cache"
+    _assert_one_line_error(run("extract", str(own_map), "--cache-dir", str(cache), *args), fragment)
+    assert not cache.exists()
+
+
+def test_extract_corrupt_image_is_one_line_error(own_map, tmp_path):
+    (own_map.parent / "map.png").write_bytes(b"\x89PNG\r\n\x1a\n broken")
+    _assert_one_line_error(run("extract", str(own_map), "--cache-dir", str(tmp_path / "c")), "image: cannot read")
+
+
+def test_vocab_build_refuses_a_tiny_vocabulary(tmp_path):
+    _assert_one_line_error(run("vocab", "build", "--out", str(tmp_path), "--orb-words", "1"), "--orb-words: got 1")

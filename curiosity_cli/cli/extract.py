@@ -1,0 +1,51 @@
+"""``curiosity extract``: visual words of a map, cut into its cell grid."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from curiosity_cli.cli import app
+from curiosity_cli.config import CONFIG_DIR
+
+
+@app.command("extract")
+def extract(
+    dataset: str = typer.Argument(..., help="A registered map name or a path to a dataset YAML."),
+    config: Path = typer.Option(CONFIG_DIR / "paper.yaml", "--config", help="Config whose `words` section to use."),
+    overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a words key, e.g. --set words.colour_words=true."),
+    stride: int = typer.Option(None, "--stride", help="Texton words every N pixels; default the dataset's word_stride."),
+    cell_width: int = typer.Option(None, "--cell-width", help="Cell side in pixels; default the dataset's."),
+    cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
+    force: bool = typer.Option(False, "--force", help="Extract again even if a cached store exists."),
+    density: Path = typer.Option(None, "--density", help="Also write a PNG of words per cell and a sample of words."),
+) -> None:
+    """Extract ORB and texton words (hue words optional) into a cached word store."""
+    import numpy as np
+
+    from curiosity_cli.config import load_words_config
+    from curiosity_cli.data import load_map
+    from curiosity_cli.files import display_path
+    from curiosity_cli.words.extract import extract_words
+
+    words = load_words_config(config, overrides)
+    map_data = load_map(dataset)
+    result = extract_words(map_data, words, stride=stride, cell_width=cell_width, cache_dir=cache_dir, force=force)
+    store = result.store
+    per_cell = store.words_per_cell()
+    typer.echo(f"{'reused' if result.reused else 'wrote'} {display_path(result.path)}")
+    typer.echo(
+        f"{len(store.words):,} words in {store.n_cells} cells ({store.grid_shape[0]} x {store.grid_shape[1]}, "
+        f"{store.cell_width} px), vocabulary {store.vocabulary_size}"
+    )
+    for t in store.types:
+        typer.echo(f"  {t.kind:<7} {store.count_by_type()[t.kind]:>10,}  ids {t.offset}..{t.offset + t.size - 1} ({t.name})")
+    typer.echo(f"words per cell: min {per_cell.min()}, median {int(np.median(per_cell))}, max {per_cell.max()}")
+    if result.seconds:
+        typer.echo("seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in result.seconds.items()))
+    if density is not None:
+        from curiosity_cli.plots.words import write_word_density
+
+        write_word_density(map_data, store, density)
+        typer.echo(f"wrote {display_path(density)}")

@@ -1,0 +1,169 @@
+"""Extraction: a map image → its word store, cached by what made it.
+
+A store is keyed by a hash of the decoded image pixels, the vocabularies' content hashes
+and every parameter that changes the words, so a cached store is reused exactly when
+re-extracting would give the same words, and never otherwise.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from curiosity_cli.config import WordsConfig
+from curiosity_cli.data import MapData
+from curiosity_cli.errors import CuriosityError
+from curiosity_cli.words.store import STORE_FORMAT, WordStore, WordType, build_store, load_store, save_store
+from curiosity_cli.words.vocab import Vocabulary, load_vocabulary
+
+#: Hue words: OpenCV's 8-bit hue channel has 180 values (2 degrees each).
+HUE_BINS = 180
+
+
+@dataclass(frozen=True)
+class Extraction:
+    """A store and how it was obtained."""
+
+    store: WordStore
+    path: Path
+    reused: bool
+    seconds: dict[str, float]  # per stage; empty when reused
+
+
+def _positive(name: str, value) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise CuriosityError(f"{name}: got {value!r}, expected an integer >= 1")
+    return int(value)
+
+
+def _word_types(orb: Vocabulary, texton: Vocabulary, colour_words: bool) -> tuple[WordType, ...]:
+    types = [
+        WordType("orb", orb.name, 0, len(orb.centres), orb.sha256),
+        WordType("texton", texton.name, len(orb.centres), len(texton.centres), texton.sha256),
+    ]
+    if colour_words:
+        types.append(WordType("hue", f"hue-{HUE_BINS}", types[-1].offset + types[-1].size, HUE_BINS, ""))
+    return tuple(types)
+
+
+def _params(map_data: MapData, words: WordsConfig, stride: int, cell_width: int) -> dict:
+    image_hash = hashlib.sha256(map_data.image.tobytes() + str(map_data.image.shape).encode()).hexdigest()
+    return {
+        "dataset": map_data.config.name,
+        "image_sha256": image_hash,
+        "image_shape": list(map_data.image.shape[:2]),
+        "stride": stride,
+        "cell_width": cell_width,
+        "orb_tile": words.orb_tile,
+        "orb_per_tile": words.orb_per_tile,
+        "orb_max_features": words.orb_max_features,
+        "colour_words": words.colour_words,
+    }
+
+
+def store_path(cache_dir: Path, params: dict, types: tuple[WordType, ...]) -> Path:
+    """``<cache_dir>/<dataset>-<hash>.npz``, the hash covering params, vocabularies and format."""
+    key = json.dumps({"params": params, "types": [t.__dict__ for t in types], "format": STORE_FORMAT}, sort_keys=True)
+    return Path(cache_dir) / f"{params['dataset']}-{hashlib.sha256(key.encode()).hexdigest()[:16]}.npz"
+
+
+def extract_words(
+    map_data: MapData,
+    words: WordsConfig,
+    *,
+    stride: int | None = None,
+    cell_width: int | None = None,
+    cache_dir: Path = Path("results/cache"),
+    force: bool = False,
+) -> Extraction:
+    """The word store of a map: from the cache when present, else extracted and cached.
+
+    Parameters
+    ----------
+    map_data : MapData
+        The map (its dataset gives the default stride and cell width).
+    words : WordsConfig
+        Vocabularies and ORB settings.
+    stride : int, optional
+        Texton (and hue) words at every ``stride``-th pixel; default the dataset's.
+    cell_width : int, optional
+        Cell side in pixels; default the dataset's.
+    cache_dir : Path
+        Where stores are kept.
+    force : bool
+        Extract again even when a cached store exists.
+
+    Returns
+    -------
+    Extraction
+
+    Raises
+    ------
+    CuriosityError
+        A bad stride or cell width, a missing or malformed vocabulary, a grey image with
+        colour words on.
+    """
+    import cv2
+
+    stride = _positive("stride", map_data.config.word_stride if stride is None else stride)
+    cell_width = _positive("cell_width", map_data.config.cell_width if cell_width is None else cell_width)
+    if cell_width > min(map_data.image.shape[:2]):
+        raise CuriosityError(
+            f"cell_width: got {cell_width}, expected at most the image's smaller side ({min(map_data.image.shape[:2])} px)"
+        )
+    image = map_data.image
+    if words.colour_words and np.array_equal(image[:, :, 0], image[:, :, 1]) and np.array_equal(image[:, :, 1], image[:, :, 2]):
+        raise CuriosityError(
+            f"{map_data.config.image}: the image is grey; colour words need colour (set words.colour_words: false)"
+        )
+    orb = load_vocabulary(words.vocabulary_dir, "orb", words.orb_vocabulary)
+    texton = load_vocabulary(words.vocabulary_dir, "texton", words.texton_vocabulary)
+    types = _word_types(orb, texton, words.colour_words)
+    params = _params(map_data, words, stride, cell_width)
+    path = store_path(cache_dir, params, types)
+    if path.is_file() and not force:
+        return Extraction(load_store(path), path, reused=True, seconds={})
+
+    from curiosity_cli.words.orb import detect_orb, nearest_binary_words
+    from curiosity_cli.words.textons import texton_words
+
+    seconds = {}
+    start = time.perf_counter()
+    grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
+    t_rows, t_cols, t_words = texton_words(grey, texton.centres, stride)
+    seconds["texton"] = time.perf_counter() - start
+
+    mark = time.perf_counter()
+    features = detect_orb(
+        grey, tile=words.orb_tile, per_tile=words.orb_per_tile, max_features=words.orb_max_features
+    )
+    o_words = nearest_binary_words(features.descriptors, orb.centres)
+    seconds["orb"] = time.perf_counter() - mark
+
+    rows, cols = [features.rows, t_rows], [features.cols, t_cols]
+    ids = [o_words.astype(np.int64) + types[0].offset, t_words.astype(np.int64) + types[1].offset]
+    if words.colour_words:
+        mark = time.perf_counter()
+        hue = cv2.cvtColor(image, cv2.COLOR_RGB2HSV)[::stride, ::stride, 0]
+        rows.append(t_rows)
+        cols.append(t_cols)
+        ids.append(hue.ravel().astype(np.int64) + types[2].offset)
+        seconds["hue"] = time.perf_counter() - mark
+
+    store = build_store(
+        np.concatenate(rows),
+        np.concatenate(cols),
+        np.concatenate(ids),
+        image.shape[:2],
+        cell_width,
+        types,
+        params,
+    )
+    save_store(store, path)
+    seconds["total"] = time.perf_counter() - start
+    return Extraction(store, path, reused=False, seconds=seconds)

@@ -1,0 +1,198 @@
+"""The word store: every visual word of a map, grouped by cell, in one compact file.
+
+All word types share one id space with fixed offsets, in this order: ORB words
+``[0, n_orb)``, texton words ``[n_orb, n_orb + n_texton)``, then hue words (when on).
+With the paper's vocabularies that is ORB 0–4999, texton 5000–5999, hue 6000–6179.
+
+The cell of a word at pixel ``(row, col)`` is ``(row // cell_width, col // cell_width)``,
+numbered row-major. A partial cell at the bottom or right border (when the image is not
+a multiple of the cell width) is a cell of its own with fewer pixels, as in the paper's
+Table 1 (2500 px at 32 px cells: 79 x 79 = 6241 cells). Words are sorted by cell, so the
+words of cell ``c`` are the contiguous slice ``cell_start[c]:cell_start[c + 1]``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from curiosity_cli.errors import CuriosityError
+from curiosity_cli.files import atomic_path, display_path
+
+STORE_FORMAT = 1
+
+
+@dataclass(frozen=True)
+class WordType:
+    """One kind of word and where its ids sit in the shared id space."""
+
+    kind: str  # "orb", "texton" or "hue"
+    name: str  # vocabulary name, e.g. "orb-5000"
+    offset: int
+    size: int
+    sha256: str  # content hash of the vocabulary ("" for hue bins, which need none)
+
+
+@dataclass(frozen=True)
+class WordStore:
+    """The words of one map.
+
+    Attributes
+    ----------
+    rows, cols : (N,) unsigned integer ndarrays
+        Pixel position of each word.
+    words : (N,) unsigned integer ndarray
+        Word id in the shared id space (see :attr:`types`).
+    cell_start : (n_cells + 1,) int64 ndarray
+        Words of cell ``c`` are ``[cell_start[c], cell_start[c + 1])``.
+    grid_shape : (int, int)
+        Cells per column and per row.
+    cell_width : int
+    types : tuple of WordType
+    params : dict
+        What made the store: dataset, image hash, stride, ORB settings, package version.
+    """
+
+    rows: np.ndarray
+    cols: np.ndarray
+    words: np.ndarray
+    cell_start: np.ndarray
+    grid_shape: tuple[int, int]
+    cell_width: int
+    types: tuple[WordType, ...]
+    params: dict
+
+    @property
+    def n_cells(self) -> int:
+        return self.grid_shape[0] * self.grid_shape[1]
+
+    @property
+    def vocabulary_size(self) -> int:
+        """Size of the shared id space (V)."""
+        return max(t.offset + t.size for t in self.types)
+
+    def cell_words(self, cell: int) -> np.ndarray:
+        """Word ids of one cell (row-major cell index)."""
+        return self.words[self.cell_start[cell] : self.cell_start[cell + 1]]
+
+    def words_per_cell(self) -> np.ndarray:
+        """(n_cells,) int64 ndarray of word counts."""
+        return np.diff(self.cell_start)
+
+    def count_by_type(self) -> dict[str, int]:
+        """Number of words of each kind."""
+        return {
+            t.kind: int(np.count_nonzero((self.words >= t.offset) & (self.words < t.offset + t.size)))
+            for t in self.types
+        }
+
+
+def _smallest_unsigned(values: np.ndarray, upper: int) -> np.ndarray:
+    return values.astype(np.min_scalar_type(max(int(upper), 1)))
+
+
+def build_store(
+    rows: np.ndarray,
+    cols: np.ndarray,
+    words: np.ndarray,
+    image_shape: tuple[int, int],
+    cell_width: int,
+    types: tuple[WordType, ...],
+    params: dict,
+) -> WordStore:
+    """Group words by cell and pack them into the smallest fitting integer types.
+
+    Parameters
+    ----------
+    rows, cols : (N,) integer ndarrays
+        Pixel positions, inside ``image_shape``.
+    words : (N,) integer ndarray
+        Ids in the shared id space.
+    image_shape : (int, int)
+        Image rows and columns.
+    cell_width : int
+        Cell side in pixels.
+    types : tuple of WordType
+    params : dict
+        JSON-serialisable description of how the words were made.
+
+    Returns
+    -------
+    WordStore
+        Sorted by cell, then row, column and word id, so the order does not depend on
+        the order the extractors produced words in.
+    """
+    from curiosity_cli.data import grid_shape as _grid_shape
+
+    grid = _grid_shape(image_shape, cell_width)
+    rows = np.asarray(rows, dtype=np.int64)
+    cols = np.asarray(cols, dtype=np.int64)
+    words = np.asarray(words, dtype=np.int64)
+    cells = (rows // cell_width) * grid[1] + cols // cell_width
+    order = np.lexsort((words, cols, rows, cells))
+    counts = np.bincount(cells, minlength=grid[0] * grid[1])
+    cell_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    vocabulary_size = max(t.offset + t.size for t in types)
+    return WordStore(
+        rows=_smallest_unsigned(rows[order], image_shape[0] - 1),
+        cols=_smallest_unsigned(cols[order], image_shape[1] - 1),
+        words=_smallest_unsigned(words[order], vocabulary_size - 1),
+        cell_start=cell_start,
+        grid_shape=grid,
+        cell_width=int(cell_width),
+        types=tuple(types),
+        params=dict(params),
+    )
+
+
+def save_store(store: WordStore, path: Path) -> None:
+    """Write a store as one compressed ``.npz``, atomically."""
+    meta = {
+        "format": STORE_FORMAT,
+        "grid_shape": list(store.grid_shape),
+        "cell_width": store.cell_width,
+        "types": [t.__dict__ for t in store.types],
+        "params": store.params,
+    }
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as handle:
+            np.savez_compressed(
+                handle,
+                rows=store.rows,
+                cols=store.cols,
+                words=store.words,
+                cell_start=store.cell_start,
+                meta=np.array(json.dumps(meta, sort_keys=True)),
+            )
+
+
+def load_store(path: Path) -> WordStore:
+    """Read a store written by :func:`save_store`.
+
+    Raises
+    ------
+    CuriosityError
+        The file is missing, not a store, or of another format version.
+    """
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            arrays = {k: data[k] for k in ("rows", "cols", "words", "cell_start")}
+    except (OSError, KeyError, ValueError) as exc:
+        raise CuriosityError(f"{display_path(path)}: not a word store ({exc})") from None
+    if meta.get("format") != STORE_FORMAT:
+        raise CuriosityError(
+            f"{display_path(path)}: format: got {meta.get('format')!r}, expected {STORE_FORMAT}; "
+            "run `curiosity extract --force` to rebuild it"
+        )
+    return WordStore(
+        **arrays,
+        grid_shape=tuple(meta["grid_shape"]),
+        cell_width=meta["cell_width"],
+        types=tuple(WordType(**t) for t in meta["types"]),
+        params=meta["params"],
+    )

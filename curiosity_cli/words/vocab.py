@@ -1,0 +1,192 @@
+"""Visual vocabularies: learned once from photographs unrelated to the maps, shipped in data/vocab/.
+
+Paper section 5.1: "The dictionary was computed by extracting features from a completely
+unrelated dataset." Here that dataset is the general photographs bundled in scikit-image
+(an astronaut, a cameraman, a cat, a clock, coffee, coins, a Hubble field, a retina, a
+rocket; each CC0 or public domain by its skimage docstring), none of
+which any embedded map was cut from. A vocabulary file ``<kind>-<size>.npz`` holds the
+centres and a JSON recipe; its content hash (SHA-256 of the centres) goes into every word
+store made with it, so a changed vocabulary can never be mistaken for the old one.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from curiosity_cli.errors import CuriosityError
+from curiosity_cli.files import atomic_path, display_path
+
+#: scikit-image's bundled photographs used for the vocabularies; the maps use none of them.
+SOURCE_IMAGES = (
+    "astronaut",
+    "camera",
+    "chelsea",
+    "clock",
+    "coffee",
+    "coins",
+    "hubble_deep_field",
+    "retina",
+    "rocket",
+)
+# ORB descriptors are taken at several image scales: one set of photos then yields about
+# 90 descriptors per word of a 5000-word vocabulary, and words cover a range of scales.
+ORB_SCALES = (0.5, 0.71, 1.0, 1.41, 2.0)
+ORB_TILE, ORB_PER_TILE = 16, 4
+TEXTON_SAMPLES_PER_IMAGE = 40_000
+ITERATIONS = 20
+
+#: Shape of one centre, and dtype, per kind of vocabulary.
+_CENTRE = {"orb": ((32,), np.uint8), "texton": ((8,), np.float32)}
+
+
+@dataclass(frozen=True)
+class Vocabulary:
+    """A vocabulary: ``centres`` of shape (size, 32) uint8 for ORB, (size, 8) float32 for textons."""
+
+    kind: str
+    centres: np.ndarray
+    recipe: dict
+
+    @property
+    def name(self) -> str:
+        return f"{self.kind}-{len(self.centres)}"
+
+    @property
+    def sha256(self) -> str:
+        return hashlib.sha256(np.ascontiguousarray(self.centres).tobytes()).hexdigest()
+
+
+def vocabulary_path(directory: Path, kind: str, size: int) -> Path:
+    """Where the ``kind`` vocabulary of ``size`` words lives in ``directory``."""
+    return Path(directory) / f"{kind}-{size}.npz"
+
+
+def load_vocabulary(directory: Path, kind: str, size: int) -> Vocabulary:
+    """Read and check a vocabulary file.
+
+    Raises
+    ------
+    CuriosityError
+        The file is missing or unreadable, or its centres have the wrong shape, dtype
+        or non-finite values; the message names the file.
+    """
+    path = vocabulary_path(directory, kind, size)
+    where = display_path(path)
+    if not path.is_file():
+        raise CuriosityError(
+            f"{where}: vocabulary not found; build it with `curiosity vocab build --{kind}-words {size}`"
+        )
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            centres, recipe = data["centres"], json.loads(str(data["recipe"]))
+    except (OSError, KeyError, ValueError) as exc:
+        raise CuriosityError(f"{where}: not a vocabulary file ({exc})") from None
+    shape, dtype = _CENTRE[kind]
+    if centres.dtype != dtype or centres.shape != (size, *shape):
+        raise CuriosityError(
+            f"{where}: centres: got {centres.dtype} of shape {centres.shape}, "
+            f"expected {np.dtype(dtype).name} of shape {(size, *shape)}"
+        )
+    if kind == "texton" and not np.isfinite(centres).all():
+        raise CuriosityError(f"{where}: centres: got non-finite values, expected finite numbers")
+    return Vocabulary(kind=kind, centres=centres, recipe=recipe)
+
+
+def save_vocabulary(vocabulary: Vocabulary, directory: Path) -> Path:
+    """Write ``<kind>-<size>.npz`` atomically; return its path."""
+    path = vocabulary_path(directory, vocabulary.kind, len(vocabulary.centres))
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as handle:
+            np.savez_compressed(
+                handle, centres=vocabulary.centres, recipe=np.array(json.dumps(vocabulary.recipe, sort_keys=True))
+            )
+    return path
+
+
+def _source_images() -> dict[str, np.ndarray]:
+    """The bundled photographs as (H, W) uint8 grey images."""
+    try:
+        import skimage.data
+    except ImportError:
+        raise CuriosityError(
+            "building vocabularies needs scikit-image's bundled photographs: pip install -e '.[maps]'"
+        ) from None
+    import cv2
+
+    images = {}
+    for name in SOURCE_IMAGES:
+        image = getattr(skimage.data, name)()
+        if image.ndim == 3:
+            image = cv2.cvtColor(np.ascontiguousarray(image[:, :, :3]), cv2.COLOR_RGB2GRAY)
+        images[name] = image
+    return images
+
+
+def build_orb_vocabulary(size: int, *, seed: int, log: Callable[[str], None] = lambda _: None) -> Vocabulary:
+    """Learn ORB words by k-majority clustering of descriptors from :data:`SOURCE_IMAGES`."""
+    import cv2
+
+    from curiosity_cli.words.binary_kmeans import binary_kmeans
+    from curiosity_cli.words.orb import detect_orb
+
+    descriptors = []
+    for name, image in _source_images().items():
+        for scale in ORB_SCALES:
+            scaled = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+            descriptors.append(detect_orb(scaled, tile=ORB_TILE, per_tile=ORB_PER_TILE).descriptors)
+        log(f"  orb: {name}: {sum(len(d) for d in descriptors)} descriptors so far")
+    pool = np.concatenate(descriptors)
+    log(f"  orb: clustering {len(pool)} descriptors into {size} words")
+    centres = binary_kmeans(pool, size, seed=seed, iterations=ITERATIONS)
+    recipe = _recipe(
+        "orb", size, seed, descriptors=len(pool), scales=list(ORB_SCALES), tile=ORB_TILE, per_tile=ORB_PER_TILE,
+        method="k-majority (binary k-means, Hamming distance), k-means++ start",
+    )
+    return Vocabulary("orb", centres, recipe)
+
+
+def build_texton_vocabulary(
+    size: int, *, seed: int, log: Callable[[str], None] = lambda _: None
+) -> Vocabulary:
+    """Learn texton words by k-means on normalised MR8 responses of :data:`SOURCE_IMAGES`."""
+    from curiosity_cli.words.filterbank import mr8_responses, normalise_responses
+    from curiosity_cli.words.kmeans import kmeans
+
+    rng = np.random.default_rng([seed, 1])
+    samples = []
+    for name, image in _source_images().items():
+        responses = normalise_responses(mr8_responses(image)).reshape(-1, 8)
+        take = min(TEXTON_SAMPLES_PER_IMAGE, len(responses))
+        samples.append(responses[np.sort(rng.choice(len(responses), take, replace=False))])
+        log(f"  texton: {name}: {take} response vectors")
+    pool = np.concatenate(samples)
+    log(f"  texton: clustering {len(pool)} vectors into {size} words")
+    centres = kmeans(pool, size, seed=seed, iterations=ITERATIONS)
+    recipe = _recipe(
+        "texton", size, seed, vectors=len(pool), samples_per_image=TEXTON_SAMPLES_PER_IMAGE,
+        method="k-means (Lloyd, k-means++ start) on contrast-normalised MR8 responses",
+    )
+    return Vocabulary("texton", centres, recipe)
+
+
+def _recipe(kind: str, size: int, seed: int, **details) -> dict:
+    import skimage
+
+    from curiosity_cli import __version__
+
+    return {
+        "kind": kind,
+        "size": size,
+        "seed": seed,
+        "iterations": ITERATIONS,
+        "source_images": [f"skimage.data.{n}" for n in SOURCE_IMAGES],
+        "scikit_image": skimage.__version__,
+        "curiosity": __version__,
+        **details,
+    }

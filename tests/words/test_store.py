@@ -1,0 +1,73 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from curiosity_cli.errors import CuriosityError
+from curiosity_cli.words.store import WordType, build_store, load_store, save_store
+
+TYPES = (WordType("orb", "orb-10", 0, 10, "a" * 64), WordType("texton", "texton-5", 10, 5, "b" * 64))
+
+
+def random_words(n=500, shape=(40, 50), seed=0):
+    rng = np.random.default_rng(seed)
+    return rng.integers(0, shape[0], n), rng.integers(0, shape[1], n), rng.integers(0, 15, n)
+
+
+def test_words_are_grouped_by_cell_including_partial_border_cells():
+    rows, cols, words = random_words()
+    store = build_store(rows, cols, words, (40, 50), 16, TYPES, {"dataset": "t"})
+    assert store.grid_shape == (3, 4)  # 40 / 16 and 50 / 16 rounded up
+    assert store.cell_start[-1] == len(rows) and store.cell_start[0] == 0
+    for cell in range(store.n_cells):
+        sl = slice(store.cell_start[cell], store.cell_start[cell + 1])
+        assert np.all(store.rows[sl] // 16 * 4 + store.cols[sl] // 16 == cell)
+    # the same multiset of (row, col, word) triples, whatever the input order
+    before = sorted(zip(rows.tolist(), cols.tolist(), words.tolist()))
+    after = sorted(zip(store.rows.tolist(), store.cols.tolist(), store.words.tolist()))
+    assert before == after
+
+
+def test_order_does_not_depend_on_input_order():
+    rows, cols, words = random_words()
+    perm = np.random.default_rng(1).permutation(len(rows))
+    a = build_store(rows, cols, words, (40, 50), 16, TYPES, {})
+    b = build_store(rows[perm], cols[perm], words[perm], (40, 50), 16, TYPES, {})
+    for name in ("rows", "cols", "words", "cell_start"):
+        assert np.array_equal(getattr(a, name), getattr(b, name))
+
+
+def test_smallest_fitting_integer_types():
+    rows, cols, words = random_words()
+    small = build_store(rows, cols, words, (40, 50), 16, TYPES, {})
+    assert small.rows.dtype == np.uint8 and small.words.dtype == np.uint8
+    big = build_store(rows * 60, cols, words, (2500, 50), 16, (WordType("orb", "orb-6000", 0, 6000, ""),), {})
+    assert big.rows.dtype == np.uint16 and big.words.dtype == np.uint16
+
+
+def test_store_round_trips(tmp_path):
+    rows, cols, words = random_words()
+    store = build_store(rows, cols, words, (40, 50), 16, TYPES, {"dataset": "t", "stride": 1})
+    save_store(store, tmp_path / "s.npz")
+    again = load_store(tmp_path / "s.npz")
+    for name in ("rows", "cols", "words", "cell_start"):
+        assert np.array_equal(getattr(again, name), getattr(store, name))
+        assert getattr(again, name).dtype == getattr(store, name).dtype
+    assert (again.grid_shape, again.cell_width, again.types, again.params) == (
+        store.grid_shape, store.cell_width, store.types, store.params,
+    )
+
+
+def test_counts_and_slices():
+    store = build_store([0, 0, 20, 39], [0, 17, 0, 49], [3, 12, 14, 0], (40, 50), 16, TYPES, {})
+    assert store.count_by_type() == {"orb": 2, "texton": 2}
+    assert store.vocabulary_size == 15
+    assert store.cell_words(0).tolist() == [3] and store.cell_words(1).tolist() == [12]
+    assert store.words_per_cell().tolist() == [1, 1, 0, 0, 1, 0, 0, 0, 0, 0, 0, 1]
+
+
+def test_a_file_that_is_not_a_store_is_refused(tmp_path):
+    path = tmp_path / "x.npz"
+    np.savez(path, something=np.zeros(3))
+    with pytest.raises(CuriosityError, match=r"x\.npz: not a word store"):
+        load_store(path)

@@ -1,0 +1,63 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from curiosity_cli.config import CONFIG_DIR, load_words_config
+from curiosity_cli.words.vocab import (
+    SOURCE_IMAGES,
+    build_texton_vocabulary,
+    load_vocabulary,
+    save_vocabulary,
+)
+
+WORDS = load_words_config(CONFIG_DIR / "paper.yaml")
+MAP_SOURCES = {"grass", "gravel", "brick", "immunohistochemistry"}  # what scripts/make_maps.py cuts from
+
+
+def test_shipped_vocabularies_load_with_their_recipes():
+    orb = load_vocabulary(WORDS.vocabulary_dir, "orb", 5000)
+    texton = load_vocabulary(WORDS.vocabulary_dir, "texton", 1000)
+    assert orb.centres.shape == (5000, 32) and orb.centres.dtype == np.uint8
+    assert texton.centres.shape == (1000, 8) and texton.centres.dtype == np.float32
+    for vocabulary in (orb, texton):
+        assert vocabulary.recipe["size"] == len(vocabulary.centres)
+        assert vocabulary.recipe["source_images"] == [f"skimage.data.{n}" for n in SOURCE_IMAGES]
+    # no two ORB words alike, no two textons alike: every word is usable
+    assert len(np.unique(orb.centres, axis=0)) == 5000 and len(np.unique(texton.centres, axis=0)) == 1000
+
+
+def test_vocabulary_sources_are_unrelated_to_the_maps():
+    assert not MAP_SOURCES & set(SOURCE_IMAGES)
+
+
+def test_vocabulary_round_trips(tmp_path):
+    texton = load_vocabulary(WORDS.vocabulary_dir, "texton", 1000)
+    path = save_vocabulary(texton, tmp_path)
+    assert path.name == "texton-1000.npz"
+    again = load_vocabulary(tmp_path, "texton", 1000)
+    assert again.sha256 == texton.sha256 and again.recipe == texton.recipe
+
+
+def test_texton_vocabulary_build_is_seeded(monkeypatch):
+    import curiosity_cli.words.vocab as vocab
+
+    monkeypatch.setattr(vocab, "SOURCE_IMAGES", ("camera", "coins"))
+    monkeypatch.setattr(vocab, "TEXTON_SAMPLES_PER_IMAGE", 2000)
+    a = build_texton_vocabulary(20, seed=5)
+    b = build_texton_vocabulary(20, seed=5)
+    assert a.sha256 == b.sha256 and a.centres.shape == (20, 8)
+    assert build_texton_vocabulary(20, seed=6).sha256 != a.sha256
+
+
+@pytest.mark.slow
+def test_shipped_vocabularies_are_rebuilt_bit_for_bit_from_their_recipe(tmp_path):
+    from typer.testing import CliRunner
+
+    from curiosity_cli.cli import app
+
+    result = CliRunner().invoke(app, ["vocab", "build", "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    for kind, size in (("orb", 5000), ("texton", 1000)):
+        rebuilt = load_vocabulary(tmp_path, kind, size)
+        assert rebuilt.sha256 == load_vocabulary(WORDS.vocabulary_dir, kind, size).sha256
