@@ -15,3 +15,7 @@ class ConfigError(CuriosityError):
 
 class DatasetError(CuriosityError):
     """A dataset whose image, labels or legend cannot be used."""
+
+
+class ParameterError(CuriosityError, ValueError):
+    """A function argument out of its range: a user's mistake at the CLI, a ValueError to code."""

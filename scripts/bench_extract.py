@@ -32,7 +32,8 @@ from curiosity_cli.config import CONFIG_DIR, dataset_names, load_words_config
 from curiosity_cli.data import load_map
 from curiosity_cli.words.extract import extract_words
 from curiosity_cli.words.filterbank import mr8_responses, normalise_responses
-from curiosity_cli.words.orb import detect_orb, nearest_binary_words
+from curiosity_cli.words.hamming import nearest_binary_words
+from curiosity_cli.words.orb import detect_orb
 from curiosity_cli.words.textons import nearest_centres
 from curiosity_cli.words.vocab import load_vocabulary
 

@@ -2,7 +2,7 @@
 seeding, per-centre bit counts.
 
 Private: arrays and scalars in, arrays out; no validation. The public wrappers are
-:func:`curiosity_cli.words.orb.nearest_binary_words` and
+:func:`curiosity_cli.words.hamming.nearest_binary_words` and
 :func:`curiosity_cli.words.binary_kmeans.binary_kmeans`. A descriptor is 32 bytes viewed
 as 4 ``uint64`` words; the slow twins live in ``tests/naive_orb.py``.
 

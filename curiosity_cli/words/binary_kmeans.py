@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from curiosity_cli.words.orb import _as_words64, _check_int, _nearest, check_descriptors
+from curiosity_cli.checks import check_int
+from curiosity_cli.words.hamming import as_words64, check_descriptors, nearest_with_distance
 
 _INITS = ("k-means++", "random")
 
@@ -40,7 +41,7 @@ def _initial_centres(descriptors: np.ndarray, k: int, init: str, rng: np.random.
     first = int(rng.integers(descriptors.shape[0]))
     uniforms = rng.random(k - 1)
     seeds = np.empty(k, np.int64)
-    n_seeds = _hamming_kernels.kmeanspp_seeds(_as_words64(descriptors), first, uniforms, seeds)
+    n_seeds = _hamming_kernels.kmeanspp_seeds(as_words64(descriptors), first, uniforms, seeds)
     if n_seeds < k:
         raise _too_few(k, n_seeds)
     return descriptors[seeds].copy()
@@ -128,12 +129,12 @@ def binary_kmeans(
         distinct descriptors.
     """
     descriptors = check_descriptors("descriptors", descriptors)
-    k = _check_int("k", k, 1)
+    k = check_int("k", k, 1)
     if k >= 2**31:
         raise ValueError(f"k: got {k}, expected fewer than 2**31")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed: got {seed!r}, expected an integer >= 0")
-    iterations = _check_int("iterations", iterations, 0)
+    iterations = check_int("iterations", iterations, 0)
     if init not in _INITS:
         raise ValueError(f"init: got {init!r}, expected one of {', '.join(map(repr, _INITS))}")
     if descriptors.shape[0] < k:
@@ -141,9 +142,9 @@ def binary_kmeans(
 
     rng = np.random.default_rng(int(seed))
     centres = _initial_centres(descriptors, k, init, rng)
-    words64 = _as_words64(descriptors)
+    words64 = as_words64(descriptors)
     for _ in range(iterations):
-        labels, distance = _nearest(words64, centres)
+        labels, distance = nearest_with_distance(words64, centres)
         updated, sizes = _majority(descriptors, labels, k)
         empty = np.flatnonzero(sizes == 0)
         if empty.size:

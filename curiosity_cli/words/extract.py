@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from curiosity_cli.checks import check_int
 from curiosity_cli.config import WordsConfig
 from curiosity_cli.data import MapData
 from curiosity_cli.errors import CuriosityError
@@ -33,12 +34,6 @@ class Extraction:
     path: Path
     reused: bool
     seconds: dict[str, float]  # per stage; empty when reused
-
-
-def _positive(name: str, value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise CuriosityError(f"{name}: got {value!r}, expected an integer >= 1")
-    return int(value)
 
 
 def _word_types(orb: Vocabulary, texton: Vocabulary, colour_words: bool) -> tuple[WordType, ...]:
@@ -110,8 +105,8 @@ def extract_words(
     """
     import cv2
 
-    stride = _positive("stride", map_data.config.word_stride if stride is None else stride)
-    cell_width = _positive("cell_width", map_data.config.cell_width if cell_width is None else cell_width)
+    stride = check_int("stride", map_data.config.word_stride if stride is None else stride, 1)
+    cell_width = check_int("cell_width", map_data.config.cell_width if cell_width is None else cell_width, 1)
     if cell_width > min(map_data.image.shape[:2]):
         raise CuriosityError(
             f"cell_width: got {cell_width}, expected at most the image's smaller side ({min(map_data.image.shape[:2])} px)"
@@ -129,7 +124,8 @@ def extract_words(
     if path.is_file() and not force:
         return Extraction(load_store(path), path, reused=True, seconds={})
 
-    from curiosity_cli.words.orb import detect_orb, nearest_binary_words
+    from curiosity_cli.words.hamming import nearest_binary_words
+    from curiosity_cli.words.orb import detect_orb
     from curiosity_cli.words.textons import texton_words
 
     seconds = {}

@@ -33,6 +33,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from curiosity_cli.checks import check_int
+
 #: ``(sigma_long, sigma_short)`` of the three anisotropic scales, in pixels.
 SCALES: tuple[tuple[float, float], ...] = ((3.0, 1.0), (6.0, 2.0), (12.0, 4.0))
 #: Number of orientations per anisotropic scale, spread evenly over 180°.
@@ -332,18 +334,11 @@ def subsample(array: np.ndarray, stride: int) -> np.ndarray:
     (ceil(H / stride), ceil(W / stride), ...) ndarray
         A view of ``array``.
     """
-    stride = check_stride(stride)
+    stride = check_int("stride", stride, 1)
     array = np.asarray(array)
     if array.ndim < 2:
         raise ValueError(f"array: got shape {array.shape}, expected at least 2 dimensions (rows, cols, ...)")
     return array[::stride, ::stride]
-
-
-def check_stride(stride: object) -> int:
-    """Return ``stride`` as an int, or raise ValueError naming it if it is not an integer >= 1."""
-    if isinstance(stride, bool) or not isinstance(stride, (int, np.integer)) or stride < 1:
-        raise ValueError(f"stride: got {stride!r}, expected an integer >= 1")
-    return int(stride)
 
 
 def check_image(image: object) -> np.ndarray:

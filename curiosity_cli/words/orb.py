@@ -2,7 +2,7 @@
 
 Paper section 5.1 describes local features with ORB words from a 5000-word vocabulary.
 :func:`detect_orb` finds ORB keypoints (OpenCV) everywhere on the map, smooth regions
-included, and :func:`nearest_binary_words` maps each 256-bit descriptor to its nearest
+included, and :func:`curiosity_cli.words.hamming.nearest_binary_words` maps each 256-bit descriptor to its nearest
 vocabulary word by Hamming distance. Vocabularies are learned with
 :func:`curiosity_cli.words.binary_kmeans.binary_kmeans`.
 
@@ -17,8 +17,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-#: Bytes in one ORB descriptor (256 bits).
-DESCRIPTOR_BYTES = 32
+from curiosity_cli.checks import as_uint8, check_int
+from curiosity_cli.errors import ParameterError
+from curiosity_cli.words.hamming import DESCRIPTOR_BYTES
 
 # OpenCV ORB's oriented-BRIEF sampling pattern is defined on a 31 x 31 patch; its edge
 # threshold (border where nothing is detected) must cover the patch, so both stay at 31.
@@ -49,103 +50,6 @@ class OrbFeatures(NamedTuple):
     rows: np.ndarray
     cols: np.ndarray
     descriptors: np.ndarray
-
-
-def _check_int(name: str, value, minimum: int, maximum: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ValueError(f"{name}: got {value!r}, expected an integer >= {minimum}")
-    if value < minimum or (maximum is not None and value > maximum):
-        expected = f"between {minimum} and {maximum}" if maximum is not None else f">= {minimum}"
-        raise ValueError(f"{name}: got {value}, expected an integer {expected}")
-    return int(value)
-
-
-def _as_uint8(name: str, array, ndim: int, shape_text: str) -> np.ndarray:
-    """``array`` as a C-contiguous uint8 array, if it is an integer array of 0..255."""
-    array = np.asarray(array)
-    if array.ndim != ndim:
-        raise ValueError(f"{name}: got shape {array.shape}, expected {shape_text}")
-    if array.dtype != np.uint8:
-        if array.dtype == np.bool_ or not np.issubdtype(array.dtype, np.integer):
-            raise ValueError(f"{name}: got dtype {array.dtype}, expected uint8")
-        if array.size and (array.min() < 0 or array.max() > 255):
-            raise ValueError(f"{name}: got values outside 0..255, expected uint8")
-        array = array.astype(np.uint8)
-    return np.ascontiguousarray(array)
-
-
-def check_descriptors(name: str, descriptors) -> np.ndarray:
-    """Validate binary descriptors; return them as a C-contiguous (N, 32) uint8 array.
-
-    Parameters
-    ----------
-    name : str
-        The parameter's name, for the error message.
-    descriptors : (N, 32) array_like of integers in 0..255
-
-    Raises
-    ------
-    ValueError
-        Naming ``name``, if the shape or values do not fit.
-    """
-    shape_text = f"(N, {DESCRIPTOR_BYTES})"
-    array = _as_uint8(name, descriptors, 2, shape_text)
-    if array.shape[1] != DESCRIPTOR_BYTES:
-        raise ValueError(f"{name}: got shape {array.shape}, expected {shape_text}")
-    return array
-
-
-def _as_words64(descriptors: np.ndarray) -> np.ndarray:
-    """(N, 32) uint8 C-contiguous → (N, 4) uint64 view; popcount runs on 64-bit words."""
-    return descriptors.view(np.uint64)
-
-
-def _nearest(words64: np.ndarray, vocabulary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Kernel call shared by :func:`nearest_binary_words` and k-majority: (index, distance)."""
-    from curiosity_cli.words import _hamming_kernels
-
-    vocabulary_t = np.ascontiguousarray(_as_words64(vocabulary).T)
-    n = words64.shape[0]
-    index = np.empty(n, np.int32)
-    distance = np.empty(n, np.int32)
-    if n:
-        _hamming_kernels.nearest_words(words64, vocabulary_t, index, distance)
-    return index, distance
-
-
-def nearest_binary_words(descriptors, vocabulary) -> np.ndarray:
-    """Exact nearest vocabulary word of each binary descriptor, by Hamming distance.
-
-    Brute force over the whole vocabulary (popcount on 64-bit words), parallel over
-    descriptors; the result does not depend on the number of threads. About 0.5 s for
-    1e5 descriptors against 5000 words on one core.
-
-    Parameters
-    ----------
-    descriptors : (N, 32) uint8 array_like
-        ORB descriptors; N may be 0.
-    vocabulary : (K, 32) uint8 array_like
-        Vocabulary words, K >= 1.
-
-    Returns
-    -------
-    (N,) int32 ndarray
-        Index into ``vocabulary`` of each descriptor's nearest word. Ties go to the
-        lowest index.
-
-    Raises
-    ------
-    ValueError
-        Naming the parameter, for a wrong shape, dtype or an empty vocabulary.
-    """
-    descriptors = check_descriptors("descriptors", descriptors)
-    vocabulary = check_descriptors("vocabulary", vocabulary)
-    if vocabulary.shape[0] == 0:
-        raise ValueError("vocabulary: got 0 words, expected at least 1")
-    if vocabulary.shape[0] >= 2**31:
-        raise ValueError(f"vocabulary: got {vocabulary.shape[0]} words, expected fewer than 2**31")
-    index, _ = _nearest(_as_words64(descriptors), vocabulary)
-    return index
 
 
 def pad_for_levels(n_levels: int, scale_factor: float) -> int:
@@ -311,30 +215,30 @@ def detect_orb(
         Naming the parameter, for a wrong image shape or dtype or an out-of-range
         setting.
     """
-    image = _as_uint8("image_gray", image_gray, 2, "(H, W)")
+    image = as_uint8("image_gray", image_gray, 2, "(H, W)")
     height, width = image.shape
     if height == 0 or width == 0:
-        raise ValueError(f"image_gray: got shape {image.shape}, expected (H, W) with H, W >= 1")
-    tile = _check_int("tile", tile, 1)
-    per_tile = _check_int("per_tile", per_tile, 1)
+        raise ParameterError(f"image_gray: got shape {image.shape}, expected (H, W) with H, W >= 1")
+    tile = check_int("tile", tile, 1)
+    per_tile = check_int("per_tile", per_tile, 1)
     if max_features is not None:
-        max_features = _check_int("max_features", max_features, 1)
-    fast_threshold = _check_int("fast_threshold", fast_threshold, 1, 255)
+        max_features = check_int("max_features", max_features, 1)
+    fast_threshold = check_int("fast_threshold", fast_threshold, 1, 255)
     if fill_threshold is not None:
-        fill_threshold = _check_int("fill_threshold", fill_threshold, 1, fast_threshold)
+        fill_threshold = check_int("fill_threshold", fill_threshold, 1, fast_threshold)
         if fill_threshold == fast_threshold:
             fill_threshold = None
-    n_levels = _check_int("n_levels", n_levels, 1, 16)
+    n_levels = check_int("n_levels", n_levels, 1, 16)
     if (
         isinstance(scale_factor, bool)
         or not isinstance(scale_factor, (int, float, np.integer, np.floating))
         or not 1.0 < scale_factor <= 2.0
     ):
-        raise ValueError(f"scale_factor: got {scale_factor!r}, expected a number in (1, 2]")
+        raise ParameterError(f"scale_factor: got {scale_factor!r}, expected a number in (1, 2]")
     scale_factor = float(scale_factor)
     if scale_factor ** (n_levels - 1) > _MAX_LEVEL_SCALE:
         # The padding grows with the coarsest level's scale; past this it dwarfs the map.
-        raise ValueError(
+        raise ParameterError(
             f"n_levels: got {n_levels} with scale_factor {scale_factor}, expected "
             f"scale_factor ** (n_levels - 1) <= {_MAX_LEVEL_SCALE}"
         )

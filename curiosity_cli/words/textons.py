@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from curiosity_cli.checks import check_int
 from curiosity_cli.words.filterbank import (
     MR8_CHANNELS,
     check_image,
-    check_stride,
     mr8_responses,
     normalise_responses,
 )
@@ -95,7 +95,7 @@ def texton_words(
         Index into ``centres`` of each sample's texton.
     """
     image = check_image(image)
-    stride = check_stride(stride)
+    stride = check_int("stride", stride, 1)
     # all checks before the filtering, which takes a while
     centres = _check_centres(centres)
     if centres.shape[1] != len(MR8_CHANNELS):

@@ -139,12 +139,12 @@ def test_a_missing_vocabulary_says_how_to_build_it(own_map, tmp_path):
 
 
 def test_a_failure_mid_extraction_leaves_no_store(own_map, tmp_path, monkeypatch):
-    import curiosity_cli.words.orb as orb
+    import curiosity_cli.words.hamming as hamming
 
     def broken(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(orb, "nearest_binary_words", broken)
+    monkeypatch.setattr(hamming, "nearest_binary_words", broken)
     with pytest.raises(KeyboardInterrupt):
         extract_words(load_map(own_map), WORDS, cache_dir=tmp_path / "cache")
     assert not (tmp_path / "cache").exists() or list((tmp_path / "cache").iterdir()) == []

@@ -8,7 +8,8 @@ import pytest
 from naive import nearest_words as naive_nearest_words
 
 from curiosity_cli.words import _hamming_kernels, orb
-from curiosity_cli.words.orb import detect_orb, nearest_binary_words
+from curiosity_cli.words.hamming import nearest_binary_words
+from curiosity_cli.words.orb import detect_orb
 
 
 def random_descriptors(rng: np.random.Generator, n: int) -> np.ndarray:

@@ -1,0 +1,31 @@
+"""Argument checks shared by the public functions: each names the bad parameter."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from curiosity_cli.errors import ParameterError
+
+
+def check_int(name: str, value, minimum: int, maximum: int | None = None) -> int:
+    """``value`` as an int in ``[minimum, maximum]``, else :class:`ParameterError` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise ParameterError(f"{name}: got {value!r}, expected an integer >= {minimum}")
+    if value < minimum or (maximum is not None and value > maximum):
+        expected = f"between {minimum} and {maximum}" if maximum is not None else f">= {minimum}"
+        raise ParameterError(f"{name}: got {value}, expected an integer {expected}")
+    return int(value)
+
+
+def as_uint8(name: str, array, ndim: int, shape_text: str) -> np.ndarray:
+    """``array`` as a C-contiguous uint8 array, if it is an integer array of 0..255."""
+    array = np.asarray(array)
+    if array.ndim != ndim:
+        raise ParameterError(f"{name}: got shape {array.shape}, expected {shape_text}")
+    if array.dtype != np.uint8:
+        if array.dtype == np.bool_ or not np.issubdtype(array.dtype, np.integer):
+            raise ParameterError(f"{name}: got dtype {array.dtype}, expected uint8")
+        if array.size and (array.min() < 0 or array.max() > 255):
+            raise ParameterError(f"{name}: got values outside 0..255, expected uint8")
+        array = array.astype(np.uint8)
+    return np.ascontiguousarray(array)
