@@ -140,3 +140,332 @@ def bit_counts(descriptors: np.ndarray, labels: np.ndarray, k: int) -> tuple[np.
         counts[c] = members.sum(axis=0)
         sizes[c] = len(members)
     return counts, sizes
+
+
+# --------------------------------------------------------------------------- topic model
+# Twins of curiosity_cli/topics/_rng.py, _sampler.py, _gibbs_kernels.py and _perplexity_kernels.py.
+# They keep only words and topics (per cell, in a dict) and recount whatever they need
+# from the topics every time they need it: nothing is cached, so nothing can go stale.
+# The float32 arithmetic of a draw is written out exactly as the kernels do it, because
+# the tests compare topics bit for bit.
+
+from dataclasses import dataclass  # noqa: E402  (kept with the section that uses it)
+
+MASK64 = 2**64 - 1
+GOLDEN = 0x9E3779B97F4A7C15
+
+
+def mix(z: int) -> int:
+    """splitmix64's output function on Python ints."""
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & MASK64
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & MASK64
+    return z ^ (z >> 31)
+
+
+class Stream:
+    """splitmix64 started at ``mix(key ^ mix(counter ^ cell * GOLDEN))``."""
+
+    def __init__(self, key: int, counter: int, cell: int):
+        self.state = mix(key ^ mix((counter & MASK64) ^ ((cell * GOLDEN) & MASK64)))
+
+    def bits(self) -> int:
+        self.state = (self.state + GOLDEN) & MASK64
+        return mix(self.state)
+
+
+def unit32(bits: int) -> np.float32:
+    return np.float32(bits >> 40) * np.float32(2.0**-24)
+
+
+def unit64(bits: int) -> float:
+    return (bits >> 11) * 2.0**-53
+
+
+def below(bits: int, n: int) -> int:
+    return ((bits >> 32) * n) >> 32
+
+
+def lane_draw(p: np.ndarray, bits: int) -> int:
+    """Inverse-CDF draw from float32 weights ``p`` (length a multiple of 8) in lane order.
+
+    Topics are visited lane by lane (lane j: topics j, j + 8, ...). All sums are float32,
+    each lane summed from 0 in topic order, the total as lane 0 + lane 1 + ... + lane 7.
+    """
+    p = np.asarray(p, np.float32)
+    lanes = [np.float32(0.0)] * 8
+    for k in range(len(p)):
+        lanes[k % 8] = np.float32(lanes[k % 8] + p[k])
+    total = np.float32(0.0)
+    for s in lanes:
+        total = np.float32(total + s)
+    target = np.float32(unit32(bits) * total)
+    positive = [j for j in range(8) if lanes[j] > 0]
+    lane, before = positive[-1], np.float32(0.0)  # the last positive lane if rounding runs past
+    for j in positive:
+        if target < np.float32(before + lanes[j]):
+            lane = j
+            break
+        before = np.float32(before + lanes[j])
+    rest = np.float32(target - before)
+    members = [k for k in range(lane, len(p), 8) if p[k] > 0]
+    running = np.float32(0.0)
+    for k in members:
+        running = np.float32(running + p[k])
+        if rest < running:
+            return k
+    return members[-1]
+
+
+@dataclass
+class NaiveModel:
+    """The state a twin needs: words and topics of each observed cell, in a dict."""
+
+    n_topics: int
+    vocabulary_size: int
+    table: np.ndarray
+    alpha: float
+    beta: float
+    key: int
+    counter: int
+    words: dict
+    topics: dict
+    order: list
+    times: list
+    frozen: np.ndarray | None = None  # (V, K) frozen word-topic counts
+
+    @classmethod
+    def of(cls, model) -> NaiveModel:
+        """A twin state equal to a TopicModel's current state."""
+        cells = [int(c) for c in model.observed_cells()]
+        return cls(
+            n_topics=model.n_topics,
+            vocabulary_size=model.vocabulary_size,
+            table=np.array(model.neighbours),
+            alpha=model.alpha,
+            beta=model.beta,
+            key=mix(model.seed),
+            counter=model.snapshot().counter,
+            words={c: model.cell_words(c).astype(np.int64) for c in cells},
+            topics={c: model.topics([c]).astype(np.int64) for c in cells},
+            order=cells,
+            times=[int(t) for t in model.observation_times()],
+            frozen=model.topic_word_counts() if model.frozen else None,
+        )
+
+    @property
+    def n_cells(self) -> int:
+        return self.table.shape[0]
+
+    @property
+    def padded(self) -> int:
+        return -(-self.n_topics // 8) * 8
+
+    def topics_in_cell_order(self) -> np.ndarray:
+        cells = sorted(self.topics)
+        return np.concatenate([self.topics[c] for c in cells]) if cells else np.zeros(0, np.int64)
+
+
+def count_topics(state: NaiveModel, topics: dict | None = None):
+    """(nwk (V, K), nk (K,), ncz (n_cells, K)) counted from topics; a topic of -1 counts nowhere."""
+    topics = state.topics if topics is None else topics
+    nwk = np.zeros((state.vocabulary_size, state.n_topics), np.int64)
+    ncz = np.zeros((state.n_cells, state.n_topics), np.int64)
+    for c, zs in topics.items():
+        for w, z in zip(state.words[c], zs):
+            if z >= 0:
+                nwk[w, z] += 1
+                ncz[c, z] += 1
+    return nwk, nwk.sum(axis=0), ncz
+
+
+def neighbourhood(state: NaiveModel, ncz: np.ndarray, cell: int) -> np.ndarray:
+    """Topic counts of ``cell`` plus those of every neighbour in the table."""
+    total = ncz[cell].copy()
+    for d in state.table[cell]:
+        if d >= 0:
+            total += ncz[d]
+    return total
+
+
+def eq5_weights(state: NaiveModel, nwk, nk, around, w) -> np.ndarray:
+    """float32 weights of eq. 5, padded to a multiple of 8 with zeros, as the kernel forms them."""
+    if state.frozen is not None:
+        nwk, nk = state.frozen, state.frozen.sum(axis=0)
+    inv = (1.0 / (nk.astype(np.float64) + state.vocabulary_size * state.beta)).astype(np.float32)
+    p = (nwk[w].astype(np.float32) + np.float32(state.beta)) * inv * (
+        np.asarray(around).astype(np.float32) + np.float32(state.alpha)
+    )
+    return np.concatenate([p, np.zeros(state.padded - state.n_topics, np.float32)])
+
+
+def add_cell_naive(state: NaiveModel, cell: int, words, time: int | None = None) -> None:
+    """Twin of ``add_cell_kernel``: uniform topics from stream (counter, cell)."""
+    stream = Stream(state.key, state.counter, cell)
+    state.words[cell] = np.asarray(words, np.int64)
+    state.topics[cell] = np.array([below(stream.bits(), state.n_topics) for _ in words], np.int64)
+    state.order.append(cell)
+    state.times.append((state.times[-1] + 1 if state.times else 0) if time is None else time)
+    state.counter += 1
+
+
+def gibbs_cell_naive(state: NaiveModel, cell: int, stream: Stream, stale_topics: dict | None = None) -> None:
+    """One Gibbs pass over a cell's words, every count recounted without the word.
+
+    With ``stale_topics``, the word-topic counts come from those topics for every other
+    cell (and this cell's current topics): the view of a cell inside a batch phase.
+    """
+    zs = state.topics[cell]
+    for i, w in enumerate(state.words[cell]):
+        zs[i] = -1
+        _, _, ncz = count_topics(state)
+        source = state.topics if stale_topics is None else {**stale_topics, cell: zs}
+        nwk, nk, _ = count_topics(state, source)
+        zs[i] = lane_draw(eq5_weights(state, nwk, nk, neighbourhood(state, ncz, cell), w), stream.bits())
+
+
+def refine_cells_naive(state: NaiveModel, cells) -> None:
+    """Twin of ``refine_cells_kernel``: cell j of the list uses stream (counter + j, cell)."""
+    for j, c in enumerate(cells):
+        gibbs_cell_naive(state, int(c), Stream(state.key, state.counter + j, int(c)))
+    state.counter += len(cells)
+
+
+def distance2_colouring_naive(table: np.ndarray) -> np.ndarray:
+    """Twin of ``distance2_colouring``: greedy, in cell order, smallest colour free within distance 2."""
+    colour = {}
+    for c in range(table.shape[0]):
+        near = {d for d in table[c] if d >= 0}
+        near |= {e for d in list(near) for e in table[d] if e >= 0}
+        near.discard(c)
+        used = {colour[d] for d in near if d in colour}
+        colour[c] = min(set(range(len(used) + 1)) - used)
+    return np.array([colour[c] for c in range(table.shape[0])], np.int32)
+
+
+def refine_batch_naive(state: NaiveModel, sweeps: int) -> None:
+    """Twin of ``refine_batch_kernel``: phases by colour, stale word-topic counts per phase.
+
+    In sweep s, for each colour in increasing order, each observed cell of that colour
+    (in cell order) is refined with stream (counter + s, cell), seeing every other cell's
+    word-topic contribution as it was when the phase began.
+    """
+    colour = distance2_colouring_naive(state.table)
+    cells = sorted(state.topics)
+    for s in range(sweeps):
+        for h in sorted({colour[c] for c in cells}):
+            start = {c: zs.copy() for c, zs in state.topics.items()}
+            for c in [c for c in cells if colour[c] == h]:
+                gibbs_cell_naive(state, c, Stream(state.key, state.counter + s, c), stale_topics=start)
+    state.counter += sweeps
+
+
+def refine_realtime_naive(state: NaiveModel, budget: int, eta: float) -> tuple[int, int]:
+    """Twin of ``refine_realtime_kernel``: (words sampled, picks)."""
+    times = sorted(set(state.times))
+    groups = [[c for c, t in zip(state.order, state.times) if t == time] for time in times]
+    picker = Stream(state.key, state.counter, state.n_cells)
+    done = picks = idle = 0
+    while done + idle < budget:  # a pick without words spends one unit
+        bits = picker.bits()
+        if len(groups) == 1 or unit64(bits) < eta:
+            group = groups[-1]
+        else:
+            group = groups[below(picker.bits(), len(groups) - 1)]
+        for c in group:
+            gibbs_cell_naive(state, c, Stream(state.key, state.counter + 1 + picks, c))
+        sampled = sum(len(state.words[c]) for c in group)
+        done += sampled
+        idle += sampled == 0
+        picks += 1
+    state.counter += 1 + picks
+    return done, picks
+
+
+def lda_gibbs_naive(docs, topics, n_topics, n_words, alpha, beta, streams):
+    """Collapsed Gibbs sampler of LDA (Griffiths & Steyvers 2004), one pass over each document.
+
+    ``docs`` and ``topics`` are lists of arrays (topics changed in place); document d
+    draws from ``streams[d]``. p(z = k) ∝ (n_wk + β)/(n_k + Vβ) · (n_dk + α), every count
+    without the word, in the kernels' float32 arithmetic and lane-order draw.
+    """
+    padding = np.zeros(-(-n_topics // 8) * 8 - n_topics, np.float32)
+    for d, (doc, zs) in enumerate(zip(docs, topics)):
+        for i, w in enumerate(doc):
+            zs[i] = -1
+            nwk = np.zeros((n_words, n_topics), np.int64)
+            for other_doc, other_zs in zip(docs, topics):
+                for v, z in zip(other_doc, other_zs):
+                    if z >= 0:
+                        nwk[v, z] += 1
+            ndk = np.bincount(zs[zs >= 0], minlength=n_topics)
+            inv = (1.0 / (nwk.sum(axis=0) + n_words * beta)).astype(np.float32)
+            p = (nwk[w].astype(np.float32) + np.float32(beta)) * inv * (ndk.astype(np.float32) + np.float32(alpha))
+            zs[i] = lane_draw(np.concatenate([p, padding]), streams[d].bits())
+
+
+def ml_topics_naive(state: NaiveModel, cells) -> np.ndarray:
+    """Twin of ``ml_topics_kernel``: np.argmax of eq. 5 with the word included, float64."""
+    nwk, nk, ncz = count_topics(state)
+    if state.frozen is not None:
+        nwk, nk = state.frozen, state.frozen.sum(axis=0)
+    norm = 1.0 / (nk + state.vocabulary_size * state.beta)
+    out = []
+    for c in cells:
+        around = neighbourhood(state, ncz, c)
+        for w in state.words[c]:
+            out.append(np.argmax((nwk[w] + state.beta) * norm * (around + state.alpha)))
+    return np.array(out, np.int64)
+
+
+def log_likelihood_naive(state: NaiveModel) -> float:
+    """Twin of ``mean_log_likelihood_kernel``: mean log Σ_k φ_k(w) θ_c(k), float64."""
+    nwk, nk, ncz = count_topics(state)
+    if state.frozen is not None:
+        nwk, nk = state.frozen, state.frozen.sum(axis=0)
+    phi = (nwk + state.beta) / (nk + state.vocabulary_size * state.beta)
+    logs = []
+    for c in sorted(state.words):
+        around = neighbourhood(state, ncz, c)
+        theta = (around + state.alpha) / (around.sum() + state.n_topics * state.alpha)
+        logs += [math.log(float(phi[w] @ theta)) for w in state.words[c]]
+    return float(np.mean(logs)) if logs else 0.0
+
+
+def word_perplexity_naive(state: NaiveModel, words) -> float:
+    """Twin of ``word_perplexity_kernel``: eq. 11 straight from its definition."""
+    nwk, nk, _ = count_topics(state)
+    if state.frozen is not None:
+        nwk, nk = state.frozen, state.frozen.sum(axis=0)
+    phi = (nwk + state.beta) / (nk + state.vocabulary_size * state.beta)
+    path = (nk + state.alpha) / (nk.sum() + state.n_topics * state.alpha)
+    return math.exp(-np.mean([math.log(float(phi[w] @ path)) for w in words]))
+
+
+def topic_perplexity_naive(state: NaiveModel, words, cell: int) -> tuple[float, np.ndarray]:
+    """Twin of ``topic_perplexity_kernel``: (eq. 12, the temporary topics)."""
+    nwk, nk, ncz = count_topics(state)
+    around = neighbourhood(state, ncz, cell)
+    stream = Stream(state.key, state.counter, state.n_cells + 1 + cell)
+    topics = []
+    for w in words:
+        z = lane_draw(eq5_weights(state, nwk, nk, around, w), stream.bits())
+        topics.append(z)
+        around[z] += 1
+    if state.frozen is not None:
+        nk = state.frozen.sum(axis=0)
+    path = (nk + state.alpha) / (nk.sum() + state.n_topics * state.alpha)
+    return math.exp(-np.mean([math.log(path[z]) for z in topics])), np.array(topics)
+
+
+def recount(model) -> dict:
+    """The counts of a TopicModel recounted from its words and topics alone.
+
+    Returns ``nwk`` (V, K), ``nk`` (K,), ``ncz`` (n_cells, K) and ``ng`` (n_cells, K);
+    for a frozen model ``nwk`` and ``nk`` are the frozen counts.
+    """
+    state = NaiveModel.of(model)
+    nwk, nk, ncz = count_topics(state)
+    if state.frozen is not None:
+        nwk, nk = state.frozen, state.frozen.sum(axis=0)
+    ng = np.array([neighbourhood(state, ncz, c) for c in range(state.n_cells)]).reshape(ncz.shape)
+    return {"nwk": nwk, "nk": nk, "ncz": ncz, "ng": ng}

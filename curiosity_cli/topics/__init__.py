@@ -1,0 +1,23 @@
+"""The ROST spatial topic model (paper section 3) and the perplexities of section 4.
+
+- :mod:`~curiosity_cli.topics.neighbours`: neighbour tables of grids and frame streams.
+- :mod:`~curiosity_cli.topics.model`: :class:`TopicModel`, its Gibbs refinement
+  (batch, realtime, frozen Φ), ML topics, snapshots and files.
+- :mod:`~curiosity_cli.topics.perplexity`: word and topic perplexity of a candidate cell.
+
+Numba kernels live in the private ``_*_kernels.py`` modules and are imported only when a
+model computes, so importing this package stays cheap.
+"""
+
+from curiosity_cli.topics.model import ModelSnapshot, TopicModel
+from curiosity_cli.topics.neighbours import grid_neighbours, stream_neighbours
+from curiosity_cli.topics.perplexity import topic_perplexity, word_perplexity
+
+__all__ = [
+    "ModelSnapshot",
+    "TopicModel",
+    "grid_neighbours",
+    "stream_neighbours",
+    "topic_perplexity",
+    "word_perplexity",
+]

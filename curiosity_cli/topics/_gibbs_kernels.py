@@ -1,0 +1,324 @@
+"""Numba kernels of the spatial topic model: initial topics, refinement, ML topics.
+
+Private: call the methods of :class:`curiosity_cli.topics.model.TopicModel`, which
+validate inputs and own the arrays (their layout and the sampler: ``_sampler.py``).
+Every kernel has a slow reference twin in ``tests/naive.py`` (section "topic model").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import prange
+
+from curiosity_cli._numba import njit
+from curiosity_cli.topics._rng import below, next_state, stream_start, unit64
+from curiosity_cli.topics._sampler import gibbs_cell, gibbs_cell_phase, refresh_inverse, row_dot
+
+# 16 int32 or float32: one 64-byte cache line
+_LINE = 16
+# cells of a batch phase are dealt to slots in chunks of this many
+_CHUNK = 16
+
+
+@njit
+def add_cell_kernel(
+    cell, first, count, words, topics, nwk, nk, inv, ncz, ng, table, n_topics, vbeta, key, counter, update_phi
+):
+    """Give the words of a new cell uniformly random topics and count them.
+
+    Draws from the stream ``(counter, cell)``. ``update_phi`` False leaves ``nwk``,
+    ``nk`` and ``inv`` alone (a model whose word-topic counts are frozen).
+    """
+    state = stream_start(key, counter, cell)
+    width = table.shape[1]
+    for i in range(first, first + count):
+        state, bits = next_state(state)
+        k = below(bits, n_topics)
+        topics[i] = k
+        ncz[cell, k] += 1
+        ng[cell, k] += 1
+        for j in range(width):
+            d = table[cell, j]
+            if d >= 0:
+                ng[d, k] += 1
+        if update_phi:
+            nwk[words[i], k] += 1
+            nk[k] += 1
+    if update_phi:
+        refresh_inverse(nk, inv, n_topics, vbeta)
+
+
+@njit
+def refine_cells_kernel(
+    cells, cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, alpha, beta, vbeta, key, counter,
+    update_phi,
+):
+    """Refine ``cells`` one after the other; the ``j``-th uses stream ``(counter + j, cell)``."""
+    p = np.zeros(nk.shape[0], np.float32)
+    for j in range(cells.shape[0]):
+        cell = cells[j]
+        state = stream_start(key, counter + np.uint64(j), cell)
+        gibbs_cell(
+            cell, cell_first[cell], cell_count[cell], words, topics, nwk, nk, inv, ncz, ng, table, p,
+            alpha, beta, vbeta, state, update_phi,
+        )
+
+
+@njit
+def link_repeats(words, cell_first, cell_count, n_words):
+    """(capacity,) int32: for each word, the previous position of its id in its cell, or -1."""
+    repeat_of = np.full(words.shape[0], -1, np.int32)
+    latest = np.full(n_words, -1, np.int64)
+    for cell in range(cell_first.shape[0]):
+        first = cell_first[cell]
+        if first < 0:
+            continue
+        for i in range(first, first + cell_count[cell]):
+            w = words[i]
+            if latest[w] >= first:
+                repeat_of[i] = latest[w]
+            latest[w] = i
+        for i in range(first, first + cell_count[cell]):
+            latest[words[i]] = -1
+    return repeat_of
+
+
+@njit(parallel=True)
+def refine_batch_kernel(
+    sweeps, phase_cells, phase_start, n_slots, n_topics,
+    cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, alpha, beta, vbeta, key, counter,
+    update_phi,
+):
+    """``sweeps`` colour-phased Gibbs sweeps; the result does not depend on ``n_slots``.
+
+    Parameters
+    ----------
+    phase_cells : (n,) int64 ndarray
+        Observed cells grouped by colour: phase ``h`` is
+        ``phase_cells[phase_start[h]:phase_start[h + 1]]``. No two cells of a phase are
+        within graph distance 2, so they share no cell count or neighbourhood sum.
+    n_slots : int
+        Units of parallel work per phase; cells are dealt to slots in chunks, and the
+        merge of a phase's changes is split among slots by word id.
+
+    Notes
+    -----
+    Sweep ``s`` refines each cell with stream ``(counter + s, cell)``. Within a phase,
+    every cell sees the word-topic counts and topic totals as they were at the start of
+    the phase plus its own changes (:func:`gibbs_cell_phase`); the phase's changes are
+    merged into the counts when the phase ends. Cell counts and neighbourhood sums are
+    shared and exact. So the result is the same on any number of threads, and differs
+    from a sequential sweep only in how stale the word-topic counts are within one phase
+    (as in AD-LDA).
+    """
+    kp = nk.shape[0]
+    n_phases = phase_start.shape[0] - 1
+    # each slot's rows, written for every word, padded by a cache line so that no two
+    # slots ever write the same line (false sharing halved the speed on 2 threads)
+    stride = kp + _LINE
+    slot_nk = np.empty((n_slots, stride), np.int32)
+    slot_inv = np.empty((n_slots, stride), np.float32)
+    slot_p = np.zeros((n_slots, stride), np.float32)
+    slot_change = np.zeros((n_slots, stride), np.int32)
+    before = np.empty_like(topics)
+    repeat_of = link_repeats(words, cell_first, cell_count, nwk.shape[0])
+    # the slot that merges each word id's changes (a table: `%` per word is a division)
+    owner = np.arange(nwk.shape[0]) % n_slots
+    for sweep in range(sweeps):
+        for phase in range(n_phases):
+            lo = phase_start[phase]
+            hi = phase_start[phase + 1]
+            for slot in prange(n_slots):
+                own_nk = slot_nk[slot, :kp]
+                own_inv = slot_inv[slot, :kp]
+                own_p = slot_p[slot, :kp]
+                # chunks of cells dealt round-robin: cells refined at the same time by
+                # two slots lie far apart, so they do not write neighbouring rows
+                for start in range(lo + slot * _CHUNK, hi, n_slots * _CHUNK):
+                    for index in range(start, min(start + _CHUNK, hi)):
+                        cell = phase_cells[index]
+                        first = cell_first[cell]
+                        last = first + cell_count[cell]
+                        before[first:last] = topics[first:last]
+                        own_nk[:] = nk
+                        own_inv[:] = inv
+                        state = stream_start(key, counter + np.uint64(sweep), cell)
+                        gibbs_cell_phase(
+                            cell, first, cell_count[cell], words, repeat_of, topics, before, nwk, own_nk, own_inv,
+                            ncz, ng, table, own_p, alpha, beta, vbeta, state, update_phi,
+                        )
+            if update_phi:
+                for slot in prange(n_slots):
+                    _merge(
+                        slot, owner, phase_cells[lo:hi], cell_first, cell_count, words, before, topics, nwk,
+                        slot_change[slot, :kp],
+                    )
+                for slot in range(n_slots):
+                    for k in range(kp):
+                        nk[k] += slot_change[slot, k]
+                refresh_inverse(nk, inv, n_topics, vbeta)
+
+
+@njit
+def _merge(slot, owner, cells, cell_first, cell_count, words, before, topics, nwk, change):
+    """Move the words of ``cells`` whose id ``owner`` gives to ``slot`` to their new topics in ``nwk``.
+
+    ``change`` receives the (Kp,) change of the topic totals.
+    """
+    change[:] = 0
+    for index in range(cells.shape[0]):
+        cell = cells[index]
+        first = cell_first[cell]
+        for i in range(first, first + cell_count[cell]):
+            a = before[i]
+            b = topics[i]
+            w = words[i]
+            if a != b and owner[w] == slot:
+                nwk[w, a] -= 1
+                nwk[w, b] += 1
+                change[a] -= 1
+                change[b] += 1
+
+
+@njit
+def refine_realtime_kernel(
+    budget, eta, order, group_start,
+    cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, alpha, beta, vbeta, key, counter,
+    update_phi,
+):
+    """Algorithm 2 of the paper: refine picked observation times until ``budget`` is spent.
+
+    Parameters
+    ----------
+    order : (n_observed,) int32 ndarray
+        Observed cells in the order they were added.
+    group_start : (T + 1,) int64 ndarray, T >= 1
+        Observation time ``t`` holds ``order[group_start[t]:group_start[t + 1]]``.
+
+    Returns
+    -------
+    (int, int)
+        Words sampled and number of picks. Picks draw from stream
+        ``(counter, n_cells)``: with probability ``eta`` (or always, with one time) the
+        newest time, else a uniform earlier one (eq. 6); pick ``j`` refines each cell of
+        its time with stream ``(counter + 1 + j, cell)``. Each word sampled spends one
+        unit of the budget, and so does a pick that finds no words, so the loop ends
+        after at most ``budget`` picks even if every reachable cell is empty.
+    """
+    n_cells = ncz.shape[0]
+    n_times = group_start.shape[0] - 1
+    p = np.zeros(nk.shape[0], np.float32)
+    picker = stream_start(key, counter, n_cells)
+    done = 0
+    idle = 0
+    picks = 0
+    while done + idle < budget:
+        picker, bits = next_state(picker)
+        if n_times == 1 or unit64(bits) < eta:
+            t = n_times - 1
+        else:
+            picker, bits = next_state(picker)
+            t = below(bits, n_times - 1)
+        pick_counter = counter + np.uint64(1 + picks)
+        sampled = 0
+        for index in range(group_start[t], group_start[t + 1]):
+            cell = order[index]
+            state = stream_start(key, pick_counter, cell)
+            gibbs_cell(
+                cell, cell_first[cell], cell_count[cell], words, topics, nwk, nk, inv, ncz, ng, table, p,
+                alpha, beta, vbeta, state, update_phi,
+            )
+            sampled += cell_count[cell]
+        done += sampled
+        if sampled == 0:
+            idle += 1
+        picks += 1
+    return done, picks
+
+
+@njit
+def ml_topics_kernel(cells, cell_first, cell_count, words, nwk, nk, ng, n_topics, alpha, beta, vbeta, out):
+    """Most probable topic of every word of ``cells`` (in that order), the word included.
+
+    ``argmax_k (nwk[w, k] + beta) * (1 / (nk[k] + V beta)) * (ng[c, k] + alpha)`` in
+    float64 (``alpha``, ``beta`` float64), ties to the lowest ``k``; written to ``out``.
+    """
+    norm = np.empty(n_topics)
+    for k in range(n_topics):
+        norm[k] = 1.0 / (nk[k] + vbeta)
+    at = 0
+    for j in range(cells.shape[0]):
+        cell = cells[j]
+        first = cell_first[cell]
+        for i in range(first, first + cell_count[cell]):
+            w = words[i]
+            best = -1.0
+            best_k = 0
+            for k in range(n_topics):
+                v = (nwk[w, k] + beta) * norm[k] * (ng[cell, k] + alpha)
+                if v > best:
+                    best = v
+                    best_k = k
+            out[at] = best_k
+            at += 1
+
+
+@njit
+def mean_log_likelihood_kernel(cells, cell_first, cell_count, words, nwk, nk, ng, n_topics, alpha, beta, vbeta):
+    """Mean over the words of ``cells`` of ``log sum_k phi_k(w) theta_c(k)``, float64.
+
+    ``phi_k(w) = (nwk[w, k] + beta) / (nk[k] + V beta)`` and ``theta_c(k) = (ng[c, k] +
+    alpha) / (sum_k ng[c, k] + K alpha)``, every count including the word itself; 0.0
+    when there are no words.
+    """
+    kp = nk.shape[0]
+    norm = np.zeros(kp)
+    for k in range(n_topics):
+        norm[k] = 1.0 / (nk[k] + vbeta)
+    mixture = np.zeros(kp)
+    total = 0.0
+    n = 0
+    for j in range(cells.shape[0]):
+        cell = cells[j]
+        first = cell_first[cell]
+        size = 0.0
+        for k in range(n_topics):
+            size += ng[cell, k]
+        scale = 1.0 / (size + n_topics * alpha)
+        for k in range(n_topics):
+            mixture[k] = norm[k] * (ng[cell, k] + alpha) * scale
+        for i in range(first, first + cell_count[cell]):
+            total += np.log(row_dot(nwk, words[i], beta, mixture))
+            n += 1
+    if n == 0:
+        return 0.0
+    return total / n
+
+
+@njit
+def distance2_colouring(table):
+    """Greedy colouring in which cells within graph distance 2 get different colours.
+
+    Cells are coloured in index order, each with the smallest colour that no
+    already-coloured cell within distance 2 has. Returns (n_cells,) int32 colours.
+    """
+    n_cells, width = table.shape
+    colour = np.full(n_cells, -1, np.int32)
+    # a cell has at most width + width * width cells within distance 2
+    taken = np.full(width * width + width + 1, -1, np.int64)
+    for c in range(n_cells):
+        for j in range(width):
+            d = table[c, j]
+            if d < 0:
+                continue
+            if colour[d] >= 0:
+                taken[colour[d]] = c
+            for jj in range(width):
+                e = table[d, jj]
+                if e >= 0 and e != c and colour[e] >= 0:
+                    taken[colour[e]] = c
+        pick = 0
+        while taken[pick] == c:
+            pick += 1
+        colour[c] = pick
+    return colour

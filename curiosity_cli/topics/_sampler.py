@@ -1,0 +1,268 @@
+"""The Gibbs sampler of the spatial topic model: one cell's words, the draw, its weights.
+
+Private: used by ``_gibbs_kernels`` and ``_perplexity_kernels``; twins in
+``tests/naive.py`` (section "topic model").
+
+The arrays, for ``n_cells`` cells, vocabulary ``V``, ``K`` topics padded to
+``Kp = 8 * ceil(K / 8)`` columns (padding columns stay zero, and ``inv`` is zero there,
+so padded topics get probability exactly 0 and the dense loops need no remainder):
+
+- ``words`` (capacity,) int32, ``topics`` (capacity,) int8/int16/int32: the words of
+  observed cell ``c`` are ``[cell_first[c], cell_first[c] + cell_count[c])``.
+- ``nwk`` (V, Kp) int32 word-topic counts: one word's counts over topics are contiguous,
+  which is the inner loop of the sampler.
+- ``nk`` (Kp,) int32 topic totals; ``inv`` (Kp,) float32, ``inv[k] = float32(1 /
+  (nk[k] + V beta))`` computed in float64, kept in step with ``nk``.
+- ``ncz`` (n_cells, Kp) int32 topic counts of each cell.
+- ``ng`` (n_cells, Kp) int32 neighbourhood sums: ``ncz[c]`` plus ``ncz[d]`` for every
+  ``d`` in ``table[c]``, for every cell, observed or not (an unobserved cell counts
+  nothing itself, and its sum is the prior a candidate cell there would see).
+- ``table`` (n_cells, width) int32 neighbours, -1 padded, symmetric.
+
+The sampler (eq. 5 of the paper), for word ``i`` of cell ``c`` with word id ``w``, with
+the word removed from every count::
+
+    p[k] = (float32(nwk[w, k]) + beta) * inv[k] * (float32(ng[c, k]) + alpha)
+
+in float32, left to right. The draw is an inverse-CDF search over topics in *lane
+order*: lane ``j`` (0..7) holds topics ``j, j + 8, j + 16, ...``; lane sums are
+accumulated in float32 in that order, the total is ``lane[0] + lane[1] + ... + lane[7]``,
+``target = u * total`` with ``u`` a float32 uniform, the lane is the first whose running
+sum exceeds ``target``, and within it the topic is the first whose running sum (from 0)
+exceeds ``target - (sum of the earlier lanes)``. Rounding can leave ``target`` past the
+last running sum; then the last lane (topic) with positive mass is taken. Lanes make the
+sums 8 independent chains of additions instead of one, and the search 16 steps, not 64.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from curiosity_cli._numba import njit
+from curiosity_cli.topics._prefetch import prefetch
+from curiosity_cli.topics._rng import next_state, unit32
+
+LANES = 8
+
+
+@njit
+def inverse(count, vbeta):
+    """``float32(1 / (count + V beta))``, the cached topic normaliser."""
+    return np.float32(1.0 / (count + vbeta))
+
+
+@njit(inline="always")
+def weight(nwk, inv, ng, w, cell, k, alpha, beta):
+    """Eq. 5's unnormalised weight of topic ``k`` for word ``w`` of ``cell``, in float32."""
+    return (np.float32(nwk[w, k]) + beta) * inv[k] * (np.float32(ng[cell, k]) + alpha)
+
+
+@njit
+def refresh_inverse(nk, inv, n_topics, vbeta):
+    """Recompute ``inv`` from ``nk`` for the real topics (padding stays 0)."""
+    for k in range(n_topics):
+        inv[k] = inverse(nk[k], vbeta)
+
+
+@njit(inline="always")
+def lane_draw(p, bits):
+    """Topic drawn with probability proportional to ``p`` (length a multiple of 8), in lane order.
+
+    Both searches count the running sums at or below the target rather than break out of
+    a loop: the same topic as a first-exceeding search (running sums never decrease),
+    without unpredictable branches. Written without indexing tuples by a variable or
+    storing partial sums, both of which numba makes slow here.
+    """
+    n_blocks = p.shape[0] // LANES
+    l0 = l1 = l2 = l3 = l4 = l5 = l6 = l7 = np.float32(0.0)
+    for b in range(n_blocks):
+        o = b * LANES
+        l0 += p[o]
+        l1 += p[o + 1]
+        l2 += p[o + 2]
+        l3 += p[o + 3]
+        l4 += p[o + 4]
+        l5 += p[o + 5]
+        l6 += p[o + 6]
+        l7 += p[o + 7]
+    c0 = l0
+    c1 = c0 + l1
+    c2 = c1 + l2
+    c3 = c2 + l3
+    c4 = c3 + l4
+    c5 = c4 + l5
+    c6 = c5 + l6
+    c7 = c6 + l7
+    target = unit32(bits) * c7
+    lane = (
+        int(c0 <= target) + int(c1 <= target) + int(c2 <= target) + int(c3 <= target)
+        + int(c4 <= target) + int(c5 <= target) + int(c6 <= target) + int(c7 <= target)
+    )
+    # the sum of the lanes before the chosen one: the last running sum at or below target
+    below_lane = np.float32(0.0)
+    below_lane = c0 if c0 <= target else below_lane
+    below_lane = c1 if c1 <= target else below_lane
+    below_lane = c2 if c2 <= target else below_lane
+    below_lane = c3 if c3 <= target else below_lane
+    below_lane = c4 if c4 <= target else below_lane
+    below_lane = c5 if c5 <= target else below_lane
+    below_lane = c6 if c6 <= target else below_lane
+    below_lane = c7 if c7 <= target else below_lane
+    if lane == LANES:
+        # rounding left the target at or past the total: the last lane with mass
+        lane = (
+            7 if l7 > 0 else 6 if l6 > 0 else 5 if l5 > 0 else 4 if l4 > 0
+            else 3 if l3 > 0 else 2 if l2 > 0 else 1 if l1 > 0 else 0
+        )
+    rest = target - below_lane
+    running = np.float32(0.0)
+    block = 0
+    for b in range(n_blocks):
+        running += p[b * LANES + lane]
+        block += int(running <= rest)
+    if block == n_blocks:
+        block = n_blocks - 1
+        while p[block * LANES + lane] == 0:
+            block -= 1
+    return block * LANES + lane
+
+
+@njit(inline="always")
+def row_dot(nwk, w, beta, weights):
+    """``sum_k (nwk[w, k] + beta) * weights[k]`` in float64, over 8 partial sums.
+
+    ``weights`` has ``Kp`` entries, zero for padding topics. Eight partial sums break
+    the chain of dependent additions a single running sum would be.
+    """
+    s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+    for b in range(weights.shape[0] // LANES):
+        o = b * LANES
+        s0 += (nwk[w, o] + beta) * weights[o]
+        s1 += (nwk[w, o + 1] + beta) * weights[o + 1]
+        s2 += (nwk[w, o + 2] + beta) * weights[o + 2]
+        s3 += (nwk[w, o + 3] + beta) * weights[o + 3]
+        s4 += (nwk[w, o + 4] + beta) * weights[o + 4]
+        s5 += (nwk[w, o + 5] + beta) * weights[o + 5]
+        s6 += (nwk[w, o + 6] + beta) * weights[o + 6]
+        s7 += (nwk[w, o + 7] + beta) * weights[o + 7]
+    return ((s0 + s1) + (s2 + s3)) + ((s4 + s5) + (s6 + s7))
+
+
+@njit
+def gibbs_cell(
+    cell, first, count, words, topics, nwk, nk, inv, ncz, ng, table, p, alpha, beta, vbeta, state, update_phi
+):
+    """One Gibbs pass over the words of ``cell`` in order (eq. 5, exact leave-one-out).
+
+    ``p`` is (Kp,) float32 scratch whose padding entries are 0. Returns the new state.
+    """
+    kp = p.shape[0]
+    width = table.shape[1]
+    last = first + count
+    for i in range(first, last):
+        w = words[i]
+        old = topics[i]
+        if i + 1 < last:
+            for k in range(0, kp, 32):
+                prefetch(nwk, words[i + 1], k)
+        # the weights with the word still counted: removing it changes entry `old` only,
+        # which is recomputed below; this loop need not wait for the removal's stores
+        for k in range(kp):
+            p[k] = weight(nwk, inv, ng, w, cell, k, alpha, beta)
+        ncz[cell, old] -= 1
+        ng[cell, old] -= 1
+        kept = inv[old]
+        if update_phi:
+            nwk[w, old] -= 1
+            nk[old] -= 1
+            inv[old] = inverse(nk[old], vbeta)
+        p[old] = weight(nwk, inv, ng, w, cell, old, alpha, beta)
+        state, bits = next_state(state)
+        new = lane_draw(p, bits)
+        topics[i] = new
+        ncz[cell, new] += 1
+        ng[cell, new] += 1
+        if update_phi:
+            nwk[w, new] += 1
+            nk[new] += 1
+            # back to the count it had, so to the normaliser it had: no division
+            inv[new] = kept if new == old else inverse(nk[new], vbeta)
+        if new != old:
+            # the other cells whose neighbourhood holds this cell
+            for j in range(width):
+                d = table[cell, j]
+                if d >= 0:
+                    ng[d, old] -= 1
+                    ng[d, new] += 1
+    return state
+
+
+@njit
+def gibbs_cell_phase(
+    cell, first, count, words, repeat_of, topics, before, nwk, nk, inv, ncz, ng, table, p, alpha, beta, vbeta, state,
+    update_phi,
+):
+    """:func:`gibbs_cell` for a batch phase: the word-topic counts ``nwk`` are read-only.
+
+    The cell sees ``nwk`` as at the start of the phase plus its own changes: ``before``
+    holds the phase-start topics of the cell's words, ``repeat_of[i]`` the previous
+    position of word ``i``'s id in the cell (-1 if none), and the weights of the few
+    topics where the cell's own changes (and the word's removal) differ from ``nwk`` are
+    recomputed from the corrected counts. ``nk`` and ``inv`` are the cell's own copies,
+    updated in place; cell counts and neighbourhood sums as in :func:`gibbs_cell`. The
+    weights equal those :func:`gibbs_cell` would compute on a private copy of ``nwk``.
+    """
+    kp = p.shape[0]
+    width = table.shape[1]
+    last = first + count
+    for i in range(first, last):
+        w = words[i]
+        old = topics[i]
+        if i + 1 < last:
+            for k in range(0, kp, 32):
+                prefetch(nwk, words[i + 1], k)
+        for k in range(kp):
+            p[k] = weight(nwk, inv, ng, w, cell, k, alpha, beta)
+        ncz[cell, old] -= 1
+        ng[cell, old] -= 1
+        kept = inv[old]
+        if update_phi:
+            nk[old] -= 1
+            inv[old] = inverse(nk[old], vbeta)
+            p[old] = _own_weight(i, old, old, w, cell, repeat_of, topics, before, nwk, inv, ng, alpha, beta)
+            j = repeat_of[i]
+            while j >= 0:
+                a = before[j]
+                b = topics[j]
+                if a != b:
+                    p[a] = _own_weight(i, old, a, w, cell, repeat_of, topics, before, nwk, inv, ng, alpha, beta)
+                    p[b] = _own_weight(i, old, b, w, cell, repeat_of, topics, before, nwk, inv, ng, alpha, beta)
+                j = repeat_of[j]
+        else:
+            p[old] = weight(nwk, inv, ng, w, cell, old, alpha, beta)
+        state, bits = next_state(state)
+        new = lane_draw(p, bits)
+        topics[i] = new
+        ncz[cell, new] += 1
+        ng[cell, new] += 1
+        if update_phi:
+            nk[new] += 1
+            inv[new] = kept if new == old else inverse(nk[new], vbeta)
+        if new != old:
+            for j in range(width):
+                d = table[cell, j]
+                if d >= 0:
+                    ng[d, old] -= 1
+                    ng[d, new] += 1
+    return state
+
+
+@njit
+def _own_weight(i, old, k, w, cell, repeat_of, topics, before, nwk, inv, ng, alpha, beta):
+    """Weight of topic ``k`` for word ``i`` (removed) with the cell's own changes to row ``w``."""
+    count = nwk[w, k] - (1 if k == old else 0)
+    j = repeat_of[i]
+    while j >= 0:
+        count += (1 if topics[j] == k else 0) - (1 if before[j] == k else 0)
+        j = repeat_of[j]
+    return (np.float32(count) + beta) * inv[k] * (np.float32(ng[cell, k]) + alpha)

@@ -1,0 +1,724 @@
+"""The ROST spatial topic model (paper section 3): state, refinement, Φ, save and load.
+
+A :class:`TopicModel` holds the words of the cells observed so far, one topic label per
+word, and the counts the Gibbs sampler needs. A word's topic is resampled from eq. 5::
+
+    p(z = k) ∝ (n_kw + β) / (n_k + Vβ) · (n_Gk + α)
+
+with every count excluding the word itself; ``n_Gk`` is the number of topic-``k`` words
+in the word's cell and its neighbours (the neighbour table; only observed cells hold
+words). With a table without columns this is the collapsed Gibbs sampler of LDA with
+cells as documents.
+
+Randomness: the model's seed and a 64-bit event counter determine every draw (see
+``_rng.py``); the same seed and the same calls give bit-identical states.
+
+Layouts: word-topic counts are stored ``(V, Kp)`` (``Kp`` = K rounded up to a multiple
+of 8), so one word's counts over topics are contiguous for the sampler's dense loop;
+public accessors return ``(V, K)``, topics in columns.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from curiosity_cli.checks import check_int
+from curiosity_cli.errors import CuriosityError, ParameterError
+from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.topics.neighbours import check_neighbours
+
+MODEL_FORMAT = 1
+_MIN_CAPACITY = 1024
+
+
+@dataclass(frozen=True)
+class ModelSnapshot:
+    """A copy of a model's whole mutable state, for :meth:`TopicModel.restore`.
+
+    Every field is the model's own array (copied), trimmed to the words and cells in use;
+    ``counter`` is the random state (with the model's fixed seed).
+    """
+
+    n_topics: int
+    vocabulary_size: int
+    n_cells: int
+    frozen: bool
+    words: np.ndarray
+    topics: np.ndarray
+    cell_first: np.ndarray
+    cell_count: np.ndarray
+    order: np.ndarray
+    times: np.ndarray
+    nwk: np.ndarray
+    nk: np.ndarray
+    ncz: np.ndarray
+    ng: np.ndarray
+    counter: int
+
+
+class TopicModel:
+    """Spatial topic model over cells with a fixed neighbour table.
+
+    Parameters
+    ----------
+    n_topics : int
+        K >= 1. Topic labels are stored as int8 for K <= 127 (int16, int32 above).
+    vocabulary_size : int
+        V >= 1; word ids are ``0 .. V - 1``.
+    neighbours : (n_cells, width) int ndarray
+        Neighbour table (see :mod:`curiosity_cli.topics.neighbours`): symmetric, ``-1``
+        padded, no self-loops. Its row count fixes the cells ``0 .. n_cells - 1``.
+    alpha, beta : float
+        Dirichlet hyper-parameters, > 0.
+    seed : int
+        0 .. 2**64 - 1; with the same calls, the same seed gives the same state.
+    vocabulary_hashes : mapping of str to str, or sequence of str, optional
+        Identifies the vocabularies the word ids come from; stored and saved verbatim.
+    frozen_counts : (V, K) int ndarray, optional
+        Fix the word-topic counts (Φ) to these, e.g. another model's
+        :meth:`topic_word_counts`: words added to this model then count only in their
+        cell and neighbourhood, refinement changes only topics, cell counts and
+        neighbourhood sums, and the sampler uses ``(frozen_kw + β) / (frozen_k + Vβ)``
+        for Φ (the word is not in the frozen counts, so there is nothing to leave out).
+        This is how a whole map is labelled with a model learned on a path.
+
+    Raises
+    ------
+    ParameterError
+        Naming the first invalid parameter.
+    """
+
+    def __init__(
+        self,
+        n_topics: int,
+        vocabulary_size: int,
+        neighbours,
+        *,
+        alpha: float,
+        beta: float,
+        seed: int,
+        vocabulary_hashes=None,
+        frozen_counts=None,
+    ):
+        self._k = check_int("n_topics", n_topics, 1)
+        self._v = check_int("vocabulary_size", vocabulary_size, 1)
+        self._table = check_neighbours(neighbours)
+        self._table.flags.writeable = False
+        self._alpha = _check_positive("alpha", alpha)
+        self._beta = _check_positive("beta", beta)
+        self._seed = check_int("seed", seed, 0, 2**64 - 1)
+        self._hashes = _check_hashes(vocabulary_hashes)
+        self._kp = -(-self._k // 8) * 8
+        self._topic_dtype = np.dtype(np.int8 if self._k <= 127 else np.int16 if self._k <= 32767 else np.int32)
+        self._colours = None
+
+        n_cells = self._table.shape[0]
+        self._words = np.zeros(0, np.int32)
+        self._topics = np.zeros(0, self._topic_dtype)
+        self._n_words = 0
+        self._cell_first = np.full(n_cells, -1, np.int64)
+        self._cell_count = np.zeros(n_cells, np.int64)
+        self._order = np.zeros(n_cells, np.int32)
+        self._times = np.zeros(n_cells, np.int64)
+        self._n_observed = 0
+        self._nwk = np.zeros((self._v, self._kp), np.int32)
+        self._nk = np.zeros(self._kp, np.int32)
+        self._inv = np.zeros(self._kp, np.float32)
+        self._ncz = np.zeros((n_cells, self._kp), np.int32)
+        self._ng = np.zeros((n_cells, self._kp), np.int32)
+        self._counter = 0
+        self._frozen = frozen_counts is not None
+        if self._frozen:
+            self._nwk[:, : self._k] = _check_frozen(frozen_counts, self._v, self._k)
+            self._nk[:] = self._nwk.sum(axis=0, dtype=np.int64)
+        self._refresh_inverse()
+
+    # ------------------------------------------------------------------ properties
+
+    @property
+    def n_topics(self) -> int:
+        return self._k
+
+    @property
+    def vocabulary_size(self) -> int:
+        return self._v
+
+    @property
+    def n_cells(self) -> int:
+        return self._table.shape[0]
+
+    @property
+    def neighbours(self) -> np.ndarray:
+        """The (n_cells, width) int32 neighbour table (read-only)."""
+        return self._table
+
+    @property
+    def alpha(self) -> float:
+        return self._alpha
+
+    @property
+    def beta(self) -> float:
+        return self._beta
+
+    @property
+    def seed(self) -> int:
+        return self._seed
+
+    @property
+    def vocabulary_hashes(self):
+        return self._hashes
+
+    @property
+    def frozen(self) -> bool:
+        """True if the word-topic counts are fixed (``frozen_counts`` was given)."""
+        return self._frozen
+
+    @property
+    def topic_dtype(self) -> np.dtype:
+        return self._topic_dtype
+
+    @property
+    def n_words(self) -> int:
+        """Number of words in the model."""
+        return self._n_words
+
+    @property
+    def n_observed(self) -> int:
+        """Number of cells added."""
+        return self._n_observed
+
+    # ------------------------------------------------------------------ reading the state
+
+    def observed_cells(self) -> np.ndarray:
+        """(n_observed,) int32 ndarray of the cells added, in the order they were added."""
+        return self._order[: self._n_observed].copy()
+
+    def observation_times(self) -> np.ndarray:
+        """(n_observed,) int64 ndarray: the time of each cell of :meth:`observed_cells`."""
+        return self._times[: self._n_observed].copy()
+
+    def is_observed(self, cell: int) -> bool:
+        cell = check_int("cell", cell, 0, self.n_cells - 1)
+        return bool(self._cell_first[cell] >= 0)
+
+    def cell_words(self, cell: int) -> np.ndarray:
+        """(n,) int32 word ids of an observed cell, in the order they were added."""
+        cell = self._check_cells([cell], "cell")[0]
+        first = self._cell_first[cell]
+        return self._words[first : first + self._cell_count[cell]].copy()
+
+    def topics(self, cells=None) -> np.ndarray:
+        """Current topic of every word of ``cells`` (default: all observed, by cell index).
+
+        Returns
+        -------
+        (n,) ndarray of :attr:`topic_dtype`
+            Cell after cell in the order given, each cell's words in the order added
+            (for cells added from a word store: store order).
+        """
+        return self._in_order(self._topics, self._cells_or_all(cells))
+
+    def topic_word_counts(self) -> np.ndarray:
+        """(V, K) int32 ndarray: ``n_kw``, how often word ``w`` has topic ``k`` (Φ as counts)."""
+        return self._nwk[:, : self._k].copy()
+
+    def topic_totals(self) -> np.ndarray:
+        """(K,) int32 ndarray: ``n_k``, the words with topic ``k`` (columns of Φ summed)."""
+        return self._nk[: self._k].copy()
+
+    def cell_topic_counts(self) -> np.ndarray:
+        """(n_cells, K) int32 ndarray: topic counts of each cell (zeros if not observed)."""
+        return self._ncz[:, : self._k].copy()
+
+    def neighbourhood_counts(self) -> np.ndarray:
+        """(n_cells, K) int32 ndarray: ``n_Gk``, topic counts of each cell plus its neighbours."""
+        return self._ng[:, : self._k].copy()
+
+    def phi(self) -> np.ndarray:
+        """(V, K) float64 ndarray: ``φ_k(w) = (n_kw + β) / (n_k + Vβ)``; each column sums to 1."""
+        counts = self._nwk[:, : self._k].astype(np.float64)
+        return (counts + self._beta) / (self._nk[: self._k] + self._v * self._beta)
+
+    def ml_topics(self, cells=None) -> np.ndarray:
+        """Maximum-likelihood topic of every word of ``cells`` (default: all observed, by cell index).
+
+        ``argmax_k (n_kw + β) / (n_k + Vβ) · (n_Gk + α)`` with the word *included* in
+        every count (eq. 5 of the current state), in float64, ties to the lowest topic.
+
+        Returns
+        -------
+        (n,) ndarray of :attr:`topic_dtype`
+            In the order of :meth:`topics`.
+        """
+        from curiosity_cli.topics._gibbs_kernels import ml_topics_kernel
+
+        cells = self._cells_or_all(cells)
+        out = np.empty(int(self._cell_count[cells].sum()), self._topic_dtype)
+        ml_topics_kernel(
+            cells, self._cell_first, self._cell_count, self._words, self._nwk, self._nk, self._ng,
+            self._k, self._alpha, self._beta, self._v * self._beta, out,
+        )
+        return out
+
+    def log_likelihood(self) -> float:
+        """Mean per-word log-likelihood of the observed words under the current state (nats).
+
+        ``(1/N) Σ_i log Σ_k φ_k(w_i) θ_{c_i}(k)`` with ``φ_k(w) = (n_kw + β) / (n_k + Vβ)``
+        and ``θ_c(k) = (n_Gk + α) / (Σ_k n_Gk + Kα)`` the topic distribution of the
+        word's neighbourhood (eq. 3), counts including the word itself: the plug-in
+        predictive probability of each word, so ``exp(-log_likelihood())`` is the model's
+        perplexity on its own words. 0.0 for a model without words. Not the collapsed
+        joint ``log p(w, z)``: the spatial prior has no normalised joint to compare with.
+        """
+        from curiosity_cli.topics._gibbs_kernels import mean_log_likelihood_kernel
+
+        cells = self._cells_or_all(None)
+        return float(
+            mean_log_likelihood_kernel(
+                cells, self._cell_first, self._cell_count, self._words, self._nwk, self._nk, self._ng,
+                self._k, self._alpha, self._beta, self._v * self._beta,
+            )
+        )
+
+    # ------------------------------------------------------------------ changing the state
+
+    def add_cell(self, cell: int, words, *, time: int | None = None) -> None:
+        """Add an observed cell's words, each with a uniformly random topic.
+
+        Parameters
+        ----------
+        cell : int
+            A cell not yet in the model, ``0 .. n_cells - 1``.
+        words : (n,) int array_like
+            Word ids in ``0 .. V - 1``; may be empty.
+        time : int, optional
+            Observation time, at least the latest time so far; cells with one time are
+            one observation for :meth:`refine_realtime` (the cells of one camera frame).
+            Default: a new time, one after the latest (each cell its own observation).
+
+        Raises
+        ------
+        ParameterError
+            Naming ``cell``, ``words`` or ``time``.
+        """
+        from curiosity_cli.topics._gibbs_kernels import add_cell_kernel
+
+        cell = check_int("cell", cell, 0, self.n_cells - 1)
+        if self._cell_first[cell] >= 0:
+            raise ParameterError(f"cell: cell {cell} is already in the model")
+        words = self._check_words(words)
+        latest = int(self._times[self._n_observed - 1]) if self._n_observed else -1
+        time = latest + 1 if time is None else check_int("time", time, max(latest, 0))
+
+        first = self._n_words
+        self._reserve(first + words.size)
+        self._words[first : first + words.size] = words
+        self._n_words += words.size
+        self._cell_first[cell] = first
+        self._cell_count[cell] = words.size
+        self._order[self._n_observed] = cell
+        self._times[self._n_observed] = time
+        self._n_observed += 1
+        add_cell_kernel(
+            cell, first, words.size, self._words, self._topics, self._nwk, self._nk, self._inv,
+            self._ncz, self._ng, self._table, self._k, self._v * self._beta,
+            self._key(), np.uint64(self._counter), not self._frozen,
+        )
+        self._counter += 1
+
+    def refine_cells(self, cells) -> int:
+        """One Gibbs pass over the words of each listed cell, in the order given.
+
+        Exactly sequential (each word sees every earlier change). The ``j``-th listed
+        cell draws from its own stream, so a cell may be listed more than once.
+
+        Returns
+        -------
+        int
+            Words sampled.
+        """
+        from curiosity_cli.topics._gibbs_kernels import refine_cells_kernel
+
+        cells = self._check_cells(cells, "cells")
+        refine_cells_kernel(cells, *self._sampler_arrays(), np.uint64(self._counter), not self._frozen)
+        self._counter += cells.size
+        return int(self._cell_count[cells].sum())
+
+    def refine_batch(self, sweeps: int, *, threads: int = 1) -> int:
+        """Algorithm 1: ``sweeps`` Gibbs sweeps over every observed cell.
+
+        Each sweep visits the cells in phases, one per colour of a distance-2 colouring
+        of the neighbour table (no two cells of a phase share a cell count or a
+        neighbourhood sum), and the cells of a phase in parallel. Within a phase a cell
+        sees the word-topic counts as at the start of the phase plus its own changes, so
+        the result is the same for every ``threads`` (see
+        ``_gibbs_kernels.refine_batch_kernel``); for an exactly sequential sweep use
+        :meth:`refine_cells`.
+
+        Parameters
+        ----------
+        sweeps : int
+            >= 0.
+        threads : int
+            >= 1; more than numba's thread pool (``NUMBA_NUM_THREADS``) runs as that many.
+
+        Returns
+        -------
+        int
+            Words sampled.
+        """
+        import numba
+
+        from curiosity_cli.topics._gibbs_kernels import refine_batch_kernel
+
+        sweeps = check_int("sweeps", sweeps, 0)
+        threads = check_int("threads", threads, 1)
+        if sweeps == 0 or self._n_observed == 0:
+            return 0
+        cells = np.sort(self._order[: self._n_observed]).astype(np.int64)
+        colour = self._colouring()[cells]
+        phase_cells = cells[np.argsort(colour, kind="stable")]
+        phase_start = np.searchsorted(np.sort(colour), np.arange(colour.max() + 2)).astype(np.int64)
+
+        # slots beyond the thread pool would only cost memory: the result is the same
+        slots = min(threads, numba.config.NUMBA_NUM_THREADS)
+        previous = numba.get_num_threads()
+        numba.set_num_threads(slots)
+        try:
+            refine_batch_kernel(
+                sweeps, phase_cells, phase_start, slots, self._k, *self._sampler_arrays(),
+                np.uint64(self._counter), not self._frozen,
+            )
+        finally:
+            numba.set_num_threads(previous)
+        self._counter += sweeps
+        return sweeps * self._n_words
+
+    def refine_realtime(self, word_budget: int, *, eta: float) -> int:
+        """Algorithm 2: refine picked observations until ``word_budget`` words are sampled.
+
+        Each pick is the newest observation time with probability ``eta``, else a
+        uniformly random earlier one (eq. 6; with a single time, always that one), and
+        refines every cell observed at that time (:meth:`refine_cells`). Deterministic.
+
+        Parameters
+        ----------
+        word_budget : int
+            >= 0. Each word sampled spends one unit, and so does a pick whose cells hold
+            no words (so the call ends even if every cell it can pick is empty).
+        eta : float
+            Refinement bias, 0 <= eta <= 1.
+
+        Returns
+        -------
+        int
+            Words sampled: at least ``word_budget`` (the last pick overshoots by less
+            than the words of one observation) unless some picks found no words.
+        """
+        from curiosity_cli.topics._gibbs_kernels import refine_realtime_kernel
+
+        word_budget = check_int("word_budget", word_budget, 0)
+        eta = _check_unit("eta", eta)
+        if word_budget == 0 or self._n_observed == 0:
+            return 0
+        order = self._order[: self._n_observed]
+        times = self._times[: self._n_observed]
+        group_start = np.concatenate([[0], np.flatnonzero(np.diff(times)) + 1, [times.size]]).astype(np.int64)
+        done, picks = refine_realtime_kernel(
+            word_budget, eta, order, group_start, *self._sampler_arrays(), np.uint64(self._counter), not self._frozen
+        )
+        self._counter += 1 + int(picks)
+        return int(done)
+
+    # ------------------------------------------------------------------ snapshots and files
+
+    def snapshot(self) -> ModelSnapshot:
+        """A copy of the whole state, random state included."""
+        n = self._n_observed
+        return ModelSnapshot(
+            n_topics=self._k,
+            vocabulary_size=self._v,
+            n_cells=self.n_cells,
+            frozen=self._frozen,
+            words=self._words[: self._n_words].copy(),
+            topics=self._topics[: self._n_words].copy(),
+            cell_first=self._cell_first.copy(),
+            cell_count=self._cell_count.copy(),
+            order=self._order[:n].copy(),
+            times=self._times[:n].copy(),
+            nwk=self._nwk.copy(),
+            nk=self._nk.copy(),
+            ncz=self._ncz.copy(),
+            ng=self._ng.copy(),
+            counter=self._counter,
+        )
+
+    def restore(self, snapshot: ModelSnapshot) -> None:
+        """Return to the state of ``snapshot`` (taken from a model of the same shape)."""
+        if not isinstance(snapshot, ModelSnapshot):
+            raise ParameterError(f"snapshot: got {type(snapshot).__name__}, expected a ModelSnapshot")
+        mine = (self._k, self._v, self.n_cells, self._frozen)
+        theirs = (snapshot.n_topics, snapshot.vocabulary_size, snapshot.n_cells, snapshot.frozen)
+        if mine != theirs:
+            raise ParameterError(
+                f"snapshot: taken from a model with (K, V, cells, frozen) = {theirs}, this one has {mine}"
+            )
+        n_words = snapshot.words.size
+        self._words = snapshot.words.copy()
+        self._topics = snapshot.topics.copy()
+        self._n_words = n_words
+        self._cell_first[:] = snapshot.cell_first
+        self._cell_count[:] = snapshot.cell_count
+        self._n_observed = snapshot.order.size
+        self._order[: self._n_observed] = snapshot.order
+        self._times[: self._n_observed] = snapshot.times
+        self._nwk[:] = snapshot.nwk
+        self._nk[:] = snapshot.nk
+        self._ncz[:] = snapshot.ncz
+        self._ng[:] = snapshot.ng
+        self._counter = snapshot.counter
+        self._refresh_inverse()
+
+    def save(self, path: Path) -> None:
+        """Write the model to an ``.npz`` file, atomically.
+
+        The file holds the parameters (K, V, α, β, seed, vocabulary hashes, format
+        version), the neighbour table, the words and topics of the observed cells in the
+        order added, their times, the random state and, for a frozen model, the frozen
+        counts. Counts are recomputed from the topics on load.
+        """
+        n = self._n_observed
+        order = self._order[:n]
+        meta = {
+            "format": MODEL_FORMAT,
+            "n_topics": self._k,
+            "vocabulary_size": self._v,
+            "alpha": self._alpha,
+            "beta": self._beta,
+            "seed": self._seed,
+            "counter": self._counter,
+            "vocabulary_hashes": self._hashes,
+            "frozen": self._frozen,
+        }
+        arrays = {
+            "neighbours": self._table,
+            "order": order,
+            "times": self._times[:n],
+            "sizes": self._cell_count[order],
+            "words": self._in_order(self._words, order),
+            "topics": self._in_order(self._topics, order),
+            "meta": np.array(json.dumps(meta, sort_keys=True)),
+        }
+        if self._frozen:
+            arrays["frozen_counts"] = self.topic_word_counts()
+        with atomic_path(path) as tmp, open(tmp, "wb") as handle:
+            np.savez_compressed(handle, **arrays)
+
+    @classmethod
+    def load(cls, path: Path) -> TopicModel:
+        """Read a model written by :meth:`save`; the loaded model equals the saved one.
+
+        Raises
+        ------
+        CuriosityError
+            One line naming the file: missing, not a topic model, another format version,
+            or inconsistent contents.
+        """
+        path = Path(path)
+        where = display_path(path)
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                meta = json.loads(str(data["meta"]))
+                if not isinstance(meta, dict):
+                    raise ValueError("meta is not a mapping")
+                arrays = {k: data[k] for k in ("neighbours", "order", "times", "sizes", "words", "topics")}
+                frozen_counts = data["frozen_counts"] if meta.get("frozen") else None
+        except (OSError, KeyError, ValueError, TypeError) as exc:
+            raise CuriosityError(f"{where}: not a topic model ({_one_line(exc)})") from None
+        if meta.get("format") != MODEL_FORMAT:
+            raise CuriosityError(f"{where}: format: got {meta.get('format')!r}, expected {MODEL_FORMAT}")
+        try:
+            model = cls(
+                meta["n_topics"],
+                meta["vocabulary_size"],
+                arrays["neighbours"],
+                alpha=meta["alpha"],
+                beta=meta["beta"],
+                seed=meta["seed"],
+                vocabulary_hashes=meta["vocabulary_hashes"],
+                frozen_counts=frozen_counts,
+            )
+            model._fill(arrays, check_int("counter", meta["counter"], 0))
+        except (KeyError, ParameterError, ValueError, TypeError) as exc:
+            raise CuriosityError(f"{where}: not a valid topic model ({_one_line(exc)})") from None
+        return model
+
+    # ------------------------------------------------------------------ internals
+
+    def _key(self) -> np.uint64:
+        from curiosity_cli.topics._rng import mix
+
+        return np.uint64(mix(np.uint64(self._seed)))
+
+    def _sampler_arrays(self) -> tuple:
+        """The kernels' shared arguments, from ``cell_first`` to ``key``."""
+        return (
+            self._cell_first, self._cell_count, self._words, self._topics, self._nwk, self._nk, self._inv,
+            self._ncz, self._ng, self._table, np.float32(self._alpha), np.float32(self._beta),
+            self._v * self._beta, self._key(),
+        )
+
+    def _refresh_inverse(self) -> None:
+        self._inv[:] = 0
+        self._inv[: self._k] = (1.0 / (self._nk[: self._k] + self._v * self._beta)).astype(np.float32)
+
+    def _colouring(self) -> np.ndarray:
+        if self._colours is None:
+            from curiosity_cli.topics._gibbs_kernels import distance2_colouring
+
+            self._colours = distance2_colouring(self._table)
+        return self._colours
+
+    def _reserve(self, size: int) -> None:
+        if size <= self._words.size:
+            return
+        capacity = max(size, 2 * self._words.size, _MIN_CAPACITY)
+        words = np.zeros(capacity, np.int32)
+        topics = np.zeros(capacity, self._topic_dtype)
+        words[: self._n_words] = self._words[: self._n_words]
+        topics[: self._n_words] = self._topics[: self._n_words]
+        self._words, self._topics = words, topics
+
+    def _check_words(self, words) -> np.ndarray:
+        words = np.asarray(words)
+        if words.ndim != 1:
+            raise ParameterError(f"words: got shape {words.shape}, expected (n,)")
+        if words.size == 0:
+            return np.zeros(0, np.int32)
+        if words.dtype == np.bool_ or not np.issubdtype(words.dtype, np.integer):
+            raise ParameterError(f"words: got dtype {words.dtype}, expected integer word ids")
+        if words.min() < 0 or words.max() >= self._v:
+            raise ParameterError(f"words: ids must be in 0..{self._v - 1}, got {words.min()}..{words.max()}")
+        return words.astype(np.int32)
+
+    def _check_cells(self, cells, name: str) -> np.ndarray:
+        cells = np.asarray(cells)
+        if cells.ndim != 1:
+            raise ParameterError(f"{name}: got shape {cells.shape}, expected a 1-D list of cells")
+        if cells.size == 0:
+            return np.zeros(0, np.int64)
+        if cells.dtype == np.bool_ or not np.issubdtype(cells.dtype, np.integer):
+            raise ParameterError(f"{name}: got dtype {cells.dtype}, expected integer cell indices")
+        if cells.min() < 0 or cells.max() >= self.n_cells:
+            raise ParameterError(f"{name}: cells must be in 0..{self.n_cells - 1}")
+        cells = cells.astype(np.int64)
+        missing = cells[self._cell_first[cells] < 0]
+        if missing.size:
+            raise ParameterError(f"{name}: cell {missing[0]} is not in the model")
+        return cells
+
+    def _cells_or_all(self, cells) -> np.ndarray:
+        if cells is None:
+            return np.sort(self._order[: self._n_observed]).astype(np.int64)
+        return self._check_cells(cells, "cells")
+
+    def _in_order(self, per_word: np.ndarray, cells: np.ndarray) -> np.ndarray:
+        """The entries of a per-word array for ``cells`` (observed), cell after cell."""
+        if not len(cells):
+            return per_word[:0].copy()
+        return np.concatenate([per_word[self._cell_first[c] : self._cell_first[c] + self._cell_count[c]] for c in cells])
+
+    def _fill(self, arrays: dict, counter: int) -> None:
+        """Install words and topics read from a file, recounting everything from them."""
+        order, times, sizes = arrays["order"], arrays["times"], arrays["sizes"]
+        words, topics = arrays["words"], arrays["topics"]
+        n = order.size
+        for name, a in (("order", order), ("times", times), ("sizes", sizes), ("words", words), ("topics", topics)):
+            if a.ndim != 1 or (a.size and not np.issubdtype(a.dtype, np.integer)):
+                raise ValueError(f"{name}: expected a 1-D integer array")
+        if times.size != n or sizes.size != n:
+            raise ValueError("order, times and sizes differ in length")
+        if n and (order.min() < 0 or order.max() >= self.n_cells or np.unique(order).size != n):
+            raise ValueError("order: cells out of range or repeated")
+        if n and (np.any(np.diff(times) < 0) or times[0] < 0):
+            raise ValueError("times: negative or decreasing")
+        if (n and sizes.min() < 0) or sizes.sum() != words.size or topics.size != words.size:
+            raise ValueError("sizes, words and topics disagree")
+        if words.size and (words.min() < 0 or words.max() >= self._v):
+            raise ValueError(f"words: ids outside 0..{self._v - 1}")
+        if topics.size and (topics.min() < 0 or topics.max() >= self._k):
+            raise ValueError(f"topics: labels outside 0..{self._k - 1}")
+
+        self._words = words.astype(np.int32)
+        self._topics = topics.astype(self._topic_dtype)
+        self._n_words = words.size
+        firsts = np.concatenate([[0], np.cumsum(sizes)[:-1]]) if n else np.zeros(0, np.int64)
+        self._cell_first[order] = firsts
+        self._cell_count[order] = sizes
+        self._order[:n] = order
+        self._times[:n] = times
+        self._n_observed = n
+        self._counter = counter
+        word_cells = np.repeat(order.astype(np.int64), sizes)
+        kp = self._kp
+        self._ncz[:] = np.bincount(word_cells * kp + self._topics, minlength=self.n_cells * kp).reshape(-1, kp)
+        self._ng[:] = self._ncz
+        for column in self._table.T:
+            present = column >= 0
+            self._ng[present] += self._ncz[column[present]]
+        if not self._frozen:
+            pairs = self._words.astype(np.int64) * kp + self._topics
+            self._nwk[:] = np.bincount(pairs, minlength=self._v * kp).reshape(-1, kp)
+            self._nk[:] = self._nwk.sum(axis=0)
+            self._refresh_inverse()
+
+
+def _check_positive(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"{name}: got {value!r}, expected a number > 0")
+    if not math.isfinite(value) or value <= 0:
+        raise ParameterError(f"{name}: got {value}, expected a finite number > 0")
+    return float(value)
+
+
+def _check_unit(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"{name}: got {value!r}, expected a number between 0 and 1")
+    if not 0 <= value <= 1:
+        raise ParameterError(f"{name}: got {value}, expected a number between 0 and 1")
+    return float(value)
+
+
+def _check_hashes(hashes):
+    if hashes is None:
+        return None
+    if isinstance(hashes, Mapping):
+        if not all(isinstance(k, str) and isinstance(v, str) for k, v in hashes.items()):
+            raise ParameterError("vocabulary_hashes: expected a mapping of str to str")
+        return dict(hashes)
+    if isinstance(hashes, Sequence) and not isinstance(hashes, str):
+        if not all(isinstance(h, str) for h in hashes):
+            raise ParameterError("vocabulary_hashes: expected a sequence of str")
+        return tuple(hashes)
+    raise ParameterError(f"vocabulary_hashes: got {type(hashes).__name__}, expected a mapping or a sequence of str")
+
+
+def _check_frozen(counts, n_words: int, n_topics: int) -> np.ndarray:
+    counts = np.asarray(counts)
+    if counts.shape != (n_words, n_topics):
+        raise ParameterError(f"frozen_counts: got shape {counts.shape}, expected (V, K) = ({n_words}, {n_topics})")
+    if counts.dtype == np.bool_ or not np.issubdtype(counts.dtype, np.integer):
+        raise ParameterError(f"frozen_counts: got dtype {counts.dtype}, expected integer counts")
+    if counts.size and (counts.min() < 0 or counts.sum(axis=0, dtype=np.int64).max() > np.iinfo(np.int32).max):
+        raise ParameterError("frozen_counts: counts must be >= 0 and each topic's total fit in int32")
+    return counts.astype(np.int32)
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__

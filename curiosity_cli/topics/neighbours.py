@@ -1,0 +1,144 @@
+"""Neighbourhood graphs of cells, as fixed-width tables.
+
+A table is an ``(n_cells, width) int32`` array: row ``c`` lists the neighbours of cell
+``c``, one per column, ``-1`` where a neighbour does not exist (at a border). Each column
+has a fixed meaning, so a caller can read directions from it:
+
+======  ==========================================================
+column  neighbour of ``(row, col)`` (frame ``t``)
+======  ==========================================================
+0       up, ``(row - 1, col)``
+1       down, ``(row + 1, col)``
+2       left, ``(row, col - 1)``
+3       right, ``(row, col + 1)``
+4       the same cell in the previous frame (``t - 1``), streams only
+5       the same cell in the next frame (``t + 1``), streams only
+======  ==========================================================
+
+Without spatial neighbours the four spatial columns are left out, so a table with no
+columns is plain LDA (each cell its own document).
+
+A cell never lists itself: the model adds a cell's own topic counts to its neighbours'
+(eq. 3 of the paper sums over the cell *and* its neighbours).
+
+Streams are a fixed number of frames: cell ``frame * rows * cols + row * cols + col``.
+The model's arrays are sized by the table, so a driver that runs indefinitely needs a
+frame budget (or a fresh model per budget).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from curiosity_cli.checks import check_int
+from curiosity_cli.errors import ParameterError
+
+
+def grid_neighbours(rows: int, cols: int, spatial: int = 4) -> np.ndarray:
+    """Neighbour table of a grid of ``rows x cols`` cells numbered row-major.
+
+    Parameters
+    ----------
+    rows, cols : int
+        Grid size, both >= 1.
+    spatial : {4, 0}
+        4 for up, down, left and right; 0 for none (the model is then plain LDA).
+
+    Returns
+    -------
+    (rows * cols, spatial) ndarray of int32
+        Columns up, down, left, right; ``-1`` off the grid.
+    """
+    rows = check_int("rows", rows, 1)
+    cols = check_int("cols", cols, 1)
+    spatial = _check_choice("spatial", spatial, (4, 0))
+    return stream_neighbours(rows, cols, 1, spatial=spatial, temporal=0)
+
+
+def stream_neighbours(rows: int, cols: int, n_frames: int, *, spatial: int = 4, temporal: int = 2) -> np.ndarray:
+    """Neighbour table of a stream of ``n_frames`` frames of ``rows x cols`` cells.
+
+    Parameters
+    ----------
+    rows, cols : int
+        Cells per frame, both >= 1.
+    n_frames : int
+        Number of frames, >= 1.
+    spatial : {4, 0}
+        4 for up, down, left and right within a frame; 0 for none.
+    temporal : {2, 0}
+        2 for the same cell in the previous and next frame; 0 for none.
+
+    Returns
+    -------
+    (n_frames * rows * cols, spatial + temporal) ndarray of int32
+        Cell ``frame * rows * cols + row * cols + col``; columns up, down, left, right
+        (if ``spatial``), then previous, next (if ``temporal``); ``-1`` where the
+        neighbour is off the grid or outside the stream.
+    """
+    rows = check_int("rows", rows, 1)
+    cols = check_int("cols", cols, 1)
+    n_frames = check_int("n_frames", n_frames, 1)
+    spatial = _check_choice("spatial", spatial, (4, 0))
+    temporal = _check_choice("temporal", temporal, (2, 0))
+
+    frame, row, col = np.meshgrid(np.arange(n_frames), np.arange(rows), np.arange(cols), indexing="ij")
+    frame, row, col = frame.ravel(), row.ravel(), col.ravel()
+    offsets = []
+    if spatial:
+        offsets += [(0, -1, 0), (0, 1, 0), (0, 0, -1), (0, 0, 1)]
+    if temporal:
+        offsets += [(-1, 0, 0), (1, 0, 0)]
+    table = np.full((frame.size, len(offsets)), -1, dtype=np.int32)
+    for j, (df, dr, dc) in enumerate(offsets):
+        f, r, c = frame + df, row + dr, col + dc
+        inside = (f >= 0) & (f < n_frames) & (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
+        table[inside, j] = ((f * rows + r) * cols + c)[inside]
+    return table
+
+
+def check_neighbours(neighbours) -> np.ndarray:
+    """A neighbour table as a C-contiguous int32 array, if it is a valid undirected graph.
+
+    Valid: 2-D integer array, at least one row, entries ``-1`` or a cell index, no cell
+    listing itself or the same neighbour twice, and symmetric (``d`` in row ``c`` exactly
+    when ``c`` is in row ``d``): the model keeps each cell's neighbourhood sum up to date
+    by updating the sums of the cells a changed word's cell lists.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``neighbours`` and the first problem found.
+    """
+    table = np.asarray(neighbours)
+    if table.ndim != 2 or table.shape[0] < 1:
+        raise ParameterError(f"neighbours: got shape {table.shape}, expected (n_cells, width) with n_cells >= 1")
+    if table.dtype == np.bool_ or not np.issubdtype(table.dtype, np.integer):
+        raise ParameterError(f"neighbours: got dtype {table.dtype}, expected integers")
+    n_cells = table.shape[0]
+    if table.size and (table.min() < -1 or table.max() >= n_cells):
+        raise ParameterError(f"neighbours: entries must be -1 or a cell index below {n_cells}")
+    table = np.ascontiguousarray(table, dtype=np.int32)
+    cell, column = np.nonzero(table >= 0)
+    other = table[cell, column]
+    if np.any(other == cell):
+        raise ParameterError(f"neighbours: cell {cell[other == cell][0]} lists itself")
+    edges = cell.astype(np.int64) * n_cells + other
+    unique = np.unique(edges)
+    if unique.size != edges.size:
+        raise ParameterError("neighbours: a cell lists the same neighbour twice")
+    reverse = np.sort(other.astype(np.int64) * n_cells + cell)
+    if not np.array_equal(unique, reverse):
+        missing = np.setdiff1d(unique, reverse)[0]
+        raise ParameterError(
+            f"neighbours: not symmetric: cell {missing // n_cells} lists {missing % n_cells}, "
+            "but not the other way round"
+        )
+    return table
+
+
+def _check_choice(name: str, value, choices: tuple[int, ...]) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) not in choices:
+        expected = " or ".join(str(c) for c in choices)
+        raise ParameterError(f"{name}: got {value!r}, expected {expected}")
+    return int(value)

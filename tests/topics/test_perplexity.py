@@ -1,0 +1,118 @@
+"""Word and topic perplexity (eqs. 11 and 12) against their definitions and twins."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from naive import NaiveModel, topic_perplexity_naive, word_perplexity_naive
+
+from curiosity_cli.errors import ParameterError
+from curiosity_cli.topics import TopicModel, grid_neighbours, topic_perplexity, word_perplexity
+
+
+def assert_same_state(a: TopicModel, b: TopicModel):
+    sa, sb = a.snapshot(), b.snapshot()
+    for field in dataclasses.fields(sa):
+        np.testing.assert_array_equal(getattr(sa, field.name), getattr(sb, field.name), err_msg=field.name)
+
+
+def path_model(seed=0, frozen=None):
+    """A model of a 5-cell path on a 4 x 4 grid, refined a little."""
+    rng = np.random.default_rng(seed)
+    model = TopicModel(5, 12, grid_neighbours(4, 4), alpha=0.3, beta=0.2, seed=seed, frozen_counts=frozen)
+    for cell in [5, 6, 10, 9, 13]:
+        model.add_cell(cell, rng.integers(0, 12, rng.integers(3, 15)))
+    model.refine_batch(3)
+    return model
+
+
+def test_word_perplexity_is_eq_11():
+    model = path_model(1)
+    words = [0, 3, 3, 11, 7]
+    phi = model.phi()  # (V, K)
+    totals = model.topic_totals()
+    path = (totals + model.alpha) / (totals.sum() + model.n_topics * model.alpha)
+    expected = math.exp(-np.mean([math.log(phi[w] @ path) for w in words]))
+    assert word_perplexity(model, words) == pytest.approx(expected, rel=1e-12)
+    assert word_perplexity(model, np.array(words, np.uint16)) == pytest.approx(expected, rel=1e-12)
+    twin = word_perplexity_naive(NaiveModel.of(model), words)
+    assert word_perplexity(model, words) == pytest.approx(twin, rel=1e-12)
+
+
+def test_word_perplexity_of_an_empty_model_is_the_vocabulary_size():
+    # every word equally likely under uniform Φ: perplexity V
+    model = TopicModel(3, 40, grid_neighbours(2, 2), alpha=0.1, beta=0.1, seed=0)
+    assert word_perplexity(model, [1, 2, 3]) == pytest.approx(40, rel=1e-12)
+    assert topic_perplexity(model, [1, 2, 3], 0) == pytest.approx(3, rel=1e-12)
+
+
+@pytest.mark.parametrize(("cell", "frozen"), [(1, False), (9, False), (0, False), (2, True)])
+def test_topic_perplexity_matches_twin_and_eq_12_given_its_topics(cell, frozen):
+    model = path_model(2, frozen=np.arange(60).reshape(12, 5) % 7 if frozen else None)
+    words = np.random.default_rng(cell).integers(0, 12, 40)
+    value, topics = topic_perplexity(model, words, cell, return_topics=True)
+    twin_value, twin_topics = topic_perplexity_naive(NaiveModel.of(model), words, cell)
+    np.testing.assert_array_equal(topics, twin_topics)
+    assert value == pytest.approx(twin_value, rel=1e-12)
+    totals = model.topic_totals()
+    path = (totals + model.alpha) / (totals.sum() + model.n_topics * model.alpha)
+    assert value == pytest.approx(math.exp(-np.mean(np.log(path[topics]))), rel=1e-12)
+    # a deterministic function of the state: the same again
+    assert topic_perplexity(model, words, cell) == value
+
+
+def test_topic_perplexity_draws_depend_on_the_cells_neighbourhood():
+    # two topics with disjoint words, cells of topic 0 on the left; a candidate on the
+    # left edge labels an ambiguous word (in both topics) as topic 0 far more often
+    model = TopicModel(2, 3, grid_neighbours(1, 6), alpha=0.01, beta=0.01, seed=3)
+    for cell in range(6):
+        model.add_cell(cell, [0] * 50 if cell < 3 else [1] * 50)
+    model.refine_batch(20)
+    left = model.ml_topics([0])[0]
+    _, near_left = topic_perplexity(model, [2] * 200, 1, return_topics=True)
+    _, near_right = topic_perplexity(model, [2] * 200, 4, return_topics=True)
+    assert np.mean(near_left == left) > 0.9
+    assert np.mean(near_right == left) < 0.1
+
+
+def test_perplexities_of_no_words_are_one():
+    model = path_model(3)
+    assert word_perplexity(model, []) == 1.0
+    assert topic_perplexity(model, np.zeros(0, int), 0) == 1.0
+    value, topics = topic_perplexity(model, [], 0, return_topics=True)
+    assert value == 1.0 and topics.shape == (0,)
+
+
+def test_perplexity_calls_do_not_change_the_model():
+    model = path_model(4)
+    before = path_model(4)
+    for cell in [1, 2, 4, 14, 5]:
+        word_perplexity(model, [1, 2, 3, 4])
+        topic_perplexity(model, np.arange(12), cell)
+    assert_same_state(model, before)
+    model.refine_realtime(50, eta=0.5)
+    before.refine_realtime(50, eta=0.5)
+    assert_same_state(model, before)
+
+
+def test_perplexities_are_at_least_one_and_higher_for_unseen_words():
+    model = TopicModel(4, 30, grid_neighbours(3, 3), alpha=0.1, beta=0.1, seed=5)
+    for cell in range(5):
+        model.add_cell(cell, np.arange(10).repeat(5))
+    model.refine_batch(10)
+    seen, unseen = np.arange(10), np.arange(10, 30)
+    assert 1.0 <= word_perplexity(model, seen) < word_perplexity(model, unseen)
+    assert topic_perplexity(model, seen, 6) >= 1.0
+
+
+def test_perplexities_name_the_bad_parameter():
+    model = path_model(5)
+    with pytest.raises(ParameterError, match="^words:"):
+        word_perplexity(model, [12])
+    with pytest.raises(ParameterError, match="^words:"):
+        topic_perplexity(model, [[1]], 0)
+    with pytest.raises(ParameterError, match="^cell:"):
+        topic_perplexity(model, [1], 16)
