@@ -393,6 +393,8 @@ def main(argv: list[str] | None = None) -> None:
     except ImportError:
         raise SystemExit("tomotopy is not installed: pip install 'curiosity[bench]' (or pip install tomotopy)") from None
 
+    source = model_source_hash()
+    print(f"topic model sources {source}")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         paths = prepare_corpora(args.corpora, args.quick, args.seed, folder)
@@ -417,6 +419,8 @@ def main(argv: list[str] | None = None) -> None:
             summary[name] = print_corpus_table(name, results)
             print(f"  ({len(configs) * repeats} processes in {time.perf_counter() - start:.0f} s)")
 
+    if model_source_hash() != source:
+        print("\nWARNING: the topic model's sources changed during the run; rows may mix versions")
     print(f"\nload average (1 min) after the runs: {os.getloadavg()[0]:.2f} (about 1 while one process runs)")
     print(FOOTER.format(warmup=warmup, sweeps=sweeps))
     print("\ngoals: a/c >= 1.0, b/c >= 0.8, 2-thread speed-up >= 1.7x (reported, not asserted)")
@@ -426,6 +430,18 @@ def main(argv: list[str] | None = None) -> None:
             goal = GOALS["speed-up" if key.startswith("speed-up") else key]
             parts.append(f"{key} = {value:.2f} ({'met' if value >= goal else 'NOT met'})")
         print(f"  {name}: " + ", ".join(parts))
+
+
+def model_source_hash() -> str:
+    """Short hash of the topic model's source files, to notice an edit during a run."""
+    import hashlib
+
+    from curiosity_cli.config import PROJECT_ROOT
+
+    digest = hashlib.sha256()
+    for path in sorted((PROJECT_ROOT / "curiosity_cli" / "topics").glob("*.py")):
+        digest.update(path.name.encode() + path.read_bytes())
+    return digest.hexdigest()[:12]
 
 
 def prepare_tiny(folder: Path) -> Path:

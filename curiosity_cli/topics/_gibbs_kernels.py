@@ -85,7 +85,7 @@ def link_repeats(words, cell_first, cell_count, n_words):
 
 @njit(parallel=True)
 def refine_batch_kernel(
-    sweeps, phase_cells, phase_start, n_slots, n_topics,
+    sweeps, phase_cells, phase_start, n_slots, n_topics, repeat_of,
     cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, alpha, beta, vbeta, key, counter,
     update_phi,
 ):
@@ -93,13 +93,15 @@ def refine_batch_kernel(
 
     Parameters
     ----------
+    repeat_of : (capacity,) int32 ndarray
+        :func:`link_repeats` of the words.
     phase_cells : (n,) int64 ndarray
         Observed cells grouped by colour: phase ``h`` is
         ``phase_cells[phase_start[h]:phase_start[h + 1]]``. No two cells of a phase are
         within graph distance 2, so they share no cell count or neighbourhood sum.
     n_slots : int
-        Units of parallel work per phase; cells are dealt to slots in chunks, and the
-        merge of a phase's changes is split among slots by word id.
+        Units of parallel work per phase (each with its own topic totals and scratch);
+        cells are dealt to slots in chunks.
 
     Notes
     -----
@@ -119,11 +121,7 @@ def refine_batch_kernel(
     slot_nk = np.empty((n_slots, stride), np.int32)
     slot_inv = np.empty((n_slots, stride), np.float32)
     slot_p = np.zeros((n_slots, stride), np.float32)
-    slot_change = np.zeros((n_slots, stride), np.int32)
     before = np.empty_like(topics)
-    repeat_of = link_repeats(words, cell_first, cell_count, nwk.shape[0])
-    # the slot that merges each word id's changes (a table: `%` per word is a division)
-    owner = np.arange(nwk.shape[0]) % n_slots
     for sweep in range(sweeps):
         for phase in range(n_phases):
             lo = phase_start[phase]
@@ -148,36 +146,27 @@ def refine_batch_kernel(
                             ncz, ng, table, own_p, alpha, beta, vbeta, state, update_phi,
                         )
             if update_phi:
-                for slot in prange(n_slots):
-                    _merge(
-                        slot, owner, phase_cells[lo:hi], cell_first, cell_count, words, before, topics, nwk,
-                        slot_change[slot, :kp],
-                    )
-                for slot in range(n_slots):
-                    for k in range(kp):
-                        nk[k] += slot_change[slot, k]
+                # serial: one pass over the phase's words is a few percent of a sweep,
+                # while splitting it among threads by word id cost more than it saved
+                _merge(phase_cells[lo:hi], cell_first, cell_count, words, before, topics, nwk, nk)
                 refresh_inverse(nk, inv, n_topics, vbeta)
 
 
 @njit
-def _merge(slot, owner, cells, cell_first, cell_count, words, before, topics, nwk, change):
-    """Move the words of ``cells`` whose id ``owner`` gives to ``slot`` to their new topics in ``nwk``.
-
-    ``change`` receives the (Kp,) change of the topic totals.
-    """
-    change[:] = 0
+def _merge(cells, cell_first, cell_count, words, before, topics, nwk, nk):
+    """Move each word of ``cells`` from topic ``before[i]`` to ``topics[i]`` in ``nwk`` and ``nk``."""
     for index in range(cells.shape[0]):
         cell = cells[index]
         first = cell_first[cell]
         for i in range(first, first + cell_count[cell]):
             a = before[i]
             b = topics[i]
-            w = words[i]
-            if a != b and owner[w] == slot:
+            if a != b:
+                w = words[i]
                 nwk[w, a] -= 1
                 nwk[w, b] += 1
-                change[a] -= 1
-                change[b] += 1
+                nk[a] -= 1
+                nk[b] += 1
 
 
 @njit

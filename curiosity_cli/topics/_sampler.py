@@ -197,7 +197,7 @@ def gibbs_cell(
     return state
 
 
-@njit
+@njit(inline="always")
 def gibbs_cell_phase(
     cell, first, count, words, repeat_of, topics, before, nwk, nk, inv, ncz, ng, table, p, alpha, beta, vbeta, state,
     update_phi,
@@ -257,7 +257,7 @@ def gibbs_cell_phase(
     return state
 
 
-@njit
+@njit(inline="always")
 def _own_weight(i, old, k, w, cell, repeat_of, topics, before, nwk, inv, ng, alpha, beta):
     """Weight of topic ``k`` for word ``i`` (removed) with the cell's own changes to row ``w``."""
     count = nwk[w, k] - (1 if k == old else 0)

@@ -313,6 +313,8 @@ def test_restore_rejects_a_snapshot_of_another_shape():
         other.restore(snap)
     with pytest.raises(ParameterError, match="snapshot"):
         other.restore("not a snapshot")
+    with pytest.raises(ParameterError, match="neighbour table"):
+        build(11, spatial=0).restore(build(11).snapshot())
 
 
 def test_restore_also_undoes_added_cells():
