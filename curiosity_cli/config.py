@@ -29,9 +29,6 @@ PROJECT_ROOT = Path(__file__).resolve().parent.parent
 CONFIG_DIR = PROJECT_ROOT / "configs"
 DATASET_CONFIG_DIR = CONFIG_DIR / "datasets"
 
-#: The paper's four weight functions (section 4), in the order the paper's plots use.
-WEIGHT_FUNCTIONS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity")
-
 #: Where a value given on the command line with ``--set KEY=VALUE`` "comes from".
 _OVERRIDE = "--set"
 
@@ -88,7 +85,8 @@ class WordsConfig:
 class ExploreConfig:
     """Exploration runs on the simulated 2-D grid (paper sections 4 and 5.1)."""
 
-    weight_functions: tuple[str, ...] = _spec(choices=WEIGHT_FUNCTIONS)
+    # names from curiosity_cli.explore.weights.WEIGHT_FUNCTIONS, checked when loading
+    weight_functions: tuple[str, ...] = _spec()
     restarts: int = _spec(min=1)
     path_length: int = _spec(min=1)
     checkpoints: tuple[int, ...] = _spec(min=1)
@@ -457,7 +455,15 @@ def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:
         except ConfigError as exc:
             raise ConfigError(f"{_where(raw, ('datasets', i))}: {exc}") from None
         datasets.append(entry if path.parent == DATASET_CONFIG_DIR else str(path))
+    from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS
+
     explore = config.explore
+    for i, name in enumerate(explore.weight_functions):
+        if name not in WEIGHT_FUNCTIONS:
+            raise ConfigError(
+                f"{_where(raw, ('explore', 'weight_functions', i))}: got {name!r}, "
+                f"expected one of {', '.join(WEIGHT_FUNCTIONS)}"
+            )
     if len(set(explore.weight_functions)) != len(explore.weight_functions):
         raise ConfigError(
             f"{_where(raw, ('explore', 'weight_functions'))}: got {list(explore.weight_functions)}, "

@@ -8,7 +8,6 @@ from curiosity_cli.cli import app
 
 # (command, what it will do, the issue that builds it)
 _PLANNED = (
-    ("explore", "Run exploration paths for each weight function and restart.", 5),
     ("label", "Label a whole map with the topic models learned on the paths.", 6),
     ("evaluate", "Mutual information of path labels against human and batch labels.", 6),
     ("plot", "The paper's figures from the results tables.", 6),

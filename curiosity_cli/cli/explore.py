@@ -1,0 +1,80 @@
+"""``curiosity explore``: the exploration grid of an experiment config."""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import sys
+from pathlib import Path
+
+import typer
+
+from curiosity_cli.cli import app
+from curiosity_cli.config import CONFIG_DIR
+
+
+@app.command("explore")
+def explore(
+    config: Path = typer.Argument(CONFIG_DIR / "quick.yaml", help="Experiment YAML, e.g. configs/paper-grid.yaml."),
+    maps: list[str] = typer.Option([], "--map", help="Only this map (repeatable); default the config's datasets."),
+    weights: str = typer.Option(None, "--weights", help="Comma-separated weight functions, e.g. random-walk,topic-perplexity."),
+    restarts: int = typer.Option(None, "--restarts", min=1, help="Restarts per weight function."),
+    steps: int = typer.Option(None, "--steps", min=1, help="Path length; checkpoints beyond it are dropped, and it becomes the last."),
+    overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override any config key, e.g. --set model.eta=0.8."),
+    jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
+    force: bool = typer.Option(False, "--force", help="Redo runs that are already finished."),
+    results_dir: Path = typer.Option(Path("results"), "--results-dir", help="Experiment folders go here."),
+    cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
+) -> None:
+    """Run every weight function from every restart on every map, and save paths and topic models.
+
+    Finished runs are kept: run the same command again to resume a stopped grid.
+    """
+    from curiosity_cli.config import dataset_path, load_config
+    from curiosity_cli.errors import ConfigError
+    from curiosity_cli.explore.grid import run_grid
+    from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS
+    from curiosity_cli.files import display_path
+
+    options = []
+    if maps:
+        try:
+            paths = [str(dataset_path(name).resolve()) for name in maps]
+        except ConfigError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--map") from None
+        options.append(f"datasets={paths}")
+    if weights is not None:
+        names = [name.strip() for name in weights.split(",")]
+        for name in names:
+            if name not in WEIGHT_FUNCTIONS:
+                raise typer.BadParameter(f"got {name!r}, expected one of {', '.join(WEIGHT_FUNCTIONS)}", param_hint="--weights")
+        options.append(f"explore.weight_functions={names}")
+    if restarts is not None:
+        options.append(f"explore.restarts={restarts}")
+    resolved = load_config(config, [*overrides, *options])
+    if steps is not None:
+        kept = tuple(c for c in resolved.explore.checkpoints if c < steps) + (steps,)
+        resolved = dataclasses.replace(
+            resolved, explore=dataclasses.replace(resolved.explore, path_length=steps, checkpoints=kept)
+        )
+
+    with contextlib.ExitStack() as stack:
+        bars = []
+
+        def prepared(to_run: int, skipped: int) -> None:
+            typer.echo(f"{resolved.name}: {to_run} runs to do, {skipped} already finished", err=True)
+            bars.append(stack.enter_context(typer.progressbar(length=to_run, label="exploring", file=sys.stderr)))
+
+        def finished(task, size: int) -> None:
+            bars[0].update(1)
+
+        summary = run_grid(
+            resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
+            on_prepared=prepared, on_run=finished,
+        )
+    typer.echo(
+        f"wrote {summary.ran} runs ({summary.bytes_written / 1e6:.1f} MB) to {display_path(summary.folder)} "
+        f"in {summary.seconds:.0f} s; {summary.skipped} were already there"
+    )
+    if summary.fallbacks:
+        typer.echo(f"{summary.fallbacks} moves fell back to a uniform draw (no positive weight)")

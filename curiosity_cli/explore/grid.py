@@ -1,0 +1,339 @@
+"""The experiment grid: maps x weight functions x restarts, in parallel, resumable.
+
+Design, in the order a grid runs:
+
+- **Paired start cells.** For each map, one seeded permutation of its cells (from the
+  experiment seed and the map's name); restart ``r`` starts at its ``r``-th cell for
+  every weight function, so weight functions can be compared restart by restart. A
+  restart's start cell does not depend on how many restarts the grid has.
+- **Seeds.** Each run draws from ``SeedSequence((seed, crc32(map), crc32(weight
+  function), restart))``: the same numbers whatever ``jobs`` is and in whatever order
+  runs finish.
+- **Parallel.** Runs are joblib tasks (``loky`` processes by default). A worker loads
+  the map's word store from the cache once and keeps it; each worker's numba threads
+  are capped so the workers together use the cores once.
+- **Written by the caller.** A task returns its :class:`Exploration`; this process
+  writes the run folder atomically (:mod:`curiosity_cli.explore.runs`), so where a run
+  was computed never matters and a killed grid loses only the runs in flight.
+- **Resumable.** Finished runs are skipped unless ``force``; the experiment folder
+  keeps the resolved config, ``provenance.yaml`` (seed, version, commit) and
+  ``runs.csv`` (every run's start cell and seed). A resumed grid must agree with the
+  saved config on everything that changes a run's numbers.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import traceback
+import zlib
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from curiosity_cli.config import ExperimentConfig, to_dict, to_yaml
+from curiosity_cli.errors import ConfigError, CuriosityError
+from curiosity_cli.files import atomic_path, display_path
+
+#: Config keys that choose which runs a grid holds, not what a run computes.
+_SELECTION_KEYS = {("name",), ("datasets",), ("explore", "weight_functions"), ("explore", "restarts")}
+
+
+class GridError(CuriosityError):
+    """Some runs of a grid failed; the others were written."""
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """One run of the grid, everything a worker needs to compute it."""
+
+    dataset: str
+    weight_function: str
+    restart: int
+    start_cell: int
+    seed: tuple[int, ...]
+    store_path: str
+
+
+@dataclass(frozen=True)
+class StoreInfo:
+    """A map's cached word store, as the grid needs it."""
+
+    name: str
+    path: Path
+    grid_shape: tuple[int, int]
+    vocabulary_size: int
+    vocabulary_hashes: list[str]
+
+
+@dataclass(frozen=True)
+class GridSummary:
+    """What a call to :func:`run_grid` did."""
+
+    folder: Path
+    ran: int
+    skipped: int
+    failed: list[str]
+    fallbacks: int
+    bytes_written: int
+    seconds: float
+
+
+def _key(name: str) -> int:
+    return zlib.crc32(name.encode())
+
+
+def start_cells(seed: int, dataset: str, n_cells: int, restarts: int) -> np.ndarray:
+    """(restarts,) int64 ndarray: the start cells of a map's restarts, shared by all weight functions.
+
+    Raises
+    ------
+    ConfigError
+        More restarts than the map has cells.
+    """
+    if restarts > n_cells:
+        raise ConfigError(f"explore.restarts: got {restarts}, but {dataset} has only {n_cells} cells to start from")
+    rng = np.random.default_rng(np.random.SeedSequence((seed, _key(dataset))))
+    return rng.permutation(n_cells)[:restarts].astype(np.int64)
+
+
+def plan_runs(config: ExperimentConfig, stores: dict[str, StoreInfo]) -> list[RunTask]:
+    """Every run of the grid, ordered by map, restart, then weight function.
+
+    Parameters
+    ----------
+    config : ExperimentConfig
+    stores : dict of str to StoreInfo
+        For each entry of ``config.datasets``, its map's name and cached word store.
+
+    Raises
+    ------
+    ConfigError
+        A map with fewer cells than the path length or the restarts need.
+    """
+    tasks = []
+    for entry in config.datasets:
+        dataset = stores[entry].name
+        grid_shape = stores[entry].grid_shape
+        n_cells = grid_shape[0] * grid_shape[1]
+        if config.explore.path_length > n_cells:
+            raise ConfigError(
+                f"explore.path_length: got {config.explore.path_length} steps, but {dataset} has only {n_cells} "
+                f"cells ({grid_shape[0]} x {grid_shape[1]}); use fewer steps or a smaller cell width"
+            )
+        starts = start_cells(config.seed, dataset, n_cells, config.explore.restarts)
+        for restart, start in enumerate(starts):
+            for weight_function in config.explore.weight_functions:
+                seed = (config.seed, _key(dataset), _key(weight_function), restart)
+                tasks.append(RunTask(dataset, weight_function, restart, int(start), seed, str(stores[entry].path)))
+    return tasks
+
+
+def check_saved_config(folder: Path, config: ExperimentConfig) -> None:
+    """Refuse to add runs to an experiment folder whose saved config computes runs differently.
+
+    Raises
+    ------
+    ConfigError
+        Naming the first key that differs, with both values.
+    """
+    import yaml
+
+    saved_path = Path(folder) / "config.yaml"
+    if not saved_path.is_file():
+        return
+    saved = yaml.safe_load(saved_path.read_text())
+    for keys, old, new in _differences(saved, to_dict(config)):
+        if keys not in _SELECTION_KEYS:
+            raise ConfigError(
+                f"{display_path(saved_path)}: {'.'.join(keys)} was {old!r} for the runs already there, now {new!r}; "
+                "use another experiment name or another results folder"
+            )
+
+
+def _differences(old, new, keys: tuple = ()):
+    if isinstance(old, dict) and isinstance(new, dict):
+        for key in sorted(set(old) | set(new)):
+            yield from _differences(old.get(key), new.get(key), keys + (key,))
+    elif old != new:
+        yield keys, old, new
+
+
+def run_grid(
+    config: ExperimentConfig,
+    *,
+    results_dir: Path = Path("results"),
+    cache_dir: Path = Path("results/cache"),
+    jobs: int | None = None,
+    force: bool = False,
+    on_prepared: Callable[[int, int], None] | None = None,
+    on_run: Callable[[RunTask, int], None] | None = None,
+) -> GridSummary:
+    """Run every missing run of an experiment grid and write it under ``results_dir/<name>``.
+
+    Parameters
+    ----------
+    config : ExperimentConfig
+    results_dir, cache_dir : Path
+        Experiment folders go under ``results_dir``; word stores are cached in ``cache_dir``.
+    jobs : int, optional
+        Worker processes; default the number of cores.
+    force : bool
+        Redo finished runs too.
+    on_prepared : callable, optional
+        Called as ``on_prepared(to_run, skipped)`` before the first run starts.
+    on_run : callable, optional
+        Called as ``on_run(task, bytes_written)`` as each run is written (bytes 0 if it failed).
+
+    Raises
+    ------
+    ConfigError
+        A saved config that disagrees, or a map too small for the grid.
+    GridError
+        After the whole grid, if some runs raised: each named with its traceback's last line.
+    """
+    from joblib import Parallel, delayed
+
+    from curiosity_cli.explore.runs import is_complete, remove_partial_runs, run_folder
+
+    started = time.perf_counter()
+    jobs = (os.cpu_count() or 1) if jobs is None else jobs
+    folder = Path(results_dir) / config.name
+    check_saved_config(folder, config)
+    stores = prepare_stores(config, cache_dir)
+    tasks = plan_runs(config, stores)
+    by_name = {info.name: info for info in stores.values()}
+    _write_experiment_files(folder, config, tasks, by_name)
+    remove_partial_runs(folder)
+
+    todo = [t for t in tasks if force or not is_complete(run_folder(folder, t.dataset, t.weight_function, t.restart))]
+    if on_prepared is not None:
+        on_prepared(len(todo), len(tasks) - len(todo))
+    threads = max(1, (os.cpu_count() or 1) // max(1, jobs))
+    failed, fallbacks, written = [], 0, 0
+    results = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")(
+        delayed(compute_run)(task, config, threads) for task in todo
+    )
+    for task, outcome in results:
+        size = 0
+        if isinstance(outcome, str):
+            failed.append(f"{task.dataset} / {task.weight_function} / restart {task.restart}: {outcome}")
+        else:
+            exploration, seconds = outcome
+            size = _write(folder, task, exploration, seconds, config, by_name[task.dataset])
+            fallbacks += int(exploration.fallback.sum())
+            written += size
+        if on_run is not None:
+            on_run(task, size)
+    summary = GridSummary(folder, len(todo) - len(failed), len(tasks) - len(todo), failed, fallbacks, written,
+                          time.perf_counter() - started)
+    if failed:
+        raise GridError(f"{len(failed)} of {len(todo)} runs failed (the others are written): " + "; ".join(failed))
+    return summary
+
+
+def prepare_stores(config: ExperimentConfig, cache_dir: Path) -> dict[str, StoreInfo]:
+    """Each entry of ``config.datasets``: its map's word store, extracted now if not cached.
+
+    Raises
+    ------
+    ConfigError
+        Two entries naming maps of the same name (their runs would share folders).
+    """
+    from curiosity_cli.data import load_map
+    from curiosity_cli.words.extract import extract_words
+
+    stores = {}
+    for entry in config.datasets:
+        map_data = load_map(entry)
+        name = map_data.config.name
+        if any(info.name == name for info in stores.values()):
+            raise ConfigError(f"datasets: two entries are maps named {name!r}; runs are filed by map name")
+        extraction = extract_words(map_data, config.words, cache_dir=cache_dir)
+        store = extraction.store
+        stores[entry] = StoreInfo(
+            name, extraction.path, store.grid_shape, store.vocabulary_size, [t.sha256 for t in store.types]
+        )
+    return stores
+
+
+@lru_cache(maxsize=4)
+def _load_store(path: str):
+    from curiosity_cli.words.store import load_store
+
+    return load_store(Path(path))
+
+
+def compute_run(task: RunTask, config: ExperimentConfig, threads: int = 1):
+    """Compute one run in a worker: ``(task, (Exploration, seconds))``, or ``(task, error text)``.
+
+    An error comes back as text rather than raised so that one failing run does not
+    stop the others.
+    """
+    import numba
+
+    from curiosity_cli.explore.walker import explore
+
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    started = time.perf_counter()
+    try:
+        exploration = explore(
+            _load_store(task.store_path), task.weight_function, task.start_cell,
+            model=config.model, settings=config.explore, seed=task.seed,
+        )
+    except Exception as exc:  # noqa: BLE001 - reported with the run's name, the grid goes on
+        return task, "".join(traceback.format_exception_only(exc)).strip()
+    return task, (exploration, time.perf_counter() - started)
+
+
+def _write(folder: Path, task: RunTask, exploration, seconds: float, config: ExperimentConfig, store: StoreInfo) -> int:
+    from curiosity_cli import __version__
+    from curiosity_cli.explore.runs import run_folder, write_run
+
+    grid_shape = store.grid_shape
+    meta = {
+        "dataset": task.dataset,
+        "weight_function": task.weight_function,
+        "restart": task.restart,
+        "start_cell": task.start_cell,
+        "start_row": task.start_cell // grid_shape[1],
+        "start_col": task.start_cell % grid_shape[1],
+        "seed": list(task.seed),
+        "store": store.path.name,
+        "vocabulary_hashes": store.vocabulary_hashes,
+        "grid_shape": list(grid_shape),
+        "vocabulary_size": store.vocabulary_size,
+        "n_topics": config.model.topics,
+        "path_length": config.explore.path_length,
+        "fallbacks": int(exploration.fallback.sum()),
+        "words_sampled": int(exploration.words_sampled.sum()),
+        "seconds": round(seconds, 3),
+        "curiosity": __version__,
+    }
+    return write_run(run_folder(folder, task.dataset, task.weight_function, task.restart), exploration, meta, grid_shape[1])
+
+
+def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[RunTask], stores) -> None:
+    import pandas as pd
+    import yaml
+
+    from curiosity_cli.provenance import provenance
+
+    folder.mkdir(parents=True, exist_ok=True)
+    with atomic_path(folder / "config.yaml") as tmp:
+        tmp.write_text(to_yaml(config))
+    with atomic_path(folder / "provenance.yaml") as tmp:
+        tmp.write_text(yaml.safe_dump(provenance(config.seed), sort_keys=False))
+    rows = []
+    for t in tasks:
+        cols = stores[t.dataset].grid_shape[1]
+        rows.append(
+            {"dataset": t.dataset, "weight_function": t.weight_function, "restart": t.restart,
+             "start_row": t.start_cell // cols, "start_col": t.start_cell % cols,
+             "seed": " ".join(map(str, t.seed)), "store": Path(t.store_path).name}
+        )
+    with atomic_path(folder / "runs.csv") as tmp:
+        pd.DataFrame(rows).to_csv(tmp, index=False)

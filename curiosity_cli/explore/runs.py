@@ -1,0 +1,177 @@
+"""One run's folder on disk: written whole or not at all, and read back.
+
+``results/<experiment>/runs/<dataset>/<weight function>/restart-<NNN>/`` holds:
+
+- ``path.csv``: one row per step: ``step, row, col, cell, first_visit, words_sampled,
+  log_likelihood, fallback``;
+- ``candidates.csv``: one row per scored neighbour: ``step, row, col, cell, coverage,
+  word_perplexity, topic_perplexity, weight, chosen``;
+- ``checkpoints.npz`` (compressed): the path's cells and, for every checkpoint length
+  ``L``, the non-zero word-topic counts Φ_p as ``L/words``, ``L/topics``, ``L/counts``;
+- ``run.json``: what the run was (dataset, weight function, restart, start cell, seed,
+  word store, vocabulary hashes, model parameters) and what it cost (seconds, and
+  ``bytes``: the size of the three files above).
+
+The folder is built under a hidden temporary name and renamed into place, so a folder
+under its real name is always complete; a killed writer leaves only a hidden
+``.restart-NNN.tmp-*`` folder, which the next grid run removes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from curiosity_cli.errors import CuriosityError
+from curiosity_cli.explore.walker import Exploration, SparseCounts
+from curiosity_cli.files import display_path
+
+RUN_FORMAT = 1
+_TMP_MARK = ".tmp-"
+
+
+class RunError(CuriosityError):
+    """A run folder that is missing, incomplete or corrupt."""
+
+
+def run_folder(root: Path, dataset: str, weight_function: str, restart: int) -> Path:
+    """Where a run lives under an experiment folder ``root``."""
+    return Path(root) / "runs" / dataset / weight_function / f"restart-{restart:03d}"
+
+
+def remove_partial_runs(root: Path) -> int:
+    """Delete the temporary folders killed writers left under ``root/runs``; returns how many."""
+    removed = 0
+    for tmp in (Path(root) / "runs").glob(f"*/*/.restart-*{_TMP_MARK}*"):
+        shutil.rmtree(tmp, ignore_errors=True)
+        removed += 1
+    return removed
+
+
+def write_run(folder: Path, exploration: Exploration, meta: dict, grid_cols: int) -> int:
+    """Write a run's folder atomically (replacing an old one); returns its size in bytes, run.json included.
+
+    Parameters
+    ----------
+    folder : Path
+        From :func:`run_folder`.
+    exploration : Exploration
+    meta : dict
+        JSON-ready facts about the run; ``format``, ``checkpoints`` and ``bytes`` are added.
+    grid_cols : int
+        Cells per row of the map's grid, to write rows and columns.
+    """
+    import pandas as pd
+
+    folder = Path(folder)
+    tmp = folder.parent / f".{folder.name}{_TMP_MARK}{uuid.uuid4().hex[:8]}"
+    tmp.mkdir(parents=True)
+    try:
+        e = exploration
+        rows, cols = np.divmod(e.path, grid_cols)
+        pd.DataFrame(
+            {
+                "step": np.arange(e.path.size), "row": rows, "col": cols, "cell": e.path,
+                "first_visit": e.first_visit, "words_sampled": e.words_sampled,
+                "log_likelihood": e.log_likelihood, "fallback": e.fallback,
+            }
+        ).to_csv(tmp / "path.csv", index=False)
+        c_rows, c_cols = np.divmod(e.candidate_cell, grid_cols)
+        pd.DataFrame(
+            {
+                "step": e.candidate_step, "row": c_rows, "col": c_cols, "cell": e.candidate_cell,
+                "coverage": e.coverage, "word_perplexity": e.word_perplexity,
+                "topic_perplexity": e.topic_perplexity, "weight": e.weight, "chosen": e.chosen,
+            }
+        ).to_csv(tmp / "candidates.csv", index=False)
+        arrays = {"path": e.path.astype(np.int32), "lengths": np.array(sorted(e.checkpoints), np.int32)}
+        for length, counts in e.checkpoints.items():
+            arrays.update({f"{length}/words": counts.words, f"{length}/topics": counts.topics, f"{length}/counts": counts.counts})
+        np.savez_compressed(tmp / "checkpoints.npz", **arrays)
+        size = sum(p.stat().st_size for p in tmp.iterdir())
+        meta = {"format": RUN_FORMAT, **meta, "checkpoints": sorted(e.checkpoints), "bytes": size}
+        (tmp / "run.json").write_text(json.dumps(meta, indent=2) + "\n")
+        size += (tmp / "run.json").stat().st_size
+        if folder.exists():
+            shutil.rmtree(folder)
+        os.rename(tmp, folder)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+    return size
+
+
+@dataclass(frozen=True)
+class Run:
+    """A finished run read back from its folder.
+
+    Attributes
+    ----------
+    folder : Path
+    meta : dict
+        ``run.json``.
+    path : (L,) int64 ndarray
+        Row-major cell of each step.
+    """
+
+    folder: Path
+    meta: dict
+    path: np.ndarray
+
+    def phi(self, length: int) -> np.ndarray:
+        """(V, K) int32 ndarray: the word-topic counts Φ_p after ``length`` steps."""
+        if length not in self.meta["checkpoints"]:
+            raise RunError(
+                f"{display_path(self.folder)}: no checkpoint at path length {length}; "
+                f"it has {', '.join(map(str, self.meta['checkpoints']))}"
+            )
+        words, topics, counts = _load_arrays(
+            self.folder / "checkpoints.npz", [f"{length}/words", f"{length}/topics", f"{length}/counts"]
+        )
+        return SparseCounts(words, topics, counts, (self.meta["vocabulary_size"], self.meta["n_topics"])).dense()
+
+
+def is_complete(folder: Path) -> bool:
+    """Whether a run folder exists under its real name (so it was written whole)."""
+    return (Path(folder) / "run.json").is_file()
+
+
+def read_run(folder: Path) -> Run:
+    """Read a run folder.
+
+    Raises
+    ------
+    RunError
+        A missing or corrupt ``run.json`` or ``checkpoints.npz``, naming the file.
+    """
+    folder = Path(folder)
+    meta_path = folder / "run.json"
+    try:
+        meta = json.loads(meta_path.read_text())
+    except FileNotFoundError:
+        raise RunError(f"{display_path(meta_path)}: not found; expected a finished run") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise RunError(f"{display_path(meta_path)}: corrupt ({exc}); run the grid with --force to redo it") from None
+    if meta.get("format") != RUN_FORMAT:
+        raise RunError(f"{display_path(meta_path)}: format {meta.get('format')!r}, expected {RUN_FORMAT}")
+    (path,) = _load_arrays(folder / "checkpoints.npz", ["path"])
+    return Run(folder, meta, path.astype(np.int64))
+
+
+def _load_arrays(path: Path, names: list[str]) -> list[np.ndarray]:
+    import zipfile
+    import zlib
+
+    try:
+        with np.load(path) as npz:
+            return [npz[name] for name in names]
+    except FileNotFoundError:
+        raise RunError(f"{display_path(path)}: not found; the run folder is incomplete") from None
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+        raise RunError(f"{display_path(path)}: corrupt ({exc}); run the grid with --force to redo it") from None

@@ -1,0 +1,278 @@
+"""One exploration run: a walker on a map's cell grid, learning a topic model as it goes.
+
+Each step ``t`` (0-based) of a run of ``path_length`` steps, with the walker in cell ``p_t``:
+
+1. **Observe**: on the first visit, the words of ``p_t`` enter the topic model with
+   observation time ``t``.
+2. **Refine**: realtime refinement (Algorithm 2, bias η) for a fixed budget of word
+   samples, or for a wall-clock budget when ``explore.step_seconds`` is set. The fixed
+   budget stands in for the paper's 200 ms per step, so results do not depend on how
+   fast the machine is.
+3. **Score** the in-bounds 4-neighbours with the run's weight function
+   (:mod:`curiosity_cli.explore.weights`).
+4. **Move** to a neighbour drawn with probability proportional to its weight. Weights
+   that are NaN or infinite count as 0; if no weight is left positive the draw is
+   uniform, and the step is counted as a fallback.
+
+After ``L`` steps the path has length ``L`` (``p_0 .. p_{L-1}`` observed); at each
+checkpoint length the model's word-topic counts Φ_p are kept. The last step only
+observes and refines: nothing scores a move that would never be observed.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from curiosity_cli.config import ExploreConfig, ModelConfig
+from curiosity_cli.errors import ParameterError
+from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, coverage_potential
+from curiosity_cli.words.store import WordStore
+
+# word samples per call when refining against the clock: small enough to stop on time
+_CLOCK_CHUNK = 5000
+
+
+@dataclass(frozen=True)
+class SparseCounts:
+    """Non-zero entries of a (V, K) word-topic count matrix, for compact checkpoints.
+
+    Attributes
+    ----------
+    words, topics : (nnz,) int ndarrays
+        Row (word id) and column (topic) of each non-zero count.
+    counts : (nnz,) int32 ndarray
+    shape : (int, int)
+        ``(V, K)``.
+    """
+
+    words: np.ndarray
+    topics: np.ndarray
+    counts: np.ndarray
+    shape: tuple[int, int]
+
+    @classmethod
+    def of(cls, dense: np.ndarray) -> SparseCounts:
+        words, topics = np.nonzero(dense)
+        return cls(
+            words.astype(np.min_scalar_type(dense.shape[0] - 1)),
+            topics.astype(np.min_scalar_type(dense.shape[1] - 1)),
+            dense[words, topics].astype(np.int32),
+            (int(dense.shape[0]), int(dense.shape[1])),
+        )
+
+    def dense(self) -> np.ndarray:
+        """(V, K) int32 ndarray."""
+        out = np.zeros(self.shape, np.int32)
+        out[self.words, self.topics] = self.counts
+        return out
+
+
+@dataclass(frozen=True)
+class Exploration:
+    """What one run did and learned.
+
+    Attributes
+    ----------
+    path : (L,) int64 ndarray
+        Row-major cell of each step.
+    first_visit : (L,) bool ndarray
+        Whether the step observed a new cell.
+    words_sampled : (L,) int64 ndarray
+        Word samples of refinement at each step.
+    log_likelihood : (L,) float64 ndarray
+        The model's mean per-word log-likelihood after each step's refinement (nats).
+    fallback : (L,) bool ndarray
+        Steps whose move was drawn uniformly because no weight was positive (always
+        False on the last step, which does not move).
+    candidate_step, candidate_cell : (M,) int64 ndarrays
+        For every scored neighbour: the step and the neighbour's cell.
+    coverage, word_perplexity, topic_perplexity, weight : (M,) float64 ndarrays
+        The facts the weight function saw and the weight it gave.
+    chosen : (M,) bool ndarray
+        Whether the walker moved there.
+    checkpoints : dict of int to SparseCounts
+        Word-topic counts Φ_p at each checkpoint path length.
+    """
+
+    path: np.ndarray
+    first_visit: np.ndarray
+    words_sampled: np.ndarray
+    log_likelihood: np.ndarray
+    fallback: np.ndarray
+    candidate_step: np.ndarray
+    candidate_cell: np.ndarray
+    coverage: np.ndarray
+    word_perplexity: np.ndarray
+    topic_perplexity: np.ndarray
+    weight: np.ndarray
+    chosen: np.ndarray
+    checkpoints: dict[int, SparseCounts]
+
+
+def in_bounds_neighbours(cell: int, grid_shape: tuple[int, int]) -> np.ndarray:
+    """(n,) int64 ndarray: the 4-neighbours of ``cell`` inside the grid, up, down, left, right."""
+    rows, cols = grid_shape
+    row, col = divmod(int(cell), cols)
+    out = []
+    for d_row, d_col in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+        r, c = row + d_row, col + d_col
+        if 0 <= r < rows and 0 <= c < cols:
+            out.append(r * cols + c)
+    return np.array(out, np.int64)
+
+
+def draw_move(weights: np.ndarray, rng: np.random.Generator) -> tuple[int, bool]:
+    """Index drawn with probability proportional to ``weights``; ``(index, fell back to uniform)``.
+
+    NaN and infinite weights count as 0; when nothing positive is left, the draw is
+    uniform. Negative weights are a bug in the weight function: the caller checks.
+    """
+    usable = np.where(np.isfinite(weights), weights, 0.0)
+    total = usable.sum()
+    if not total > 0:
+        return int(rng.integers(weights.shape[0])), True
+    return int(rng.choice(weights.shape[0], p=usable / total)), False
+
+
+def explore(
+    store: WordStore,
+    weight_function: str,
+    start_cell: int,
+    *,
+    model: ModelConfig,
+    settings: ExploreConfig,
+    seed,
+) -> Exploration:
+    """Run one exploration path (module docstring) and return its records and checkpoints.
+
+    Parameters
+    ----------
+    store : WordStore
+        The map's words by cell.
+    weight_function : str
+        A name in :data:`~curiosity_cli.explore.weights.WEIGHT_FUNCTIONS`.
+    start_cell : int
+        Row-major cell of the first step.
+    model : ModelConfig
+        Topics, α, β, η and the spatial neighbourhood of the topic model.
+    settings : ExploreConfig
+        Path length, checkpoints, refinement budget and the coverage clamp.
+    seed : int or sequence of int
+        Entropy for :class:`numpy.random.SeedSequence`; the topic model and the moves
+        draw from two streams spawned from it.
+
+    Returns
+    -------
+    Exploration
+
+    Raises
+    ------
+    ParameterError
+        An unknown weight function, a start cell off the grid, a single-cell map, or a
+        weight function returning the wrong shape or negative weights.
+    """
+    from curiosity_cli.topics.model import TopicModel
+    from curiosity_cli.topics.neighbours import grid_neighbours
+    from curiosity_cli.topics.perplexity import topic_perplexity, word_perplexity
+
+    if weight_function not in WEIGHT_FUNCTIONS:
+        raise ParameterError(
+            f"weight_function: got {weight_function!r}, expected one of {', '.join(WEIGHT_FUNCTIONS)}"
+        )
+    score = WEIGHT_FUNCTIONS[weight_function]
+    n_cells = store.n_cells
+    if n_cells < 2:
+        raise ParameterError("store: the map has a single cell, so there is nowhere to move")
+    if not 0 <= int(start_cell) < n_cells:
+        raise ParameterError(f"start_cell: got {start_cell}, expected 0 .. {n_cells - 1}")
+    grid_cols = store.grid_shape[1]
+    model_seed, move_seed = np.random.SeedSequence(seed).spawn(2)
+    rng = np.random.default_rng(move_seed)
+    topic_model = TopicModel(
+        model.topics,
+        store.vocabulary_size,
+        grid_neighbours(*store.grid_shape, model.spatial_neighbours),
+        alpha=model.alpha,
+        beta=model.beta,
+        seed=int(model_seed.generate_state(1, np.uint64)[0]),
+        vocabulary_hashes=[t.sha256 for t in store.types],
+    )
+
+    length = settings.path_length
+    path = np.empty(length, np.int64)
+    first_visit = np.zeros(length, bool)
+    words_sampled = np.zeros(length, np.int64)
+    log_likelihood = np.empty(length)
+    fallback = np.zeros(length, bool)
+    visits = np.zeros(n_cells, np.int64)
+    scored: list[tuple] = []
+    checkpoints: dict[int, SparseCounts] = {}
+    keep = set(settings.checkpoints)
+
+    cell = int(start_cell)
+    for step in range(length):
+        path[step] = cell
+        if visits[cell] == 0:
+            first_visit[step] = True
+            topic_model.add_cell(cell, store.cell_words(cell), time=step)
+        visits[cell] += 1
+        words_sampled[step] = _refine(topic_model, model.eta, settings)
+        log_likelihood[step] = topic_model.log_likelihood()
+        if step + 1 in keep:
+            checkpoints[step + 1] = SparseCounts.of(topic_model.topic_word_counts())
+        if step + 1 == length:
+            break
+
+        cells = in_bounds_neighbours(cell, store.grid_shape)
+        visited = np.flatnonzero(visits)
+        candidates = Candidates(
+            cells=cells,
+            coverage=coverage_potential(cells, visited, visits[visited], grid_cols, settings.min_d2),
+            word_perplexity=np.array([word_perplexity(topic_model, store.cell_words(g)) for g in cells]),
+            topic_perplexity=np.array([topic_perplexity(topic_model, store.cell_words(g), g) for g in cells]),
+        )
+        weights = np.asarray(score(candidates), np.float64)
+        if weights.shape != cells.shape or np.any(weights < 0):
+            raise ParameterError(
+                f"weight function {weight_function!r}: returned {weights!r}, expected {cells.size} weights >= 0"
+            )
+        choice, fallback[step] = draw_move(weights, rng)
+        scored.append((step, candidates, weights, choice))
+        cell = int(cells[choice])
+
+    return _records(path, first_visit, words_sampled, log_likelihood, fallback, scored, checkpoints)
+
+
+def _refine(topic_model, eta: float, settings: ExploreConfig) -> int:
+    if settings.step_seconds is None:
+        return topic_model.refine_realtime(settings.samples_per_step, eta=eta)
+    deadline = time.perf_counter() + settings.step_seconds
+    done = 0
+    while time.perf_counter() < deadline:
+        done += topic_model.refine_realtime(_CLOCK_CHUNK, eta=eta)
+    return done
+
+
+def _records(path, first_visit, words_sampled, log_likelihood, fallback, scored, checkpoints) -> Exploration:
+    def column(get, dtype) -> np.ndarray:
+        parts = [np.asarray(get(*entry), dtype) for entry in scored]
+        return np.concatenate(parts) if parts else np.zeros(0, dtype)
+
+    return Exploration(
+        path=path,
+        first_visit=first_visit,
+        words_sampled=words_sampled,
+        log_likelihood=log_likelihood,
+        fallback=fallback,
+        candidate_step=column(lambda step, c, w, i: np.full(c.cells.size, step), np.int64),
+        candidate_cell=column(lambda step, c, w, i: c.cells, np.int64),
+        coverage=column(lambda step, c, w, i: c.coverage, np.float64),
+        word_perplexity=column(lambda step, c, w, i: c.word_perplexity, np.float64),
+        topic_perplexity=column(lambda step, c, w, i: c.topic_perplexity, np.float64),
+        weight=column(lambda step, c, w, i: w, np.float64),
+        chosen=column(lambda step, c, w, i: np.arange(c.cells.size) == i, bool),
+        checkpoints=checkpoints,
+    )

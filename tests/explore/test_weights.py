@@ -1,0 +1,105 @@
+"""Weight functions and the move draw against the paper's formulas, evaluated naively."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from curiosity_cli.explore.walker import draw_move, in_bounds_neighbours
+from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, coverage_potential
+
+
+def potential_naive(candidate, visits: dict, cols: int, min_d2: float) -> float:
+    """Σ_j n_j / max(d², min_d2), one visited cell at a time."""
+    row, col = divmod(candidate, cols)
+    total = 0.0
+    for cell, n in visits.items():
+        r, c = divmod(cell, cols)
+        total += n / max((row - r) ** 2 + (col - c) ** 2, min_d2)
+    return total
+
+
+@pytest.mark.parametrize("min_d2", [0.25, 1.0, 2.0])
+def test_coverage_potential_matches_the_sum_with_the_clamp(min_d2):
+    cols = 5
+    visits = {0: 3, 6: 1, 7: 2, 24: 1}  # 7 is also a candidate: d = 0 hits the clamp
+    candidates = np.array([1, 7, 12, 23])
+    got = coverage_potential(candidates, np.array(list(visits)), np.array(list(visits.values())), cols, min_d2)
+    expected = [potential_naive(int(c), visits, cols, min_d2) for c in candidates]
+    np.testing.assert_allclose(got, expected, rtol=1e-15)
+    # the visited candidate (7) gets n / min_d2 from itself
+    assert got[1] >= 2 / min_d2
+
+
+def test_the_four_weight_functions_are_the_papers_formulas():
+    candidates = Candidates(
+        cells=np.array([3, 5, 9]),
+        coverage=np.array([0.5, 2.0, 4.0]),
+        word_perplexity=np.array([10.0, 20.0, 1.0]),
+        topic_perplexity=np.array([3.0, 1.5, 8.0]),
+    )
+    expected = {
+        "random-walk": [1.0, 1.0, 1.0],
+        "stochastic-coverage": [1 / 0.5, 1 / 2.0, 1 / 4.0],
+        "word-perplexity": [10 / 0.5, 20 / 2.0, 1 / 4.0],
+        "topic-perplexity": [3 / 0.5, 1.5 / 2.0, 8 / 4.0],
+    }
+    assert list(WEIGHT_FUNCTIONS)[:4] == list(expected)
+    for name, weights in expected.items():
+        np.testing.assert_allclose(WEIGHT_FUNCTIONS[name](candidates), weights, rtol=1e-15)
+
+
+@pytest.mark.parametrize(
+    "cell, expected",
+    [
+        (0, [4, 1]),  # top-left corner: down, right
+        (3, [7, 2]),  # top-right corner: down, left
+        (5, [1, 9, 4, 6]),  # inside: up, down, left, right
+        (10, [6, 9, 11]),  # bottom edge: up, left, right
+    ],
+)
+def test_neighbours_stay_on_a_3_by_4_grid(cell, expected):
+    assert in_bounds_neighbours(cell, (3, 4)).tolist() == expected
+
+
+def test_a_single_column_grid_has_only_vertical_neighbours():
+    assert in_bounds_neighbours(2, (5, 1)).tolist() == [1, 3]
+
+
+def test_draw_follows_the_weights_and_falls_back_to_uniform_only_without_positive_weight():
+    rng = np.random.default_rng(0)
+    weights = np.array([1.0, 0.0, 3.0, np.nan])
+    draws = [draw_move(weights, rng) for _ in range(4000)]
+    assert not any(fell for _, fell in draws)
+    counts = np.bincount([i for i, _ in draws], minlength=4)
+    assert counts[1] == counts[3] == 0
+    assert counts[2] / counts[0] == pytest.approx(3.0, rel=0.15)
+    for dead in ([0.0, 0.0], [np.nan, np.inf], [0.0, -np.inf]):
+        index, fell = draw_move(np.array(dead), rng)
+        assert fell and index in (0, 1)
+
+
+def test_random_walk_draws_are_uniform_over_in_bounds_neighbours():
+    # chi-square goodness of fit, 3 degrees of freedom: 16.27 is the 0.1 % critical value
+    rng = np.random.default_rng(7)
+    n = 8000
+    counts = np.zeros(4)
+    for _ in range(n):
+        index, _ = draw_move(WEIGHT_FUNCTIONS["random-walk"](_candidates(4)), rng)
+        counts[index] += 1
+    chi2 = ((counts - n / 4) ** 2 / (n / 4)).sum()
+    assert chi2 < 16.27, counts
+
+
+def _candidates(n: int) -> Candidates:
+    ones = np.ones(n)
+    return Candidates(np.arange(n), ones, ones, ones)
+
+
+def test_the_clamp_keeps_a_revisited_cell_reachable():
+    # unclamped, a candidate the walker stands on would have infinite potential
+    cols = 3
+    potential = coverage_potential(np.array([4]), np.array([4]), np.array([1]), cols, 0.25)
+    assert math.isfinite(potential[0]) and potential[0] == pytest.approx(4.0)
