@@ -96,11 +96,50 @@ class ExploreConfig:
 
 
 @dataclass(frozen=True)
+class LabelConfig:
+    """Labelling whole maps: with a path's model (Z_p) and in batch mode (Z_b) (paper section 5.1)."""
+
+    sweeps: int = _spec(min=1)
+    batch_sweeps: int = _spec(min=1)
+
+
+@dataclass(frozen=True)
 class DriveConfig:
-    """The live robot driver (paper section 5.2)."""
+    """The live robot driver (paper section 5.2), its wire protocol and the simulated robot."""
 
     gamma: float = _spec(min=0, max=1, max_exclusive=True)
     temporal_neighbours: int = _spec(choices=(0, 2))
+    frame_width: int = _spec(min=16)
+    grid_rows: int = _spec(min=1)
+    grid_cols: int = _spec(min=1)
+    texton_stride: int = _spec(min=1)
+    orb_levels: int = _spec(min=1, max=16)
+    orb_fill_threshold: int | None = _spec(min=1, max=19)
+    samples_per_frame: int = _spec(min=0)
+    window_frames: int = _spec(min=2)
+    carry_frames: int = _spec(min=0)
+    carry_sweeps: int = _spec(min=0)
+    surge_cruise: float = _spec()
+    surge_gain: float = _spec(min=0)
+    surge_min: float = _spec()
+    surge_max: float = _spec()
+    yaw_gain: float = _spec(min=0)
+    yaw_rate_max: float = _spec(min=0)
+    pitch_gain: float = _spec(min=0)
+    pitch_rate_max: float = _spec(min=0)
+    port: str | None = _spec()
+    baud: int = _spec(min=1)
+    hello_timeout: float = _spec(min=0, min_exclusive=True)
+    ack_timeout: float = _spec(min=0, min_exclusive=True)
+    resends: int = _spec(min=0)
+    keepalive: float = _spec(min=0, min_exclusive=True)
+    watchdog: float = _spec(min=0, min_exclusive=True)
+    state_rate: float = _spec(min=0, min_exclusive=True)
+    sim_metres_per_pixel: float = _spec(min=0, min_exclusive=True)
+    sim_view_rows: int = _spec(min=16)
+    sim_view_cols: int = _spec(min=16)
+    sim_frame_interval: float = _spec(min=0)
+    video_fps: float = _spec(min=0, min_exclusive=True)
 
 
 @dataclass(frozen=True)
@@ -113,6 +152,7 @@ class ExperimentConfig:
     model: ModelConfig = _spec()
     words: WordsConfig = _spec()
     explore: ExploreConfig = _spec()
+    label: LabelConfig = _spec()
     drive: DriveConfig = _spec()
 
 

@@ -42,15 +42,3 @@ def own_map(tmp_path: Path) -> Path:
     path = tmp_path / "own.yaml"
     path.write_text(yaml.safe_dump(config, sort_keys=False))
     return path
-
-
-def edit_yaml(path: Path, **changes) -> Path:
-    """Rewrite keys of a YAML file in place (a value of ... deletes the key)."""
-    data = yaml.safe_load(path.read_text())
-    for key, value in changes.items():
-        if value is ...:
-            data.pop(key)
-        else:
-            data[key] = value
-    path.write_text(yaml.safe_dump(data, sort_keys=False))
-    return path

@@ -343,18 +343,30 @@ def distance2_colouring_naive(table: np.ndarray) -> np.ndarray:
 
 
 def refine_batch_naive(state: NaiveModel, sweeps: int) -> None:
-    """Twin of ``refine_batch_kernel``: phases by colour, stale word-topic counts per phase.
+    """Twin of ``TopicModel.refine_batch``: phases by colour, stale word-topic counts per phase.
 
-    In sweep s, for each colour in increasing order, each observed cell of that colour
-    (in cell order) is refined with stream (counter + s, cell), seeing every other cell's
-    word-topic contribution as it was when the phase began.
+    Phases: for each colour in increasing order, the observed cells of that colour in
+    cell order, cut into ceil(n / m) runs of consecutive cells with m = ceil(observed
+    cells / 16), the first n mod runs of them one cell longer than the rest. In sweep s,
+    each cell of a phase is refined with stream (counter + s, cell), seeing every other
+    cell's word-topic contribution as it was when the phase began.
     """
     colour = distance2_colouring_naive(state.table)
     cells = sorted(state.topics)
+    most = math.ceil(len(cells) / 16)
+    phases = []
+    for h in sorted({colour[c] for c in cells}):
+        group = [c for c in cells if colour[c] == h]
+        runs = math.ceil(len(group) / most)
+        at = 0
+        for j in range(runs):
+            size = len(group) // runs + (1 if j < len(group) % runs else 0)
+            phases.append(group[at : at + size])
+            at += size
     for s in range(sweeps):
-        for h in sorted({colour[c] for c in cells}):
+        for phase in phases:
             start = {c: zs.copy() for c, zs in state.topics.items()}
-            for c in [c for c in cells if colour[c] == h]:
+            for c in phase:
                 gibbs_cell_naive(state, c, Stream(state.key, state.counter + s, c), stale_topics=start)
     state.counter += sweeps
 
@@ -469,3 +481,22 @@ def recount(model) -> dict:
         nwk, nk = state.frozen, state.frozen.sum(axis=0)
     ng = np.array([neighbourhood(state, ncz, c) for c in range(state.n_cells)]).reshape(ncz.shape)
     return {"nwk": nwk, "nk": nk, "ncz": ncz, "ng": ng}
+
+
+# --------------------------------------------------------------------------- mutual information
+
+
+def mutual_information_naive(a, b) -> float:
+    """Σ_ij p(i, j) log2(p(i, j) / (p(i) p(j))) over the label values that occur, in bits."""
+    a = list(np.asarray(a).ravel())
+    b = list(np.asarray(b).ravel())
+    n = len(a)
+    total = 0.0
+    for i in set(a):
+        p_i = a.count(i) / n
+        for j in set(b):
+            p_j = b.count(j) / n
+            p_ij = sum(1 for x, y in zip(a, b) if x == i and y == j) / n
+            if p_ij > 0:
+                total += p_ij * math.log2(p_ij / (p_i * p_j))
+    return total

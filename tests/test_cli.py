@@ -9,11 +9,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from conftest import edit_yaml
+from small_maps import edit_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.cli.planned import _PLANNED
 from curiosity_cli.config import CONFIG_DIR
 
 runner = CliRunner()
@@ -90,13 +89,6 @@ def test_config_show_prints_the_resolved_config():
     result = run("config", "show", str(CONFIG_DIR / "quick.yaml"), "--set", "explore.restarts=3")
     assert result.exit_code == 0, result.output
     assert "name: quick" in result.stdout and "restarts: 3" in result.stdout and "base:" not in result.stdout
-
-
-@pytest.mark.parametrize("name, summary, issue", _PLANNED)
-def test_planned_commands_say_they_are_not_implemented(name, summary, issue):
-    result = run(name, "configs/quick.yaml", "--whatever")
-    assert result.exit_code == 1
-    assert f"`curiosity {name}` is not implemented yet; it arrives with issue #{issue}" in result.stderr
 
 
 def _assert_one_line_error(result, *fragments: str) -> None:

@@ -166,7 +166,7 @@ def test_a_bad_override_names_the_option():
 
 
 def test_a_dataset_yaml_missing_its_image_is_refused(own_map):
-    from conftest import edit_yaml
+    from small_maps import edit_yaml
 
     edit_yaml(own_map, image="gone.png")
     with pytest.raises(ConfigError, match=r"own\.yaml: image: file not found: .*gone\.png$"):
@@ -174,7 +174,7 @@ def test_a_dataset_yaml_missing_its_image_is_refused(own_map):
 
 
 def test_a_dataset_with_labels_needs_a_legend(own_map):
-    from conftest import edit_yaml
+    from small_maps import edit_yaml
 
     edit_yaml(own_map, legend=None)
     with pytest.raises(ConfigError, match=r"own\.yaml: legend: missing; a dataset with labels needs a legend"):

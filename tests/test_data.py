@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 import yaml
-from conftest import edit_yaml
+from small_maps import edit_yaml
 
 from curiosity_cli.data import dataset_names, grid_shape, load_legend, load_map
 from curiosity_cli.errors import ConfigError, DatasetError

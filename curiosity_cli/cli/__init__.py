@@ -51,7 +51,7 @@ def _root(
 
 
 # Registration order is the order `--help` lists the commands: the pipeline's order.
-from curiosity_cli.cli import datasets, vocab, extract, explore, planned, config_cmd  # noqa: E402,F401
+from curiosity_cli.cli import datasets, vocab, extract, explore, label, plot, reproduce, drive, config_cmd  # noqa: E402,F401
 
 
 def main() -> None:

@@ -38,8 +38,10 @@ from curiosity_cli.config import ExperimentConfig, to_dict, to_yaml
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 
-#: Config keys that choose which runs a grid holds, not what a run computes.
-_SELECTION_KEYS = {("name",), ("datasets",), ("explore", "weight_functions"), ("explore", "restarts")}
+#: The config sections a run's numbers depend on ...
+_RUN_SECTIONS = ("seed", "model", "words", "explore")
+#: ... except these keys, which choose which runs a grid holds.
+_SELECTION_KEYS = {("explore", "weight_functions"), ("explore", "restarts")}
 
 
 class GridError(CuriosityError):
@@ -146,7 +148,8 @@ def check_saved_config(folder: Path, config: ExperimentConfig) -> None:
     if not saved_path.is_file():
         return
     saved = yaml.safe_load(saved_path.read_text())
-    for keys, old, new in _differences(saved, to_dict(config)):
+    current = to_dict(config)
+    for keys, old, new in _differences({k: saved.get(k) for k in _RUN_SECTIONS}, {k: current[k] for k in _RUN_SECTIONS}):
         if keys not in _SELECTION_KEYS:
             raise ConfigError(
                 f"{display_path(saved_path)}: {'.'.join(keys)} was {old!r} for the runs already there, now {new!r}; "

@@ -8,16 +8,14 @@ Every kernel has a slow reference twin in ``tests/naive.py`` (section "topic mod
 from __future__ import annotations
 
 import numpy as np
-from numba import prange
 
 from curiosity_cli._numba import njit
+from curiosity_cli.topics._intrinsics import fetch_add
 from curiosity_cli.topics._rng import below, next_state, stream_start, unit64
-from curiosity_cli.topics._sampler import gibbs_cell, gibbs_cell_phase, refresh_inverse, row_dot
+from curiosity_cli.topics._sampler import gibbs_cell, refresh_inverse, row_dot
 
-# 16 int32 or float32: one 64-byte cache line
-_LINE = 16
-# cells of a batch phase are dealt to slots in chunks of this many
-_CHUNK = 16
+# threads refining a batch phase take cells in chunks of this many
+_CHUNK = 4
 
 
 @njit
@@ -65,108 +63,85 @@ def refine_cells_kernel(
 
 
 @njit
-def link_repeats(words, cell_first, cell_count, n_words):
-    """(capacity,) int32: for each word, the previous position of its id in its cell, or -1."""
-    repeat_of = np.full(words.shape[0], -1, np.int32)
-    latest = np.full(n_words, -1, np.int64)
-    for cell in range(cell_first.shape[0]):
-        first = cell_first[cell]
-        if first < 0:
-            continue
-        for i in range(first, first + cell_count[cell]):
-            w = words[i]
-            if latest[w] >= first:
-                repeat_of[i] = latest[w]
-            latest[w] = i
-        for i in range(first, first + cell_count[cell]):
-            latest[words[i]] = -1
-    return repeat_of
-
-
-@njit(parallel=True)
-def refine_batch_kernel(
-    sweeps, phase_cells, phase_start, n_slots, n_topics, repeat_of,
-    cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, alpha, beta, vbeta, key, counter,
-    update_phi,
+def refine_phase_share(
+    taken, cells, previous, before, nwk, nk, inv, work_nk, work_inv, p,
+    cell_first, cell_count, words, topics, ncz, ng, table, n_topics, alpha, beta, vbeta, key, counter, update_phi,
 ):
-    """``sweeps`` colour-phased Gibbs sweeps; the result does not depend on ``n_slots``.
+    """Refine cells of one batch phase until none is left; several threads run this at once.
+
+    A batch sweep (``TopicModel.refine_batch``) visits the observed cells in phases: no
+    two cells of a phase are within graph distance 2, so they share no cell count or
+    neighbourhood sum and may be refined at the same time. Each caller takes chunks of
+    ``_CHUNK`` cells from the shared counter ``taken[0]`` (atomically), so a thread on a
+    busier core simply takes fewer.
+
+    Each caller has its own copy ``nwk``, ``nk``, ``inv`` of the word-topic counts, equal
+    to the counts at the end of the phase before once it has merged that phase's changes
+    (``previous``, empty for the first phase) into it; every caller merges the same
+    changes, in parallel. Each cell is then refined on that copy, with totals reset from
+    it (``work_nk``, ``work_inv``), and its changes are taken back out of the copy. So
+    every cell sees the counts of the phase's start plus its own changes and draws from
+    stream ``(counter, cell)``, whichever caller refines it and however many there are.
+    With ``update_phi`` False (frozen counts) the copy may be the model's own: nothing
+    writes it, and ``previous`` must be empty.
 
     Parameters
     ----------
-    repeat_of : (capacity,) int32 ndarray
-        :func:`link_repeats` of the words.
-    phase_cells : (n,) int64 ndarray
-        Observed cells grouped by colour: phase ``h`` is
-        ``phase_cells[phase_start[h]:phase_start[h + 1]]``. No two cells of a phase are
-        within graph distance 2, so they share no cell count or neighbourhood sum.
-    n_slots : int
-        Units of parallel work per phase (each with its own topic totals and scratch);
-        cells are dealt to slots in chunks.
-
-    Notes
-    -----
-    Sweep ``s`` refines each cell with stream ``(counter + s, cell)``. Within a phase,
-    every cell sees the word-topic counts and topic totals as they were at the start of
-    the phase plus its own changes (:func:`gibbs_cell_phase`); the phase's changes are
-    merged into the counts when the phase ends. Cell counts and neighbourhood sums are
-    shared and exact. So the result is the same on any number of threads, and differs
-    from a sequential sweep only in how stale the word-topic counts are within one phase
-    (as in AD-LDA).
+    taken : (1,) int64 ndarray
+        Cells of ``cells`` handed out so far; 0 at the start of the phase.
+    cells, previous : (n,) int64 ndarrays
+        The phase's cells and the phase before's.
+    before : (capacity,) ndarray of the topic type
+        The phase-start topics of the words refined (of ``previous``: of the phase before).
+    nwk, nk, inv : (V, Kp) int32, (Kp,) int32, (Kp,) float32 ndarrays
+        The caller's copy of the counts.
+    work_nk, work_inv, p : (Kp,) ndarrays
+        The caller's scratch, each on cache lines of its own.
     """
-    kp = nk.shape[0]
-    n_phases = phase_start.shape[0] - 1
-    # each slot's rows, written for every word, padded by a cache line so that no two
-    # slots ever write the same line (false sharing halved the speed on 2 threads)
-    stride = kp + _LINE
-    slot_nk = np.empty((n_slots, stride), np.int32)
-    slot_inv = np.empty((n_slots, stride), np.float32)
-    slot_p = np.zeros((n_slots, stride), np.float32)
-    before = np.empty_like(topics)
-    for sweep in range(sweeps):
-        for phase in range(n_phases):
-            lo = phase_start[phase]
-            hi = phase_start[phase + 1]
-            for slot in prange(n_slots):
-                own_nk = slot_nk[slot, :kp]
-                own_inv = slot_inv[slot, :kp]
-                own_p = slot_p[slot, :kp]
-                # chunks of cells dealt round-robin: cells refined at the same time by
-                # two slots lie far apart, so they do not write neighbouring rows
-                for start in range(lo + slot * _CHUNK, hi, n_slots * _CHUNK):
-                    for index in range(start, min(start + _CHUNK, hi)):
-                        cell = phase_cells[index]
-                        first = cell_first[cell]
-                        last = first + cell_count[cell]
-                        before[first:last] = topics[first:last]
-                        own_nk[:] = nk
-                        own_inv[:] = inv
-                        state = stream_start(key, counter + np.uint64(sweep), cell)
-                        gibbs_cell_phase(
-                            cell, first, cell_count[cell], words, repeat_of, topics, before, nwk, own_nk, own_inv,
-                            ncz, ng, table, own_p, alpha, beta, vbeta, state, update_phi,
-                        )
+    if previous.shape[0]:
+        merge_phase(previous, cell_first, cell_count, words, before, topics, nwk, nk, inv, n_topics, vbeta)
+    n = cells.shape[0]
+    while True:
+        start = fetch_add(taken, 0, _CHUNK)
+        if start >= n:
+            break
+        for index in range(start, min(start + _CHUNK, n)):
+            cell = cells[index]
+            first = cell_first[cell]
+            last = first + cell_count[cell]
+            for i in range(first, last):
+                before[i] = topics[i]
+            for k in range(nk.shape[0]):
+                work_nk[k] = nk[k]
+                work_inv[k] = inv[k]
+            gibbs_cell(
+                cell, first, cell_count[cell], words, topics, nwk, work_nk, work_inv, ncz, ng, table, p,
+                alpha, beta, vbeta, stream_start(key, counter, cell), update_phi,
+            )
             if update_phi:
-                # serial: one pass over the phase's words is a few percent of a sweep,
-                # while splitting it among threads by word id cost more than it saved
-                _merge(phase_cells[lo:hi], cell_first, cell_count, words, before, topics, nwk, nk)
-                refresh_inverse(nk, inv, n_topics, vbeta)
+                # take the cell's changes back out, the next cell must not see them
+                # (unconditionally: a no-op for an unchanged word, and no branch to mispredict)
+                for i in range(first, last):
+                    w = words[i]
+                    nwk[w, topics[i]] -= 1
+                    nwk[w, before[i]] += 1
 
 
 @njit
-def _merge(cells, cell_first, cell_count, words, before, topics, nwk, nk):
-    """Move each word of ``cells`` from topic ``before[i]`` to ``topics[i]`` in ``nwk`` and ``nk``."""
+def merge_phase(cells, cell_first, cell_count, words, before, topics, nwk, nk, inv, n_topics, vbeta):
+    """Move each word of ``cells`` from topic ``before[i]`` to ``topics[i]`` in ``nwk``, ``nk``, ``inv``."""
     for index in range(cells.shape[0]):
         cell = cells[index]
         first = cell_first[cell]
         for i in range(first, first + cell_count[cell]):
             a = before[i]
             b = topics[i]
-            if a != b:
-                w = words[i]
-                nwk[w, a] -= 1
-                nwk[w, b] += 1
-                nk[a] -= 1
-                nk[b] += 1
+            w = words[i]
+            nwk[w, a] -= 1
+            nwk[w, b] += 1
+            nk[a] -= 1
+            nk[b] += 1
+    refresh_inverse(nk, inv, n_topics, vbeta)
 
 
 @njit

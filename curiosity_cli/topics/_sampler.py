@@ -39,7 +39,7 @@ from __future__ import annotations
 import numpy as np
 
 from curiosity_cli._numba import njit
-from curiosity_cli.topics._prefetch import prefetch
+from curiosity_cli.topics._intrinsics import prefetch
 from curiosity_cli.topics._rng import next_state, unit32
 
 LANES = 8
@@ -148,6 +148,25 @@ def row_dot(nwk, w, beta, weights):
     return ((s0 + s1) + (s2 + s3)) + ((s4 + s5) + (s6 + s7))
 
 
+@njit(inline="always")
+def _add_back(cell, w, old, new, kept, nwk, nk, inv, ncz, ng, table, vbeta, update_phi):
+    """Count a word of ``cell`` (removed from topic ``old``, normaliser ``kept``) at topic ``new``."""
+    ncz[cell, new] += 1
+    ng[cell, new] += 1
+    if update_phi:
+        nwk[w, new] += 1
+        nk[new] += 1
+        # back to the count it had, so to the normaliser it had: no division
+        inv[new] = kept if new == old else inverse(nk[new], vbeta)
+    if new != old:
+        # the other cells whose neighbourhood holds this cell
+        for j in range(table.shape[1]):
+            d = table[cell, j]
+            if d >= 0:
+                ng[d, old] -= 1
+                ng[d, new] += 1
+
+
 @njit
 def gibbs_cell(
     cell, first, count, words, topics, nwk, nk, inv, ncz, ng, table, p, alpha, beta, vbeta, state, update_phi
@@ -155,20 +174,30 @@ def gibbs_cell(
     """One Gibbs pass over the words of ``cell`` in order (eq. 5, exact leave-one-out).
 
     ``p`` is (Kp,) float32 scratch whose padding entries are 0. Returns the new state.
+
+    Each word is counted at its new topic only after the next word's weights are formed,
+    and the two weights that differ from the exact ones (the previous word's new topic
+    and this word's old one) are then recomputed: the dense loop reads ``inv``,
+    ``ng[cell]`` and a row of ``nwk`` as vectors, and a vector load right after a scalar
+    store to it waits for the store to retire, which cost about 10 % per word. The weights,
+    and so the draws, are those of the plain order.
     """
     kp = p.shape[0]
-    width = table.shape[1]
     last = first + count
+    # the previous word, removed from its old topic and not yet counted at its new one
+    held = False
+    held_w = held_old = held_new = 0
+    held_kept = np.float32(0.0)
     for i in range(first, last):
         w = words[i]
         old = topics[i]
         if i + 1 < last:
             for k in range(0, kp, 32):
                 prefetch(nwk, words[i + 1], k)
-        # the weights with the word still counted: removing it changes entry `old` only,
-        # which is recomputed below; this loop need not wait for the removal's stores
         for k in range(kp):
             p[k] = weight(nwk, inv, ng, w, cell, k, alpha, beta)
+        if held:
+            _add_back(cell, held_w, held_old, held_new, held_kept, nwk, nk, inv, ncz, ng, table, vbeta, update_phi)
         ncz[cell, old] -= 1
         ng[cell, old] -= 1
         kept = inv[old]
@@ -176,93 +205,14 @@ def gibbs_cell(
             nwk[w, old] -= 1
             nk[old] -= 1
             inv[old] = inverse(nk[old], vbeta)
+        if held:
+            p[held_new] = weight(nwk, inv, ng, w, cell, held_new, alpha, beta)
         p[old] = weight(nwk, inv, ng, w, cell, old, alpha, beta)
         state, bits = next_state(state)
         new = lane_draw(p, bits)
         topics[i] = new
-        ncz[cell, new] += 1
-        ng[cell, new] += 1
-        if update_phi:
-            nwk[w, new] += 1
-            nk[new] += 1
-            # back to the count it had, so to the normaliser it had: no division
-            inv[new] = kept if new == old else inverse(nk[new], vbeta)
-        if new != old:
-            # the other cells whose neighbourhood holds this cell
-            for j in range(width):
-                d = table[cell, j]
-                if d >= 0:
-                    ng[d, old] -= 1
-                    ng[d, new] += 1
+        held = True
+        held_w, held_old, held_new, held_kept = w, old, new, kept
+    if held:
+        _add_back(cell, held_w, held_old, held_new, held_kept, nwk, nk, inv, ncz, ng, table, vbeta, update_phi)
     return state
-
-
-@njit(inline="always")
-def gibbs_cell_phase(
-    cell, first, count, words, repeat_of, topics, before, nwk, nk, inv, ncz, ng, table, p, alpha, beta, vbeta, state,
-    update_phi,
-):
-    """:func:`gibbs_cell` for a batch phase: the word-topic counts ``nwk`` are read-only.
-
-    The cell sees ``nwk`` as at the start of the phase plus its own changes: ``before``
-    holds the phase-start topics of the cell's words, ``repeat_of[i]`` the previous
-    position of word ``i``'s id in the cell (-1 if none), and the weights of the few
-    topics where the cell's own changes (and the word's removal) differ from ``nwk`` are
-    recomputed from the corrected counts. ``nk`` and ``inv`` are the cell's own copies,
-    updated in place; cell counts and neighbourhood sums as in :func:`gibbs_cell`. The
-    weights equal those :func:`gibbs_cell` would compute on a private copy of ``nwk``.
-    """
-    kp = p.shape[0]
-    width = table.shape[1]
-    last = first + count
-    for i in range(first, last):
-        w = words[i]
-        old = topics[i]
-        if i + 1 < last:
-            for k in range(0, kp, 32):
-                prefetch(nwk, words[i + 1], k)
-        for k in range(kp):
-            p[k] = weight(nwk, inv, ng, w, cell, k, alpha, beta)
-        ncz[cell, old] -= 1
-        ng[cell, old] -= 1
-        kept = inv[old]
-        if update_phi:
-            nk[old] -= 1
-            inv[old] = inverse(nk[old], vbeta)
-            p[old] = _own_weight(i, old, old, w, cell, repeat_of, topics, before, nwk, inv, ng, alpha, beta)
-            j = repeat_of[i]
-            while j >= 0:
-                a = before[j]
-                b = topics[j]
-                if a != b:
-                    p[a] = _own_weight(i, old, a, w, cell, repeat_of, topics, before, nwk, inv, ng, alpha, beta)
-                    p[b] = _own_weight(i, old, b, w, cell, repeat_of, topics, before, nwk, inv, ng, alpha, beta)
-                j = repeat_of[j]
-        else:
-            p[old] = weight(nwk, inv, ng, w, cell, old, alpha, beta)
-        state, bits = next_state(state)
-        new = lane_draw(p, bits)
-        topics[i] = new
-        ncz[cell, new] += 1
-        ng[cell, new] += 1
-        if update_phi:
-            nk[new] += 1
-            inv[new] = kept if new == old else inverse(nk[new], vbeta)
-        if new != old:
-            for j in range(width):
-                d = table[cell, j]
-                if d >= 0:
-                    ng[d, old] -= 1
-                    ng[d, new] += 1
-    return state
-
-
-@njit(inline="always")
-def _own_weight(i, old, k, w, cell, repeat_of, topics, before, nwk, inv, ng, alpha, beta):
-    """Weight of topic ``k`` for word ``i`` (removed) with the cell's own changes to row ``w``."""
-    count = nwk[w, k] - (1 if k == old else 0)
-    j = repeat_of[i]
-    while j >= 0:
-        count += (1 if topics[j] == k else 0) - (1 if before[j] == k else 0)
-        j = repeat_of[j]
-    return (np.float32(count) + beta) * inv[k] * (np.float32(ng[cell, k]) + alpha)

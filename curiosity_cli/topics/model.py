@@ -36,6 +36,8 @@ from curiosity_cli.topics.neighbours import check_neighbours
 MODEL_FORMAT = 1
 _MIN_CAPACITY = 1024
 _CACHE_LINE = 64
+# a batch phase holds at most 1/_PHASES of the observed cells (TopicModel.refine_batch)
+_PHASES = 16
 
 
 @dataclass(frozen=True)
@@ -118,7 +120,6 @@ class TopicModel:
         self._kp = -(-self._k // 8) * 8
         self._topic_dtype = np.dtype(np.int8 if self._k <= 127 else np.int16 if self._k <= 32767 else np.int32)
         self._colours = None
-        self._repeats = None  # link_repeats of the words, computed when a batch needs it
 
         n_cells = self._table.shape[0]
         self._words = np.zeros(0, np.int32)
@@ -320,7 +321,6 @@ class TopicModel:
 
         first = self._n_words
         self._reserve(first + words.size)
-        self._repeats = None
         self._words[first : first + words.size] = words
         self._n_words += words.size
         self._cell_first[cell] = first
@@ -354,54 +354,103 @@ class TopicModel:
         return int(self._cell_count[cells].sum())
 
     def refine_batch(self, sweeps: int, *, threads: int = 1) -> int:
-        """Algorithm 1: ``sweeps`` Gibbs sweeps over every observed cell.
+        """Algorithm 1: ``sweeps`` Gibbs sweeps over every observed cell, in parallel phases.
 
-        Each sweep visits the cells in phases, one per colour of a distance-2 colouring
-        of the neighbour table (no two cells of a phase share a cell count or a
-        neighbourhood sum), and the cells of a phase in parallel. Within a phase a cell
-        sees the word-topic counts as at the start of the phase plus its own changes, so
-        the result is the same for every ``threads`` (see
-        ``_gibbs_kernels.refine_batch_kernel``); for an exactly sequential sweep use
-        :meth:`refine_cells`.
+        A sweep visits the observed cells in phases, and the cells of a phase at once on
+        ``threads`` threads. Phases: for each colour of a distance-2 colouring of the
+        neighbour table in increasing order (two cells of one colour share no cell count
+        and no neighbourhood sum), the ``n_c`` observed cells of that colour in cell
+        order, cut into ``ceil(n_c / m)`` runs of consecutive cells as equal in size as
+        can be (the first ``n_c mod runs`` one cell longer), ``m = ceil(n_observed /
+        16)``. So no phase holds more than 1/16 of the cells, even without neighbours
+        (one colour), whatever ``threads`` is.
+
+        Within a phase every cell sees the word-topic counts (``n_kw``, ``n_k``) as at
+        the start of the phase plus its own changes, and in sweep ``s`` draws from the
+        stream ``(counter + s, cell)``; cell counts and neighbourhood sums are exact. So
+        the result is the same for every ``threads``, and differs from an exactly
+        sequential sweep (:meth:`refine_cells`) only in that staleness, of at most ``m``
+        cells.
 
         Parameters
         ----------
         sweeps : int
             >= 0.
         threads : int
-            >= 1; more than numba's thread pool (``NUMBA_NUM_THREADS``) runs as that many.
+            >= 1. Each thread past the first refines on its own copy of the word-topic
+            counts, (V, Kp) int32 (``Kp`` = K rounded up to a multiple of 8), made for
+            the call; none for a frozen model, whose counts are only read.
 
         Returns
         -------
         int
             Words sampled.
         """
-        import numba
+        from concurrent.futures import ThreadPoolExecutor
 
-        from curiosity_cli.topics._gibbs_kernels import refine_batch_kernel
+        from curiosity_cli.topics._gibbs_kernels import merge_phase, refine_phase_share
 
         sweeps = check_int("sweeps", sweeps, 0)
         threads = check_int("threads", threads, 1)
         if sweeps == 0 or self._n_observed == 0:
             return 0
-        cells = np.sort(self._order[: self._n_observed]).astype(np.int64)
-        colour = self._colouring()[cells]
-        phase_cells = cells[np.argsort(colour, kind="stable")]
-        phase_start = np.searchsorted(np.sort(colour), np.arange(colour.max() + 2)).astype(np.int64)
+        phases = self._phases()
+        if len(phases) == 1:
+            # one observed cell: the threads would merge the one phase into their copies
+            # while it is being refined, and only one of them would have work
+            threads = 1
+        update = not self._frozen
+        kp = self._kp
+        own = (self._nwk, self._nk, self._inv)
+        copies = [own] + [tuple(_aligned_copy(a) for a in own) if update else own for _ in range(threads - 1)]
+        # each thread's scratch, and the shared chunk counter, on cache lines of their own:
+        # two threads writing one line (false sharing) halved the speed
+        scratch = [
+            (*copy, _aligned_zeros(kp, np.int32), _aligned_zeros(kp, np.float32), _aligned_zeros(kp, np.float32))
+            for copy in copies
+        ]
+        taken = _aligned_zeros(1, np.int64)
+        before = np.empty_like(self._topics)
+        (cell_first, cell_count, words, topics, _, _, _, ncz, ng, table, alpha, beta, vbeta,
+         key) = self._sampler_arrays()  # fmt: skip
 
-        # slots beyond the thread pool would only cost memory: the result is the same
-        slots = min(threads, numba.config.NUMBA_NUM_THREADS)
-        previous = numba.get_num_threads()
-        numba.set_num_threads(slots)
-        try:
-            refine_batch_kernel(
-                sweeps, phase_cells, phase_start, slots, self._k, self._repeat_links(), *self._sampler_arrays(),
-                np.uint64(self._counter), not self._frozen,
+        def refine(mine: tuple, phase: np.ndarray, previous: np.ndarray, counter: np.uint64) -> None:
+            refine_phase_share(
+                taken, phase, previous, before, *mine, cell_first, cell_count, words, topics, ncz, ng, table,
+                self._k, alpha, beta, vbeta, key, counter, update,
             )
-        finally:
-            numba.set_num_threads(previous)
+
+        # the phase whose changes are not yet in the counts: every thread merges it into
+        # its copy when the next phase starts, and this thread into the model's at the end
+        previous = np.zeros(0, np.int64)
+        # this thread refines too, on the model's own counts; the pool starts no thread for threads == 1
+        with ThreadPoolExecutor(max(threads - 1, 1)) as pool:
+            for sweep in range(sweeps):
+                counter = np.uint64(self._counter + sweep)
+                for phase in phases:
+                    taken[0] = 0
+                    others = [pool.submit(refine, mine, phase, previous, counter) for mine in scratch[1:]]
+                    refine(scratch[0], phase, previous, counter)
+                    for other in others:
+                        other.result()  # waits, and re-raises an error of that thread
+                    if update:
+                        previous = phase
+        if update:
+            merge_phase(previous, cell_first, cell_count, words, before, topics, *own, self._k, vbeta)
         self._counter += sweeps
         return sweeps * self._n_words
+
+    def _phases(self) -> list[np.ndarray]:
+        """The phases of a batch sweep (see :meth:`refine_batch`): a list of (n,) int64 cell arrays."""
+        cells = np.sort(self._order[: self._n_observed]).astype(np.int64)
+        colour = self._colouring()[cells]
+        most = -(-cells.size // _PHASES)
+        phases = []
+        for c in np.unique(colour):
+            group = cells[colour == c]
+            parts = -(-group.size // most)
+            phases += np.array_split(group, parts)
+        return phases
 
     def refine_realtime(self, word_budget: int, *, eta: float) -> int:
         """Algorithm 2: refine picked observations until ``word_budget`` words are sampled.
@@ -477,7 +526,6 @@ class TopicModel:
         if not np.array_equal(snapshot.neighbours, self._table):
             raise ParameterError("snapshot: taken from a model with another neighbour table")
         n_words = snapshot.words.size
-        self._repeats = None
         self._words = snapshot.words.copy()
         self._topics = snapshot.topics.copy()
         self._n_words = n_words
@@ -593,13 +641,6 @@ class TopicModel:
             self._colours = distance2_colouring(self._table)
         return self._colours
 
-    def _repeat_links(self) -> np.ndarray:
-        if self._repeats is None:
-            from curiosity_cli.topics._gibbs_kernels import link_repeats
-
-            self._repeats = link_repeats(self._words, self._cell_first, self._cell_count, self._v)
-        return self._repeats
-
     def _reserve(self, size: int) -> None:
         if size <= self._words.size:
             return
@@ -674,7 +715,6 @@ class TopicModel:
         self._words = words.astype(np.int32)
         self._topics = topics.astype(self._topic_dtype)
         self._n_words = words.size
-        self._repeats = None
         firsts = np.concatenate([[0], np.cumsum(sizes)[:-1]]) if n else np.zeros(0, np.int64)
         self._cell_first[order] = firsts
         self._cell_count[order] = sizes
@@ -708,6 +748,13 @@ def _aligned_zeros(shape, dtype) -> np.ndarray:
     buffer = np.zeros(size * dtype.itemsize + _CACHE_LINE, np.uint8)
     start = -buffer.ctypes.data % _CACHE_LINE
     return buffer[start : start + size * dtype.itemsize].view(dtype).reshape(shape)
+
+
+def _aligned_copy(array: np.ndarray) -> np.ndarray:
+    """A copy of ``array`` starting on a cache line (see :func:`_aligned_zeros`)."""
+    copy = _aligned_zeros(array.shape, array.dtype)
+    copy[...] = array
+    return copy
 
 
 def _check_positive(name: str, value) -> float:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from test_grid import grid_yaml
+from small_maps import grid_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app

@@ -15,35 +15,13 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-from small_maps import small_config
+from small_maps import grid_config, grid_yaml
 
-from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.config import load_config
 from curiosity_cli.errors import ConfigError
 from curiosity_cli.explore import weights
 from curiosity_cli.explore.grid import GridError, run_grid, start_cells
 from curiosity_cli.explore.runs import RunError, read_run, remove_partial_runs, run_folder
-
-
-def grid_config(own_map: Path, **explore):
-    """The own_map fixture (6 x 8 cells of 16 px), 4 weight functions, 2 restarts, 12 steps."""
-    settings = dict(path_length=12, checkpoints=(5, 12), restarts=2)
-    settings.update(explore)
-    return dataclasses.replace(small_config(**settings), name="grid", datasets=(str(own_map),))
-
-
-def grid_yaml(own_map: Path, folder: Path) -> Path:
-    """The same grid as a YAML file a user would write."""
-    text = {
-        "base": str(CONFIG_DIR / "paper.yaml"),
-        "name": "grid",
-        "seed": 0,
-        "datasets": [str(own_map)],
-        "model": {"topics": 8},
-        "explore": {"restarts": 2, "path_length": 12, "checkpoints": [5, 12], "samples_per_step": 5000},
-    }
-    path = folder / "grid.yaml"
-    path.write_text(yaml.safe_dump(text, sort_keys=False))
-    return path
 
 
 def folder_contents(root: Path) -> dict:

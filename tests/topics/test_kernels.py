@@ -138,19 +138,30 @@ def test_refine_cells_without_neighbours_is_plain_collapsed_lda():
         np.testing.assert_array_equal(model.topics([cell]), zs)
 
 
-def test_refine_cells_with_more_than_eight_topics_matches_twin():
+# Batch twins run on grids of more than 16 observed cells: a phase holds at most
+# ceil(observed / 16) cells, so smaller models would have one cell per phase and test
+# neither the stale counts of a phase nor threads sharing one.
+BATCH_GRID = dict(rows=8, cols=9, observed=0.9)  # 64 cells: phases of up to 4
+
+
+@pytest.mark.parametrize("batch", [False, True])
+def test_refinement_with_more_than_eight_topics_matches_twin(batch):
     # K = 13 pads to 16 columns: two blocks per lane, three lanes with padding
-    model = small_model(5, n_topics=13, vocabulary=20)
+    model = small_model(5, n_topics=13, vocabulary=20, **(BATCH_GRID if batch else {}))
     twin = NaiveModel.of(model)
-    model.refine_cells(model.observed_cells())
-    refine_cells_naive(twin, list(model.observed_cells()))
+    if batch:
+        model.refine_batch(2, threads=2)
+        refine_batch_naive(twin, 2)
+    else:
+        model.refine_cells(model.observed_cells())
+        refine_cells_naive(twin, list(model.observed_cells()))
     assert_matches(model, twin)
 
 
-@pytest.mark.parametrize("threads", [1, 2])
+@pytest.mark.parametrize("threads", [1, 2, 3])
 @pytest.mark.parametrize(("seed", "spatial"), [(6, 4), (7, 0)])
 def test_refine_batch_matches_twin(seed, spatial, threads):
-    model = small_model(seed, rows=4, cols=5, spatial=spatial)
+    model = small_model(seed, spatial=spatial, **BATCH_GRID)
     twin = NaiveModel.of(model)
     model.refine_batch(2, threads=threads)
     refine_batch_naive(twin, 2)
@@ -159,8 +170,9 @@ def test_refine_batch_matches_twin(seed, spatial, threads):
 
 def test_refine_batch_with_many_repeated_words_in_a_cell_matches_twin():
     # three word ids: every cell repeats words, so a cell's own changes to a word's
-    # counts must show when the same word comes round again within the phase
-    model = small_model(14, n_topics=4, vocabulary=3, observed=1.0)
+    # counts must show when the same word comes round again within the phase, and no
+    # other cell's changes of the phase may
+    model = small_model(14, n_topics=4, vocabulary=3, **{**BATCH_GRID, "observed": 1.0})
     twin = NaiveModel.of(model)
     model.refine_batch(3, threads=2)
     refine_batch_naive(twin, 3)
@@ -169,8 +181,8 @@ def test_refine_batch_with_many_repeated_words_in_a_cell_matches_twin():
 
 def test_refine_batch_on_a_stream_table_matches_twin():
     rng = np.random.default_rng(8)
-    model = TopicModel(4, 8, stream_neighbours(2, 3, 3), alpha=0.3, beta=0.2, seed=8)
-    for frame in range(3):
+    model = TopicModel(4, 8, stream_neighbours(2, 3, 8), alpha=0.3, beta=0.2, seed=8)
+    for frame in range(8):
         for cell in range(frame * 6, frame * 6 + 6):
             model.add_cell(cell, rng.integers(0, 8, rng.integers(0, 6)), time=frame)
     twin = NaiveModel.of(model)
@@ -205,10 +217,10 @@ def test_refine_realtime_with_observation_times_matches_twin():
 # --- frozen word-topic counts ---------------------------------------------------------
 
 
-def frozen_model(seed, spatial=4):
+def frozen_model(seed, spatial=4, **grid):
     rng = np.random.default_rng(seed)
     frozen = rng.integers(0, 5, (12, 5))
-    return small_model(seed, spatial=spatial, frozen=frozen), frozen
+    return small_model(seed, spatial=spatial, frozen=frozen, **grid), frozen
 
 
 @pytest.mark.parametrize("spatial", [4, 0])
@@ -223,7 +235,7 @@ def test_frozen_refine_cells_matches_twin(spatial):
 
 @pytest.mark.parametrize("threads", [1, 2])
 def test_frozen_refine_batch_matches_twin(threads):
-    model, _ = frozen_model(12)
+    model, _ = frozen_model(12, **BATCH_GRID)
     twin = NaiveModel.of(model)
     model.refine_batch(3, threads=threads)
     refine_batch_naive(twin, 3)

@@ -277,6 +277,50 @@ def test_same_seed_same_state_on_any_thread_count_and_different_seed_differs():
     assert not np.array_equal(a.topics(), b.topics())
 
 
+@pytest.mark.parametrize("spatial", [0, 4])
+def test_batch_phases_cover_the_cells_once_in_sixteenths_of_independent_cells(spatial):
+    model = build(3, rows=9, cols=11, spatial=spatial)  # 99 cells: phases of at most 7
+    phases = model._phases()
+    cells = np.concatenate(phases)
+    np.testing.assert_array_equal(np.sort(cells), np.arange(99))
+    assert max(phase.size for phase in phases) <= 7
+    if spatial == 0:
+        # one colour: 15 runs of 7 or 6 cells, the longer ones first
+        assert [phase.size for phase in phases] == [7] * 9 + [6] * 6
+    table = model.neighbours
+    for phase in phases:
+        # no two cells of a phase within graph distance 2
+        for c in phase:
+            near = {int(d) for d in table[c] if d >= 0}
+            near |= {int(e) for d in list(near) for e in table[d] if e >= 0}
+            near.discard(int(c))
+            assert not near & set(phase.tolist())
+
+
+@pytest.mark.parametrize("frozen", [False, True])
+def test_batch_is_the_same_on_any_number_of_threads_with_many_cells_per_phase(frozen):
+    kw = dict(frozen_counts=np.arange(15 * 6).reshape(15, 6) % 7) if frozen else {}
+    states = []
+    for threads in (1, 2, 3, 5):
+        model = build(4, rows=12, cols=12, **kw)  # 144 cells: phases of up to 9
+        model.refine_batch(3, threads=threads)
+        assert_consistent(model)
+        states.append(model)
+    for other in states[1:]:
+        assert_same_state(states[0], other)
+
+
+def test_batch_on_a_single_observed_cell_is_the_same_on_two_threads():
+    models = []
+    for threads in (1, 2):
+        model = TopicModel(3, 5, grid_neighbours(2, 2), alpha=0.1, beta=0.1, seed=1)
+        model.add_cell(2, [0, 1, 1, 4, 4, 4])
+        model.refine_batch(4, threads=threads)
+        assert_consistent(model)
+        models.append(model)
+    assert_same_state(*models)
+
+
 def test_snapshot_and_restore_round_trip_bit_identically():
     model = build(10)
     model.refine_batch(1)

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
+import yaml
 
 from curiosity_cli.config import CONFIG_DIR, ExperimentConfig, load_config
 from curiosity_cli.words.store import WordStore, WordType, build_store
@@ -49,3 +51,37 @@ def two_region_store() -> WordStore:
     regions = np.zeros((6, 8), int)
     regions[:, 4:] = 1
     return synthetic_store(regions)
+
+
+def grid_config(own_map: Path, **explore):
+    """The own_map fixture (6 x 8 cells of 16 px), 4 weight functions, 2 restarts, 12 steps."""
+    settings = dict(path_length=12, checkpoints=(5, 12), restarts=2)
+    settings.update(explore)
+    return dataclasses.replace(small_config(**settings), name="grid", datasets=(str(own_map),))
+
+
+def grid_yaml(own_map: Path, folder: Path) -> Path:
+    """The same grid as a YAML file a user would write."""
+    text = {
+        "base": str(CONFIG_DIR / "paper.yaml"),
+        "name": "grid",
+        "seed": 0,
+        "datasets": [str(own_map)],
+        "model": {"topics": 8},
+        "explore": {"restarts": 2, "path_length": 12, "checkpoints": [5, 12], "samples_per_step": 5000},
+    }
+    path = folder / "grid.yaml"
+    path.write_text(yaml.safe_dump(text, sort_keys=False))
+    return path
+
+
+def edit_yaml(path: Path, **changes) -> Path:
+    """Rewrite keys of a YAML file in place (a value of ... deletes the key)."""
+    data = yaml.safe_load(path.read_text())
+    for key, value in changes.items():
+        if value is ...:
+            data.pop(key)
+        else:
+            data[key] = value
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path

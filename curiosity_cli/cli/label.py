@@ -1,0 +1,73 @@
+"""``curiosity label`` and ``curiosity evaluate``: labelings of whole maps, and their mutual information."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from pathlib import Path
+
+import typer
+
+from curiosity_cli.cli import app
+
+EXPERIMENT = typer.Argument(Path("results/quick"), help="Experiment folder written by `curiosity explore`.")
+
+
+def experiment_config(folder: Path, overrides: list[str]):
+    """The config an experiment folder was explored with, plus ``--set`` overrides."""
+    from curiosity_cli.config import load_config
+    from curiosity_cli.errors import CuriosityError
+    from curiosity_cli.files import display_path
+
+    saved = Path(folder) / "config.yaml"
+    if not saved.is_file():
+        raise CuriosityError(f"{display_path(saved)}: not found; run `curiosity explore` to make the experiment first")
+    return load_config(saved, overrides)
+
+
+@app.command("label")
+def label(
+    folder: Path = EXPERIMENT,
+    overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a key, e.g. --set label.sweeps=8."),
+    jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
+    force: bool = typer.Option(False, "--force", help="Recompute labels that are up to date."),
+    cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
+) -> None:
+    """Label each map with every run's checkpoint models (Z_p) and in batch mode (Z_b)."""
+    from curiosity_cli.evaluate.labels import label_experiment
+
+    config = experiment_config(folder, overrides)
+    with contextlib.ExitStack() as stack:
+        bars = []
+
+        def stage(description: str, units: int) -> None:
+            if bars:
+                stack.close()
+                bars.clear()
+            bars.append(stack.enter_context(typer.progressbar(length=units, label=description, file=sys.stderr)))
+
+        done = label_experiment(
+            config, results_dir=folder.parent, cache_dir=cache_dir, jobs=jobs, force=force,
+            on_stage=stage, on_done=lambda: bars[0].update(1),
+        )
+    typer.echo(
+        f"labelled {done['labelled']} runs in {done['seconds']:.0f} s ({done['skipped']} were up to date; "
+        f"batch references: {done['batch_reused']} reused)"
+    )
+
+
+@app.command("evaluate")
+def evaluate(folder: Path = EXPERIMENT) -> None:
+    """Mutual information of the path labelings against human and batch labels, with statistics."""
+    from curiosity_cli.evaluate.tables import evaluate_experiment
+    from curiosity_cli.files import display_path
+
+    result = evaluate_experiment(folder)
+    for problem in result.skipped:
+        typer.echo(f"skipped: {problem}", err=True)
+    typer.echo(f"wrote {display_path(folder / 'mi.csv')} ({len(result.mi)} rows), summary.csv, tests.csv, headline.csv")
+    for row in result.headline.itertuples():
+        paper = f"; the paper's {row.paper_map}: {row.paper_ratio:.2f}" if row.paper_map else ""
+        typer.echo(
+            f"{row.dataset}: topic-perplexity MI at 80 steps is {row.ratio:.2f} x {row.next_best}'s{paper}"
+        )

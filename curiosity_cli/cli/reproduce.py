@@ -1,0 +1,51 @@
+"""``curiosity reproduce``: the whole pipeline for an experiment config, with a report."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from pathlib import Path
+
+import typer
+
+from curiosity_cli.cli import app
+from curiosity_cli.config import CONFIG_DIR
+
+
+@app.command("reproduce")
+def reproduce(
+    config: Path = typer.Argument(CONFIG_DIR / "paper-grid.yaml", help="Experiment YAML; default the paper's full grid."),
+    quick: bool = typer.Option(False, "--quick", help="First map only, 5 restarts, paths up to 160 steps: minutes, not the full grid."),
+    overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override any config key, e.g. --set seed=1."),
+    jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
+    force: bool = typer.Option(False, "--force", help="Redo runs and labels that are already finished."),
+    results_dir: Path = typer.Option(Path("results"), "--results-dir", help="Experiment folders go here."),
+    cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
+) -> None:
+    """Extract, explore, label, evaluate and plot, then write results/<experiment>/REPORT.md.
+
+    Every stage keeps what it finished: run the same command again to resume.
+    """
+    from curiosity_cli.config import load_config
+    from curiosity_cli.files import display_path
+    from curiosity_cli.reproduce import quick_config, reproduce as run_pipeline
+
+    resolved = load_config(config, overrides)
+    if quick:
+        resolved = quick_config(resolved)
+    with contextlib.ExitStack() as stack:
+        bars = []
+
+        def stage(description: str, units: int) -> None:
+            stack.close()
+            bars.clear()
+            if units:
+                bars.append(stack.enter_context(typer.progressbar(length=units, label=description, file=sys.stderr)))
+            else:
+                typer.echo(description, err=True)
+
+        report = run_pipeline(
+            resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
+            on_stage=stage, on_done=lambda: bars and bars[0].update(1),
+        )
+    typer.echo(f"wrote {display_path(report)}")

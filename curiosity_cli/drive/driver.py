@@ -1,0 +1,247 @@
+"""The driver's loop: frame, decision, command, log row, overlay; and how a run ends.
+
+Whatever ends a run (the end of a video, ``--max-frames``, ESTOP, SIGINT or SIGTERM, an
+error anywhere) the robot is closed the same way: STOP, answered or resent like any
+frame, then the port is closed. A lost link has attempted STOP itself before the error
+reaches here.
+
+The log (``log.jsonl`` in the run folder) holds one ``frame`` row per frame, written
+when the next frame is done so that the row can carry its command's ACK latency, and
+the link's events (``resend``, ``refused``, ``nak``, ``estop``, ``stop``,
+``link-lost``) as they happen, then an ``end`` row with the outcome and counters.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from curiosity_cli.config import DriveConfig, ExperimentConfig
+from curiosity_cli.drive.jsonlines import JsonLines
+from curiosity_cli.drive.link import LinkError
+from curiosity_cli.drive.overlay import VideoSink, caption_for, draw_overlay, write_png
+from curiosity_cli.drive.pipeline import CuriosityPipeline
+from curiosity_cli.errors import ConfigError
+
+
+def check_drive_config(drive: DriveConfig, where: str) -> None:
+    """Rules that tie ``drive`` keys together.
+
+    Raises
+    ------
+    ConfigError
+        ``<where>: drive.<key>: ...`` naming the first broken rule.
+    """
+    rules = [
+        (drive.frame_width >= drive.grid_cols, "frame_width", f"at least grid_cols ({drive.grid_cols})"),
+        (drive.carry_frames < drive.window_frames, "carry_frames", f"fewer than window_frames ({drive.window_frames})"),
+        (drive.surge_min <= drive.surge_max, "surge_min", f"at most surge_max ({drive.surge_max})"),
+        (drive.keepalive < drive.watchdog, "keepalive", f"shorter than the robot's watchdog ({drive.watchdog} s)"),
+        (
+            drive.orb_fill_threshold is None or drive.orb_fill_threshold < 20,
+            "orb_fill_threshold",
+            "below ORB's FAST threshold 20, or null",
+        ),
+    ]
+    for ok, key, expected in rules:
+        if not ok:
+            raise ConfigError(f"{where}: drive.{key}: got {getattr(drive, key)}, expected {expected}")
+
+
+class StopRequest:
+    """Set by SIGINT or SIGTERM; the loop checks it between frames."""
+
+    def __init__(self):
+        self.signal: str | None = None
+
+    def __call__(self, signum, frame) -> None:
+        # only a flag: the handler may interrupt the main thread anywhere, even inside a lock
+        self.signal = signal.Signals(signum).name
+
+
+@contextlib.contextmanager
+def stopping_on_signals(request: StopRequest):
+    """Route SIGINT and SIGTERM to ``request`` for the duration of the block."""
+    previous = {s: signal.signal(s, request) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield request
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """Where a run writes.
+
+    Attributes
+    ----------
+    folder : Path
+        ``log.jsonl``, ``config.yaml``, ``provenance.yaml`` and ``frames/`` go here.
+    video : Path or None
+        The annotated video.
+    png_every : int
+        An annotated PNG every this many frames (frame 0 first); 0 for none.
+    """
+
+    folder: Path
+    video: Path | None
+    png_every: int
+
+
+def prepare_folder(folder: Path, config: ExperimentConfig, seed: int) -> None:
+    """Write the resolved config and the run's provenance into ``folder``."""
+    import yaml
+
+    from curiosity_cli.config import to_yaml
+    from curiosity_cli.files import atomic_path
+    from curiosity_cli.provenance import provenance
+
+    folder.mkdir(parents=True, exist_ok=True)
+    with atomic_path(folder / "config.yaml") as tmp:
+        tmp.write_text(to_yaml(config))
+    with atomic_path(folder / "provenance.yaml") as tmp:
+        tmp.write_text(yaml.safe_dump(provenance(seed), sort_keys=False))
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """How a run ended: ``reason`` is ``end of video``, ``max frames``, ``estop``, ``SIGINT`` or ``SIGTERM``."""
+
+    reason: str
+    frames: int
+    detail: str
+    stop_acked: bool | None  # None without a robot (or a simulated one in this process)
+
+
+def _rounded(array, places: int = 3) -> list:
+    return [[round(float(v), places) for v in row] for row in array]
+
+
+def run(
+    pipeline: CuriosityPipeline,
+    camera,
+    robot,
+    outputs: Outputs,
+    log: JsonLines,
+    *,
+    max_frames: int | None,
+    stop: StopRequest,
+    on_frame=lambda frame_number, decision: None,
+) -> Outcome:
+    """Drive until the camera ends, ``max_frames``, ESTOP or a stop request.
+
+    Parameters
+    ----------
+    pipeline : CuriosityPipeline
+    camera
+        ``read()`` returns ``(frame, capture_time)`` or None; ``close()``.
+    robot
+        A :class:`~curiosity_cli.drive.link.RobotLink`, a
+        :class:`~curiosity_cli.drive.camera.LockstepRobot`, or None (dry run: commands
+        are logged, not sent).
+    outputs : Outputs
+    log : JsonLines
+    max_frames : int or None
+    stop : StopRequest
+    on_frame : callable
+        Called after each frame with its number and :class:`Decision` (progress output).
+
+    Raises
+    ------
+    LinkError
+        The link was lost (STOP was attempted).
+    CuriosityError
+        A camera that fails, an output that cannot be written.
+    """
+    video = VideoSink(outputs.video, pipeline.config.drive.video_fps) if outputs.video else None
+    pending: dict | None = None
+    frames = 0
+    outcome = None
+    error = None
+    try:
+        while outcome is None:
+            if stop.signal is not None:
+                outcome = Outcome(stop.signal, frames, f"stopped by {stop.signal}", None)
+                break
+            if robot is not None and robot.error:
+                raise LinkError(f"{robot.error}; STOP attempted")
+            if robot is not None and robot.estop:
+                outcome = Outcome("estop", frames, f"the robot sent ESTOP ({robot.estop.reason})", None)
+                break
+            got = camera.read()
+            if got is None:
+                outcome = Outcome("end of video", frames, "end of the video", None)
+                break
+            image, captured = got
+            state = robot.state() if robot is not None else None
+            decision = pipeline.process(image)
+            command = decision.command
+            seq = robot.command(command.surge, command.yaw_rate, command.pitch_rate) if robot is not None else None
+            latency = time.monotonic() - captured
+            _flush(pending, robot, log)
+            pending = {
+                "frame": frames,
+                "latency_ms": round(latency * 1000, 2),
+                "seconds": {k: round(v, 5) for k, v in decision.seconds.items()},
+                "words": decision.words,
+                "window": decision.window,
+                "state": None if state is None else {
+                    "t": round(state.t, 3), "x": round(state.x, 4), "y": round(state.y, 4),
+                    "heading": round(state.heading, 4), "depth": round(state.depth, 3),
+                },
+                "perplexity": _rounded(decision.perplexity),
+                "scores": _rounded(decision.scores),
+                "target": list(decision.target),
+                "command": {
+                    "surge": round(command.surge, 4),
+                    "yaw_rate": round(command.yaw_rate, 4),
+                    "pitch_rate": round(command.pitch_rate, 4),
+                },
+                "seq": seq,
+            }
+            png_now = outputs.png_every and frames % outputs.png_every == 0
+            if video is not None or png_now:
+                annotated = draw_overlay(image, decision.scores, decision.target, caption_for(frames, command))
+                if video is not None:
+                    video.write(annotated)
+                if png_now:
+                    write_png(annotated, outputs.folder / "frames" / f"frame-{frames:06d}.png")
+            on_frame(frames, decision)
+            frames += 1
+            if max_frames is not None and frames >= max_frames:
+                outcome = Outcome("max frames", frames, f"{frames} frames", None)
+    except BaseException as exc:
+        error = " ".join(str(exc).split()) or type(exc).__name__
+        raise
+    finally:
+        _flush(pending, robot, log)
+        if video is not None:
+            video.close()
+        camera.close()
+        stop_acked = robot.close() if robot is not None else None
+        stats = None if robot is None else robot.stats
+        log.write(
+            "end",
+            outcome=None if outcome is None else outcome.reason,
+            error=error,
+            frames=frames,
+            stop_acked=stop_acked,
+            **({} if stats is None else {
+                "sent": stats.sent, "resent": stats.resent, "acked": stats.acked, "naks": stats.naks,
+                "refused_lines": stats.refused_lines, "states": stats.states,
+            }),
+        )
+    return Outcome(outcome.reason, outcome.frames, outcome.detail, stop_acked)
+
+
+def _flush(row: dict | None, robot, log: JsonLines) -> None:
+    """Write a frame row, with its command's ACK latency if the ACK came by now."""
+    if row is None:
+        return
+    latency = robot.ack_latency(row["seq"]) if robot is not None and row["seq"] is not None else None
+    row["ack_ms"] = None if latency is None else round(latency * 1000, 2)
+    log.write("frame", **row)

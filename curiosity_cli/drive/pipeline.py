@@ -1,0 +1,121 @@
+"""One camera frame to one velocity command: words, stream model, curiosity, controller."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from curiosity_cli.config import ExperimentConfig
+from curiosity_cli.drive.controller import Command, steer
+from curiosity_cli.drive.curiosity import CuriosityScores, cell_perplexity
+from curiosity_cli.drive.frame_words import FrameWords
+from curiosity_cli.drive.stream import StreamModel
+
+
+@dataclass(frozen=True)
+class Decision:
+    """What the pipeline made of one frame.
+
+    Attributes
+    ----------
+    perplexity : (rows, cols) float64 ndarray
+        Topic perplexity of each image cell in this frame.
+    scores : (rows, cols) float64 ndarray
+        Decayed curiosity scores after this frame.
+    target : (int, int)
+        (row, col) of the highest score.
+    command : Command
+    words : int
+        Words extracted from the frame.
+    window : int
+        Which model of the stream (0, 1, ...) holds the frame.
+    seconds : dict of str to float
+        Time spent per stage: ``words``, ``model`` (add and refine), ``score``.
+    """
+
+    perplexity: np.ndarray
+    scores: np.ndarray
+    target: tuple[int, int]
+    command: Command
+    words: int
+    window: int
+    seconds: dict
+
+
+class CuriosityPipeline:
+    """The driver's per-frame computation, with its state (model memory, scores).
+
+    Parameters
+    ----------
+    config : ExperimentConfig
+        Uses ``model``, ``words`` and ``drive``.
+    seed : int
+        Seeds the stream's topic models.
+    """
+
+    def __init__(self, config: ExperimentConfig, seed: int):
+        self.config = config
+        drive, model = config.drive, config.model
+        self.words = FrameWords(config.words, drive)
+        self.grid = self.words.grid
+        self.stream = StreamModel(
+            model.topics,
+            self.words.vocabulary_size,
+            self.grid,
+            window=drive.window_frames,
+            carry=drive.carry_frames,
+            carry_sweeps=drive.carry_sweeps,
+            spatial=model.spatial_neighbours,
+            temporal=drive.temporal_neighbours,
+            alpha=model.alpha,
+            beta=model.beta,
+            eta=model.eta,
+            budget=drive.samples_per_frame,
+            seed=seed,
+            vocabulary_hashes=self.words.vocabulary_hashes,
+        )
+        self.curiosity = CuriosityScores(drive.gamma, self.grid)
+
+    def process(self, frame: np.ndarray) -> Decision:
+        """Decide on one frame.
+
+        Parameters
+        ----------
+        frame : (H, W, 3) uint8 ndarray
+            RGB, any size with at least one pixel per image cell.
+        """
+        start = time.perf_counter()
+        cell_words = self.words(frame)
+        extracted = time.perf_counter()
+        counts = self.stream.add_frame(cell_words)
+        modelled = time.perf_counter()
+        perplexity = cell_perplexity(counts, self.stream.topic_totals(), self.config.model.alpha).reshape(self.grid)
+        scores = self.curiosity.update(perplexity).copy()
+        target = self.curiosity.target()
+        command = steer(target, self.grid, self.config.drive)
+        done = time.perf_counter()
+        return Decision(
+            perplexity=perplexity,
+            scores=scores,
+            target=target,
+            command=command,
+            words=sum(w.size for w in cell_words),
+            window=self.stream.windows - 1,
+            seconds={"words": extracted - start, "model": modelled - extracted, "score": done - modelled},
+        )
+
+
+def warm_up(config: ExperimentConfig) -> None:
+    """Load (or compile) every numba kernel the pipeline uses, on a throwaway pipeline.
+
+    Run before connecting to a robot: the first real frame then costs what every frame
+    costs, and the robot is not kept waiting through a compilation.
+    """
+    rng = np.random.default_rng(0)
+    drive = config.drive
+    frame = rng.integers(0, 256, (drive.sim_view_rows, drive.sim_view_cols, 3), dtype=np.uint8)
+    pipeline = CuriosityPipeline(config, seed=0)
+    pipeline.process(frame)
+    pipeline.stream.model.refine_batch(1)  # what a new window's carried frames get

@@ -1,0 +1,134 @@
+"""Labelling a whole map with topics: with a path's model (Z_p) or in batch mode (Z_b).
+
+Paper section 5.1: "Each of these exploration runs returned a topic model Φ_p, which we
+then used to compute topic labels for each pixel in the map in batch mode."
+
+- **Z_p** (:func:`label_with_phi`): every word of the map gets a topic from a few Gibbs
+  sweeps with the word-topic counts frozen to Φ_p (cells and neighbourhoods as in the
+  model, initial topics uniformly random), then its maximum-likelihood topic.
+- **Z_b** (:func:`batch_labels`): a model learned on all words of the map with random
+  access (Algorithm 1), then each word's maximum-likelihood topic.
+- **Pixels** (:func:`pixel_labels`): the per-pixel texton words carry the labels; with a
+  word stride ``s`` each pixel takes the label of its nearest texton word (ties go to
+  the upper and left one). ORB words take part in the cells' neighbourhoods only.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from curiosity_cli.config import ModelConfig
+from curiosity_cli.errors import ParameterError
+from curiosity_cli.words.store import WordStore
+
+
+def _whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_counts=None):
+    from curiosity_cli.topics.model import TopicModel
+    from curiosity_cli.topics.neighbours import grid_neighbours
+
+    topic_model = TopicModel(
+        model.topics,
+        store.vocabulary_size,
+        grid_neighbours(*store.grid_shape, model.spatial_neighbours),
+        alpha=model.alpha,
+        beta=model.beta,
+        seed=seed,
+        frozen_counts=frozen_counts,
+    )
+    for cell in range(store.n_cells):
+        topic_model.add_cell(cell, store.cell_words(cell))
+    return topic_model
+
+
+def label_with_phi(store: WordStore, phi: np.ndarray, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1) -> np.ndarray:
+    """Z_p of every word of the map, given a path's word-topic counts.
+
+    Parameters
+    ----------
+    store : WordStore
+    phi : (V, K) int ndarray
+        Word-topic counts of a path's model (a checkpoint).
+    model : ModelConfig
+        K, α, β and the neighbourhood.
+    sweeps : int
+        Frozen-Φ Gibbs sweeps before the maximum-likelihood topics.
+    seed : int
+        Of the initial topics and the sweeps.
+    threads : int
+        For the sweeps (the result does not depend on it).
+
+    Returns
+    -------
+    (N,) int16 ndarray
+        The topic of each word of ``store``, in the store's order.
+    """
+    if phi.shape != (store.vocabulary_size, model.topics):
+        raise ParameterError(f"phi: shape {phi.shape}, expected (V, K) = {(store.vocabulary_size, model.topics)}")
+    topic_model = _whole_map_model(store, model, seed, frozen_counts=phi)
+    topic_model.refine_batch(sweeps, threads=threads)
+    return topic_model.ml_topics().astype(np.int16)
+
+
+def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1, on_sweep=None):
+    """Z_b of every word of the map: a model learned on all of it (Algorithm 1).
+
+    Parameters
+    ----------
+    store : WordStore
+    model : ModelConfig
+    sweeps : int
+        Batch Gibbs sweeps.
+    seed : int
+    threads : int
+        For the sweeps (the result does not depend on it).
+    on_sweep : callable, optional
+        Called with the sweep number after each sweep.
+
+    Returns
+    -------
+    labels : (N,) int16 ndarray
+        The topic of each word, in the store's order.
+    log_likelihood : (sweeps,) float64 ndarray
+        The model's mean per-word log-likelihood after each sweep (nats): the trace that
+        shows whether the sweeps were enough.
+    """
+    topic_model = _whole_map_model(store, model, seed)
+    trace = np.empty(sweeps)
+    for sweep in range(sweeps):
+        topic_model.refine_batch(1, threads=threads)
+        trace[sweep] = topic_model.log_likelihood()
+        if on_sweep is not None:
+            on_sweep(sweep + 1)
+    return topic_model.ml_topics().astype(np.int16), trace
+
+
+def pixel_labels(store: WordStore, word_labels: np.ndarray, image_shape: tuple[int, int]) -> np.ndarray:
+    """Spread the labels of the texton words over the pixels of the map.
+
+    Parameters
+    ----------
+    store : WordStore
+        Its texton words sit on a regular grid every ``stride`` pixels from (0, 0).
+    word_labels : (N,) int ndarray
+        A label per word of ``store``.
+    image_shape : (int, int)
+        Rows and columns of the map.
+
+    Returns
+    -------
+    (H, W) int16 ndarray
+    """
+    texton = next((t for t in store.types if t.kind == "texton"), None)
+    if texton is None:
+        raise ParameterError("store: has no texton words to label pixels with")
+    stride = int(store.params.get("stride", 1))
+    rows, cols = image_shape
+    is_texton = (store.words >= texton.offset) & (store.words < texton.offset + texton.size)
+    grid = np.full((-(-rows // stride), -(-cols // stride)), -1, np.int16)
+    grid[store.rows[is_texton] // stride, store.cols[is_texton] // stride] = word_labels[is_texton]
+    if (grid < 0).any():
+        raise ParameterError(f"store: texton words do not cover every {stride} x {stride} block of the map")
+    # on a regular grid the nearest word is the nearest along each axis (ties go up and left)
+    nearest_row = np.minimum((np.arange(rows) + (stride - 1) // 2) // stride, grid.shape[0] - 1)
+    nearest_col = np.minimum((np.arange(cols) + (stride - 1) // 2) // stride, grid.shape[1] - 1)
+    return grid[np.ix_(nearest_row, nearest_col)]

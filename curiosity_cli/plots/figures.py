@@ -1,0 +1,490 @@
+"""The paper's figures from an experiment folder's results (paper section 5.1, figs. 2-5).
+
+:func:`write_figures` writes, as PNG and PDF under ``results/<experiment>/figures/``:
+
+- ``mi-vs-length-human``: MI between path labels Z_p and human labels Z_h against path
+  length, mean and 95% CI over restarts, one panel per map (the paper's fig. 5);
+- ``mi-vs-length-batch``: the same against the batch labels Z_b (fig. 4);
+- ``path-<dataset>``: an exploration path over its map, blue at the start to red at the
+  end, beside the map labelled with the topic model learned on that path (fig. 2);
+- ``labelings-<dataset>``: input image, ground truth, Z_b and Z_p side by side (fig. 3),
+  topic colours matched between Z_p and Z_b (see :mod:`curiosity_cli.plots.palette`);
+- ``batch-convergence``: the batch model's log-likelihood per Gibbs sweep, per map.
+
+Weight functions keep the paper's visual language: topic perplexity blue squares,
+stochastic coverage orange circles, random walk purple triangles, word perplexity green
+diamonds; any other weight function a grey marker of its own.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from pathlib import Path
+
+import numpy as np
+
+from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.plots import palette
+from curiosity_cli.plots.experiment_inputs import (
+    MI_COLUMNS,
+    SUMMARY_COLUMNS,
+    Example,
+    PlotError,
+    find_examples,
+    load_maps,
+    read_label_map,
+    read_log_likelihood,
+    read_path,
+    read_table,
+)
+
+#: (colour, marker) of the paper's weight functions, in the order legends list them.
+WEIGHT_STYLES = {
+    "topic-perplexity": ("tab:blue", "s"),
+    "stochastic-coverage": ("tab:orange", "o"),
+    "word-perplexity": ("tab:green", "D"),
+    "random-walk": ("tab:purple", "^"),
+}
+#: Styles for any other weight function, taken in turn (sorted by name).
+OTHER_STYLES = (("0.3", "v"), ("0.55", "P"), ("0.4", "X"), ("0.6", "h"), ("0.35", "*"), ("0.5", "p"), ("0.45", "<"))
+#: The example path shown in figs. 2 and 3: the paper's method, first restart.
+EXAMPLE_WEIGHT = "topic-perplexity"
+
+_DPI = 150
+_MAX_SIDE = 800  # pixels per side an image is shrunk to before drawing: keeps PDFs small
+_RC = {
+    "font.size": 10,
+    "axes.titlesize": 10.5,
+    "axes.labelsize": 10,
+    "xtick.labelsize": 9,
+    "ytick.labelsize": 9,
+    "legend.fontsize": 9.5,
+    "figure.titlesize": 12,
+    "figure.labelsize": 9,
+}
+_MATCH_NOTE = (
+    "Topic colours: $Z_b$'s topics by size, largest first; each $Z_p$ topic takes the colour of the $Z_b$ topic "
+    "it is matched to (one to one, greedily by pixel overlap); $Z_p$ topics left unmatched get colours $Z_b$ does not use."
+)
+
+
+class WrittenFigures(list):
+    """The figure files written (PNG and PDF of each figure), a ``list`` of Path.
+
+    Attributes
+    ----------
+    skipped : list of str
+        One line per figure (or panel) left out, saying which input was missing or bad.
+    """
+
+    def __init__(self, paths=(), skipped=()):
+        super().__init__(paths)
+        self.skipped = list(skipped)
+
+
+def write_figures(experiment_dir: Path) -> WrittenFigures:
+    """Write every figure the experiment folder has the inputs for.
+
+    Parameters
+    ----------
+    experiment_dir : Path
+        ``results/<experiment>/``, holding at least ``mi.csv`` from ``curiosity evaluate``.
+
+    Returns
+    -------
+    WrittenFigures
+        The PNG and PDF files written under ``experiment_dir/figures/``, a list of Path;
+        its ``skipped`` attribute says, one line each, which figures were left out and
+        why (no human labels, no batch labels, a missing run...).
+
+    Raises
+    ------
+    PlotError
+        No such folder, or ``mi.csv`` missing or malformed.
+    """
+    import pandas as pd
+
+    experiment_dir = Path(experiment_dir)
+    if not experiment_dir.is_dir():
+        raise PlotError(f"{display_path(experiment_dir)}: no such experiment folder; run `curiosity explore` first")
+    mi = read_table(experiment_dir / "mi.csv", MI_COLUMNS, "curiosity evaluate")
+    if mi.empty:
+        raise PlotError(f"{display_path(experiment_dir / 'mi.csv')}: no rows; run `curiosity evaluate` first")
+    out = experiment_dir / "figures"
+    written = WrittenFigures()
+    notes = written.skipped
+    maps = load_maps(experiment_dir, notes)
+    order = list(maps) + [d for d in dict.fromkeys(mi["dataset"].astype(str)) if d not in maps]
+
+    summary_path = experiment_dir / "summary.csv"
+    try:
+        summary = read_table(summary_path, SUMMARY_COLUMNS, "curiosity evaluate")
+        for column in ("path_length", "n", "mean", "std", "ci_low", "ci_high"):
+            summary[column] = pd.to_numeric(summary[column], errors="coerce")  # a stray text cell: NaN, not a crash
+        summary = summary.dropna(subset=["path_length"])
+    except PlotError as exc:
+        notes.append(f"no MI figures: {exc}")
+        summary = None
+    with _style():
+        if summary is not None:
+            for against, stem in (("human", "mi-vs-length-human"), ("batch", "mi-vs-length-batch")):
+                fig = mi_figure(summary, against, order)
+                if fig is None:
+                    notes.append(f"{stem}: {summary_path.name} has no MI against {against} labels (no map has them)")
+                else:
+                    written += _save(fig, out / stem)
+
+        traces = {}
+        for name, m in maps.items():
+            batch_file = experiment_dir / "batch" / f"{name}.npz"
+            z_b = read_label_map(batch_file, m.image.shape[:2], notes)
+            trace = read_log_likelihood(batch_file, notes) if batch_file.is_file() else None
+            if trace is not None:
+                traces[name] = trace
+            examples = _chosen_examples(find_examples(experiment_dir, name))
+            z_ps = [(e, z) for e in examples if (z := read_label_map(e.path, m.image.shape[:2], notes)) is not None]
+
+            if z_ps:
+                example, z_p = z_ps[-1]
+                path = read_path(experiment_dir, name, example.weight_function, example.restart, notes)
+                if path is not None:
+                    written += _save(path_figure(m, path, example, z_p, z_b), out / f"path-{name}")
+            elif not examples:
+                notes.append(f"path-{name}: no example path labelling under labels/{name}/examples/ (run `curiosity label`)")
+            if z_b is None and not z_ps:
+                notes.append(f"labelings-{name}: neither a batch nor a path labelling to draw")
+            else:
+                written += _save(labelings_figure(m, z_b, z_ps), out / f"labelings-{name}")
+
+        if traces:
+            written += _save(convergence_figure(traces), out / "batch-convergence")
+        else:
+            notes.append("batch-convergence: no batch log-likelihood trace under batch/ (run `curiosity label`)")
+    written.skipped[:] = list(dict.fromkeys(notes))  # a corrupt file is named once, not once per figure
+    return written
+
+
+# --------------------------------------------------------------------------- the figures
+
+
+def weight_style(name: str, others: list[str]) -> tuple[str, str]:
+    """(colour, marker) of a weight function; ``others`` lists the non-paper ones in use, sorted."""
+    if name in WEIGHT_STYLES:
+        return WEIGHT_STYLES[name]
+    return OTHER_STYLES[others.index(name) % len(OTHER_STYLES)]
+
+
+def _weight_order(names) -> list[str]:
+    names = set(names)
+    return [n for n in WEIGHT_STYLES if n in names] + sorted(names - set(WEIGHT_STYLES))
+
+
+def _label(weight_function: str) -> str:
+    return weight_function.replace("-", " ").replace("_", " ")
+
+
+def mi_figure(summary, against: str, datasets: list[str]):
+    """MI against path length, one panel per map: mean line and 95% CI band per weight function.
+
+    Parameters
+    ----------
+    summary : pandas.DataFrame
+        ``summary.csv``: dataset, weight_function, path_length, against, n, mean, std,
+        ci_low, ci_high.
+    against : {"human", "batch"}
+    datasets : list of str
+        Panel order; maps without finite means against ``against`` are left out.
+
+    Returns
+    -------
+    matplotlib.figure.Figure or None
+        None when no map has a finite mean against ``against``.
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import FixedLocator, NullLocator, ScalarFormatter
+
+    rows = summary[(summary["against"].astype(str) == against) & np.isfinite(summary["mean"].astype(float))]
+    panels = [d for d in datasets if (rows["dataset"].astype(str) == d).any()]
+    panels += [d for d in dict.fromkeys(rows["dataset"].astype(str)) if d not in panels]
+    if not panels:
+        return None
+    weights = _weight_order(rows["weight_function"].astype(str))
+    others = [w for w in weights if w not in WEIGHT_STYLES]
+    n_cols = min(len(panels), 3)
+    n_rows = math.ceil(len(panels) / n_cols)
+    fig = Figure(figsize=(0.6 + 4.0 * n_cols, 0.9 + 3.2 * n_rows), layout="constrained")
+    axes = fig.subplots(n_rows, n_cols, squeeze=False)
+    for ax, dataset in zip(axes.flat, panels):
+        table = rows[rows["dataset"].astype(str) == dataset]
+        for weight in weights:
+            curve = table[table["weight_function"].astype(str) == weight].sort_values("path_length")
+            if curve.empty:
+                continue
+            colour, marker = weight_style(weight, others)
+            x = curve["path_length"].to_numpy(float)
+            low, high = curve["ci_low"].to_numpy(float), curve["ci_high"].to_numpy(float)
+            band = np.isfinite(low) & np.isfinite(high)
+            ax.fill_between(x, low, high, where=band, color=colour, alpha=0.15, linewidth=0, interpolate=False)
+            ax.plot(
+                x, curve["mean"].to_numpy(float), color=colour, marker=marker, markersize=5.5,
+                linewidth=1.5, linestyle="-" if weight in WEIGHT_STYLES else "--",
+            )
+        lengths = sorted(table["path_length"].astype(int).unique())
+        ax.set_xscale("log", base=2)
+        ax.xaxis.set_major_locator(FixedLocator(lengths))
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_locator(NullLocator())
+        if len(lengths) > 1:
+            ax.set_xlim(lengths[0] / 2**0.25, lengths[-1] * 2**0.25)
+        ax.set_ylim(bottom=0)
+        ax.grid(True, color="0.9", linewidth=0.8)
+        ax.set_axisbelow(True)
+        n = table["n"].dropna()
+        restarts = f"{int(n.min())}" if n.size and n.min() == n.max() else (f"{int(n.min())}-{int(n.max())}" if n.size else "?")
+        ax.set_title(f"{dataset}  ({restarts} restart{'' if restarts == '1' else 's'})")
+        ax.set_xlabel("path length (steps)")
+        ax.set_ylabel("mutual information (bits)")
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
+    reference = "human labels $Z_h$" if against == "human" else "batch labels $Z_b$"
+    handles = [
+        Line2D([], [], color=weight_style(w, others)[0], marker=weight_style(w, others)[1], markersize=6,
+               linestyle="-" if w in WEIGHT_STYLES else "--", label=_label(w))
+        for w in weights
+    ]
+    if len(panels) == 1:
+        fig.set_size_inches(6.2, 4.8)
+    fit = max(1, int(fig.get_figwidth() / 2.0))  # a legend entry takes about 2 inches
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), fit), frameon=False)
+    title = f"Mutual information of path labels $Z_p$ with {reference}: mean and 95% CI over restarts"
+    fig.suptitle(_wrap(title, fig.get_figwidth(), _RC["figure.titlesize"]))
+    return fig
+
+
+def path_figure(m, path, example: Example, z_p: np.ndarray, z_b: np.ndarray | None):
+    """An exploration path over its map, beside the map labelled with the path's topic model.
+
+    Parameters
+    ----------
+    m : MapData
+    path : pair of (L,) int ndarray
+        Cell rows and cols of every step of the run; the first ``example.length`` are drawn.
+    example : Example
+        The run and path length the labelling ``z_p`` was learned from.
+    z_p : (H, W) int ndarray
+        Topic ids.
+    z_b : (H, W) int ndarray or None
+        The batch labelling, to colour ``z_p``'s topics as in the labelings figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.collections import LineCollection
+    from matplotlib.colors import LinearSegmentedColormap, Normalize
+    from matplotlib.figure import Figure
+
+    rows, cols = (np.asarray(a)[: example.length] for a in path)
+    half = m.config.cell_width / 2
+    pixel_rows, pixel_cols = rows * m.config.cell_width + half, cols * m.config.cell_width + half
+    height, width = m.image.shape[:2]
+    fig = Figure(figsize=(10.5, 5.6), layout="constrained")
+    ax_path, ax_labels = fig.subplots(1, 2)
+    _show(ax_path, _shrink_image(m.image), (height, width))
+    points = np.stack([pixel_cols, pixel_rows], axis=1)  # matplotlib draws (x, y) = (col, row)
+    segments = np.stack([points[:-1], points[1:]], axis=1)
+    blue_red = LinearSegmentedColormap.from_list("blue-red", ["#1f3fff", "#b000b0", "#ff1f1f"])
+    norm = Normalize(0, max(len(rows) - 1, 1))
+    # a dark outline under the coloured line keeps it visible on bright and dark ground alike
+    ax_path.add_collection(LineCollection(segments, colors="black", linewidths=3.2, alpha=0.55, capstyle="round"))
+    line = LineCollection(segments, cmap=blue_red, norm=norm, linewidths=1.8, capstyle="round")
+    line.set_array(np.arange(len(segments)))
+    ax_path.add_collection(line)
+    ax_path.plot(pixel_cols[:1], pixel_rows[:1], marker="o", markersize=8, color=blue_red(0.0), markeredgecolor="white", linestyle="none")
+    ax_path.plot(pixel_cols[-1:], pixel_rows[-1:], marker="s", markersize=8, color=blue_red(1.0), markeredgecolor="white", linestyle="none")
+    ax_path.set_title(f"{m.config.name}: {_label(example.weight_function)} path, restart {example.restart}")
+    bar = fig.colorbar(line, ax=ax_path, location="bottom", shrink=0.8, pad=0.02, aspect=35)
+    bar.set_label("step along the path (circle: start, square: end)")
+
+    slots = palette.match_topics(z_p, z_b)[0] if z_b is not None else palette.rank_topics(z_p)
+    _show(ax_labels, palette.paint_topics(_shrink_labels(z_p), slots), (height, width))
+    n_topics = np.unique(z_p).size
+    ax_labels.set_title(f"$Z_p$: labels from the model of its first {example.length} steps ({n_topics} topics)")
+    matched = "colours matched to $Z_b$'s" if z_b is not None else "colours by topic size"
+    fig.supxlabel(_wrap(f"{m.config.cell_width} px cells; path drawn through cell centres. Topic {matched}, as in labelings-{m.config.name}.", 10.5))
+    return fig
+
+
+def labelings_figure(m, z_b: np.ndarray | None, z_ps: list[tuple[Example, np.ndarray]]):
+    """Input image, ground truth, batch labels Z_b and path labels Z_p of one map, side by side.
+
+    Parameters
+    ----------
+    m : MapData
+    z_b : (H, W) int ndarray or None
+    z_ps : list of (Example, (H, W) int ndarray)
+        Path labelings, shortest path first.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    from curiosity_cli.plots.preview import colour_labels
+
+    height, width_px = m.image.shape[:2]
+    panels = [("input image", _shrink_image(m.image), None)]
+    if m.labels is not None:
+        legend = [Patch(facecolor=np.array(c.colour) / 255, edgecolor="0.5", linewidth=0.5, label=c.name) for c in m.legend]
+        panels.append(("ground truth $Z_h$", colour_labels(_shrink_labels(m.labels), m.legend), legend))
+    if z_b is not None:
+        panels.append((f"batch labels $Z_b$ ({np.unique(z_b).size} topics)", palette.paint_topics(_shrink_labels(z_b), palette.rank_topics(z_b)), None))
+    for example, z_p in z_ps:
+        if z_b is not None:
+            slots, _, agreement = palette.match_topics(z_p, z_b)
+            extra = f"\nsame colour as $Z_b$ on {100 * agreement:.0f}% of pixels"
+        else:
+            slots, extra = palette.rank_topics(z_p), ""
+        title = f"$Z_p$ after {example.length} steps ({np.unique(z_p).size} topics){extra}"
+        panels.append((title, palette.paint_topics(_shrink_labels(z_p), slots), None))
+
+    # one row of up to four maps (plus a narrow column for the legend), else two rows of three
+    # with the legend in the sixth slot
+    n = len(panels)
+    legend = next((handles for _, _, handles in panels if handles), None)
+    if n <= 4:
+        n_rows, n_cols = 1, n + (legend is not None)
+        ratios = [1.0] * n + ([0.5] if legend is not None else [])
+    else:
+        n_rows, n_cols = 2, 3
+        ratios = [1.0] * 3
+    width = 3.4 * sum(ratios) + 0.3
+    fig = Figure(figsize=(width, 3.75 * n_rows + 0.9), layout="constrained")
+    axes = fig.subplots(n_rows, n_cols, squeeze=False, gridspec_kw={"width_ratios": ratios})
+    for ax, (title, rgb, _) in zip(axes.flat, panels):
+        _show(ax, rgb, (height, width_px))
+        ax.set_title(title)
+    for ax in axes.flat[n:]:
+        ax.set_axis_off()
+    if legend is not None:
+        axes.flat[n].legend(handles=legend, loc="center left", frameon=False, title="ground truth classes",
+                            alignment="left", handlelength=1.3)
+    path_from = ""
+    if z_ps:
+        e = z_ps[0][0]
+        path_from = f"$Z_p$: the map labelled with the model learned on the {_label(e.weight_function)} path of restart {e.restart}. "
+    fig.suptitle(f"{m.config.name} ({height} x {width_px} px)")
+    note = path_from + (_MATCH_NOTE if z_b is not None and z_ps else "Topic colours by topic size, largest first.")
+    fig.supxlabel(_wrap(note, width))
+    return fig
+
+
+def convergence_figure(traces: dict[str, np.ndarray]):
+    """The batch model's mean per-word log-likelihood after each Gibbs sweep, one panel per map.
+
+    Parameters
+    ----------
+    traces : dict of str to (n_sweeps,) float ndarray
+        Nats per word, by dataset name.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
+
+    n = len(traces)
+    fig = Figure(figsize=(0.5 + 3.7 * n, 3.5), layout="constrained")
+    axes = fig.subplots(1, n, squeeze=False)[0]
+    for i, (ax, (name, trace)) in enumerate(zip(axes, traces.items())):
+        sweeps = np.arange(1, trace.size + 1)
+        ax.plot(sweeps, trace, color="tab:blue", linewidth=1.5, marker="." if trace.size <= 60 else None)
+        ax.axhline(trace[-1], color="0.5", linewidth=0.8, linestyle=":")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.grid(True, color="0.9", linewidth=0.8)
+        ax.set_axisbelow(True)
+        tail = trace[-max(1, trace.size // 10):]
+        ax.set_title(f"{name}\nlast {tail.size} sweeps within {np.ptp(tail):.2g} nats")
+        ax.set_xlabel("Gibbs sweep")
+        if i == 0:
+            ax.set_ylabel("mean log-likelihood per word (nats)")
+    fig.suptitle("Batch reference $Z_b$: convergence of the model learned on the whole map")
+    return fig
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _chosen_examples(examples: list[Example]) -> list[Example]:
+    """The example labelings figs. 2 and 3 show: one run (topic perplexity, lowest restart), its
+    shortest and longest path, shortest first."""
+    if not examples:
+        return []
+    weights = _weight_order({e.weight_function for e in examples})
+    weight = EXAMPLE_WEIGHT if EXAMPLE_WEIGHT in weights else weights[0]
+    restart = min(e.restart for e in examples if e.weight_function == weight)
+    run = [e for e in examples if e.weight_function == weight and e.restart == restart]
+    return [run[0]] if len(run) == 1 else [run[0], run[-1]]
+
+
+def _wrap(text: str, width_inches: float, font_size: float = _RC["figure.labelsize"]) -> str:
+    """Break a title or caption into lines that fit a figure ``width_inches`` wide at ``font_size`` points."""
+    import textwrap
+
+    chars_per_inch = 130 / font_size  # DejaVu Sans averages a little over half an em per character
+    return textwrap.fill(text, width=max(30, int(width_inches * chars_per_inch)))
+
+
+def _step(shape) -> int:
+    return max(1, math.ceil(max(shape[:2]) / _MAX_SIDE))
+
+
+def _shrink_labels(labels: np.ndarray) -> np.ndarray:
+    """(H, W) → every ``step``-th pixel, so at most :data:`_MAX_SIDE` per side (labels must not blend)."""
+    step = _step(labels.shape)
+    return labels[::step, ::step]
+
+
+def _shrink_image(image: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8 → area-averaged to the size :func:`_shrink_labels` gives."""
+    import cv2
+
+    step = _step(image.shape)
+    if step == 1:
+        return image
+    rows, cols = -(-image.shape[0] // step), -(-image.shape[1] // step)
+    return cv2.resize(image, (cols, rows), interpolation=cv2.INTER_AREA)  # OpenCV takes (width, height)
+
+
+def _show(ax, rgb: np.ndarray, shape: tuple[int, int]) -> None:
+    """Draw an (h, w, 3) picture over the map's full (H, W) pixel extent, without ticks."""
+    height, width = shape
+    ax.imshow(rgb, extent=(0, width, height, 0), interpolation="nearest")
+    ax.set_xlim(0, width)
+    ax.set_ylim(height, 0)
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
+@contextlib.contextmanager
+def _style():
+    import matplotlib
+
+    with matplotlib.rc_context(_RC):
+        yield
+
+
+def _save(fig, stem: Path) -> list[Path]:
+    """Write ``stem``.png and ``stem``.pdf atomically; returns both paths."""
+    paths = []
+    for suffix in (".png", ".pdf"):
+        path = stem.with_name(stem.name + suffix)
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=_DPI, format=suffix[1:])
+        paths.append(path)
+    return paths

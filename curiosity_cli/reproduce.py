@@ -1,0 +1,92 @@
+"""``curiosity reproduce``: extract, explore, label, evaluate and plot, then write REPORT.md.
+
+Each stage is resumable on its own (finished runs, labels and batch references are kept),
+so a stopped reproduction picks up where it was.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from curiosity_cli.config import ExperimentConfig
+
+#: ``--quick``: one map, this many restarts, paths up to this length.
+QUICK_RESTARTS = 5
+QUICK_LENGTH = 160
+
+
+def quick_config(config: ExperimentConfig) -> ExperimentConfig:
+    """The config shrunk for a look in minutes: its first map, 5 restarts, paths up to 160 steps.
+
+    The experiment is renamed ``<name>-quick`` so it does not mix with the full one.
+    """
+    length = min(QUICK_LENGTH, config.explore.path_length)
+    checkpoints = tuple(c for c in config.explore.checkpoints if c < length) + (length,)
+    return dataclasses.replace(
+        config,
+        name=config.name if config.name.endswith("quick") else f"{config.name}-quick",
+        datasets=config.datasets[:1],
+        explore=dataclasses.replace(
+            config.explore, restarts=min(QUICK_RESTARTS, config.explore.restarts), path_length=length,
+            checkpoints=checkpoints,
+        ),
+    )
+
+
+def reproduce(
+    config: ExperimentConfig,
+    *,
+    results_dir: Path = Path("results"),
+    cache_dir: Path = Path("results/cache"),
+    jobs: int | None = None,
+    force: bool = False,
+    on_stage: Callable[[str, int], None] | None = None,
+    on_done: Callable[[], None] | None = None,
+) -> Path:
+    """Run the whole pipeline for ``config`` and return the path of its ``REPORT.md``.
+
+    ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
+    of it done, for a progress display.
+    """
+    import yaml
+
+    from curiosity_cli.evaluate.labels import label_experiment
+    from curiosity_cli.evaluate.report import write_report
+    from curiosity_cli.evaluate.tables import evaluate_experiment
+    from curiosity_cli.explore.grid import run_grid
+    from curiosity_cli.plots.figures import write_figures
+
+    def stage(description: str, units: int) -> None:
+        if on_stage is not None:
+            on_stage(description, units)
+
+    def done(*_) -> None:
+        if on_done is not None:
+            on_done()
+
+    folder = Path(results_dir) / config.name
+    seconds = {}
+    started = time.perf_counter()
+    stage("words and exploration set-up", 0)
+    run_grid(
+        config, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
+        on_prepared=lambda to_run, skipped: stage(f"exploring ({skipped} runs already done)", to_run), on_run=done,
+    )
+    seconds["extract and explore"] = time.perf_counter() - started
+    mark = time.perf_counter()
+    label_experiment(config, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, on_stage=stage, on_done=done)
+    seconds["label"] = time.perf_counter() - mark
+    mark = time.perf_counter()
+    stage("evaluating", 0)
+    evaluation = evaluate_experiment(folder)
+    seconds["evaluate"] = time.perf_counter() - mark
+    mark = time.perf_counter()
+    stage("plotting", 0)
+    figures = write_figures(folder)
+    seconds["plot"] = time.perf_counter() - mark
+    seconds["total"] = time.perf_counter() - started
+    provenance = yaml.safe_load((folder / "provenance.yaml").read_text())
+    return write_report(folder, config, evaluation, list(figures), seconds, provenance)

@@ -1,0 +1,100 @@
+"""Cell perplexity, the γ decay and the proportional controller, against their formulas."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.drive.controller import Command, steer, target_offset
+from curiosity_cli.drive.curiosity import CuriosityScores, cell_perplexity
+from curiosity_cli.drive.driver import check_drive_config
+from curiosity_cli.errors import ConfigError, ParameterError
+
+DRIVE = load_config(CONFIG_DIR / "paper-grid.yaml").drive
+
+
+def test_cell_perplexity_is_eq_12_on_the_cells_topics():
+    alpha = 0.1
+    totals = np.array([30, 10, 0, 60])
+    counts = np.array([[2, 0, 0, 0], [0, 1, 1, 0], [0, 0, 0, 0], [1, 1, 0, 2]])
+    p = (totals + alpha) / (totals.sum() + 4 * alpha)
+    expected = [
+        math.exp(-math.log(p[0])),
+        math.exp(-(math.log(p[1]) + math.log(p[2])) / 2),
+        1.0,
+        math.exp(-(math.log(p[0]) + math.log(p[1]) + 2 * math.log(p[3])) / 4),
+    ]
+    assert np.allclose(cell_perplexity(counts, totals, alpha), expected, rtol=1e-12)
+
+
+def test_cell_perplexity_checks_shapes():
+    with pytest.raises(ParameterError, match="expected \\(n, K\\) and \\(K,\\)"):
+        cell_perplexity(np.zeros((3, 4)), np.zeros(5), 0.1)
+
+
+def test_scores_start_at_the_first_perplexity_then_decay_with_gamma():
+    rng = np.random.default_rng(1)
+    frames = rng.uniform(1, 50, size=(6, 2, 3))
+    scores = CuriosityScores(0.7, (2, 3))
+    expected = frames[0]
+    assert np.array_equal(scores.update(frames[0]), expected)
+    for frame in frames[1:]:
+        expected = 0.7 * expected + 0.3 * frame
+        assert np.allclose(scores.update(frame.ravel()), expected, rtol=1e-15)
+    assert scores.target() == np.unravel_index(np.argmax(expected), (2, 3))
+
+
+def test_gamma_zero_forgets_and_ties_go_to_the_first_cell():
+    scores = CuriosityScores(0.0, (2, 2))
+    scores.update([1.0, 5.0, 2.0, 3.0])
+    assert np.array_equal(scores.update([4.0, 1.0, 4.0, 2.0]), [[4.0, 1.0], [4.0, 2.0]])
+    assert scores.target() == (0, 0)
+    with pytest.raises(ParameterError, match="gamma"):
+        CuriosityScores(1.0, (2, 2))
+
+
+def test_target_offsets_are_cell_centres_in_half_images():
+    assert target_offset((0, 0), (6, 8)) == (-5 / 6, -7 / 8)
+    assert target_offset((5, 7), (6, 8)) == (5 / 6, 7 / 8)
+    assert target_offset((1, 1), (3, 3)) == (0.0, 0.0)
+
+
+@pytest.mark.parametrize("target", [(0, 0), (0, 7), (2, 3), (3, 4), (5, 0), (5, 7)])
+def test_steer_is_the_clipped_proportional_law(target):
+    d = DRIVE
+    e_row = (2 * target[0] + 1 - 6) / 6
+    e_col = (2 * target[1] + 1 - 8) / 8
+    expected = Command(
+        surge=min(max(d.surge_cruise - d.surge_gain * e_row, d.surge_min), d.surge_max),
+        yaw_rate=min(max(d.yaw_gain * e_col, -d.yaw_rate_max), d.yaw_rate_max),
+        pitch_rate=min(max(-d.pitch_gain * e_row, -d.pitch_rate_max), d.pitch_rate_max),
+    )
+    assert steer(target, (6, 8), d) == expected
+
+
+def test_steer_turns_towards_the_target_and_limits_apply():
+    d = dataclasses.replace(DRIVE, surge_cruise=0.3, surge_gain=1.0, surge_min=0.1, surge_max=0.4, yaw_gain=2.0, yaw_rate_max=0.5)
+    right, left = steer((3, 7), (6, 8), d), steer((3, 0), (6, 8), d)
+    assert right.yaw_rate == 0.5 and left.yaw_rate == -0.5  # clipped at the limit
+    assert steer((0, 4), (6, 8), d).surge == 0.4  # ahead: faster, up to surge_max
+    assert steer((5, 4), (6, 8), d).surge == 0.1  # behind: slower, down to surge_min
+    assert steer((0, 4), (6, 8), d).pitch_rate > 0 > steer((5, 4), (6, 8), d).pitch_rate
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (dict(carry_frames=150), "drive.carry_frames: got 150, expected fewer than window_frames (150)"),
+        (dict(surge_min=1.0), "drive.surge_min: got 1.0, expected at most surge_max (0.5)"),
+        (dict(keepalive=1.5), "drive.keepalive: got 1.5, expected shorter than the robot's watchdog (1.0 s)"),
+        (dict(frame_width=4, grid_cols=8), "drive.frame_width: got 4, expected at least grid_cols (8)"),
+    ],
+)
+def test_drive_keys_that_contradict_each_other_are_refused_in_one_line(change, message):
+    with pytest.raises(ConfigError) as info:
+        check_drive_config(dataclasses.replace(DRIVE, **change), "exp.yaml")
+    assert str(info.value) == f"exp.yaml: {message}"

@@ -1,0 +1,111 @@
+"""The stream model over an unbounded number of frames, the frame words, the pipeline."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.data import load_map
+from curiosity_cli.drive.frame_words import FrameWords, split_by_cell
+from curiosity_cli.drive.pipeline import CuriosityPipeline
+from curiosity_cli.drive.stream import StreamModel, window_seed
+from curiosity_cli.errors import ParameterError
+
+CONFIG = load_config(CONFIG_DIR / "paper-grid.yaml")
+
+
+def stream(**changes) -> StreamModel:
+    args = dict(
+        window=4, carry=2, carry_sweeps=1, spatial=4, temporal=2, alpha=0.1, beta=0.1, eta=0.5, budget=500, seed=3
+    )
+    return StreamModel(8, 50, (2, 3), **{**args, **changes})
+
+
+def frames(n: int, seed: int = 0) -> list[list[np.ndarray]]:
+    rng = np.random.default_rng(seed)
+    return [[rng.integers(0, 50, rng.integers(0, 12)) for _ in range(6)] for _ in range(n)]
+
+
+def test_frames_keep_coming_after_the_window_fills():
+    model = stream()
+    for i, cell_words in enumerate(frames(11)):
+        counts = model.add_frame(cell_words)
+        assert counts.shape == (6, 8)
+        assert np.array_equal(counts.sum(axis=1), [w.size for w in cell_words])
+    # frames 0-3 fill the first model; frames 4, 6, 8, 10 each start a new one after the 2 carried
+    assert model.windows == 5
+    assert model.model.n_observed == 3 * 6  # frames 8 and 9 carried, and frame 10
+    carried = np.concatenate(frames(11)[8])
+    assert np.array_equal(np.concatenate([model.model.cell_words(c) for c in range(6)]), carried)
+    assert model.topic_totals().sum() == sum(w.size for f in frames(11)[8:11] for w in f)
+
+
+def test_without_carry_a_full_window_starts_empty():
+    model = stream(carry=0, window=3)
+    for cell_words in frames(7):
+        model.add_frame(cell_words)
+    assert model.windows == 3 and model.model.n_observed == 6
+
+
+def test_same_seed_same_counts_and_each_window_has_its_own_seed():
+    a, b = stream(), stream()
+    for cell_words in frames(9):
+        assert np.array_equal(a.add_frame(cell_words), b.add_frame(cell_words))
+    assert len({window_seed(3, w) for w in range(5)}) == 5
+
+
+def test_a_bad_frame_changes_nothing():
+    model = stream()
+    model.add_frame(frames(1)[0])
+    before = model.model.n_observed
+    bad = frames(1)[0]
+    bad[3] = np.array([1, 99])
+    with pytest.raises(ParameterError, match="word ids must be in 0..49"):
+        model.add_frame(bad)
+    with pytest.raises(ParameterError, match="expected 6"):
+        model.add_frame(bad[:5])
+    assert model.model.n_observed == before
+
+
+def test_split_by_cell_cuts_the_image_into_equal_cells():
+    rows = np.array([0, 0, 9, 10, 19, 5])
+    cols = np.array([0, 29, 10, 0, 29, 15])
+    ids = np.array([10, 11, 12, 13, 14, 15])
+    cells = split_by_cell(rows, cols, ids, (20, 30), (2, 3))
+    assert [c.tolist() for c in cells] == [[10], [12, 15], [11], [13], [], [14]]
+
+
+def test_frame_words_use_the_shipped_vocabularies_on_a_resized_frame():
+    reef = load_map("reef-mosaic")
+    words = FrameWords(CONFIG.words, CONFIG.drive)
+    frame = reef.image[1000:1480, 800:1440]
+    small = words.resized(frame)
+    assert small.shape == (144, 192, 3)
+    cells = words(frame)
+    assert len(cells) == 48
+    every = np.concatenate(cells)
+    assert every.min() >= 0 and every.max() < 6000 and words.vocabulary_size == 6000
+    textons = (every >= 5000).sum()
+    assert textons == 48 * 36  # every 4th pixel of 144 x 192
+    assert (every < 5000).sum() > 0  # and ORB words
+    with pytest.raises(ParameterError, match="expected \\(H, W, 3\\) uint8 RGB"):
+        words(frame[:, :, 0])
+
+
+def test_the_pipeline_is_deterministic_for_a_seed():
+    reef = load_map("reef-mosaic")
+    config = dataclasses.replace(CONFIG, drive=dataclasses.replace(CONFIG.drive, samples_per_frame=2000))
+    views = [reef.image[r : r + 240, 600 : 920] for r in (900, 930, 960)]
+    runs = []
+    for _ in range(2):
+        pipeline = CuriosityPipeline(config, seed=5)
+        runs.append([pipeline.process(v) for v in views])
+    for first, second in zip(*runs):
+        assert np.array_equal(first.scores, second.scores) and first.target == second.target
+        assert first.command == second.command
+    last = runs[0][-1]
+    assert last.perplexity.shape == (6, 8) and (last.perplexity >= 1).all()
+    assert last.scores[last.target] == last.scores.max()

@@ -1,0 +1,126 @@
+"""label, evaluate and reproduce end to end on a small real map, and their bad inputs."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from small_maps import grid_config, grid_yaml
+from typer.testing import CliRunner
+
+from curiosity_cli.cli import app
+from curiosity_cli.evaluate.labels import LabelError, batch_path, example_path, label_experiment, label_path
+from curiosity_cli.evaluate.tables import EvaluationError, evaluate_experiment
+from curiosity_cli.explore.grid import run_grid
+from curiosity_cli.explore.runs import run_folder
+
+runner = CliRunner()
+
+
+def small_experiment(own_map, tmp_path, **explore):
+    """A grid of 4 weight functions x 2 restarts x 12 steps on own_map, explored and labelled."""
+    config = grid_config(own_map, **explore)
+    config = dataclasses.replace(config, label=dataclasses.replace(config.label, sweeps=2, batch_sweeps=8))
+    run_grid(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    return config, tmp_path / "grid"
+
+
+def test_label_and_evaluate_write_every_table(own_map, tmp_path):
+    config, folder = small_experiment(own_map, tmp_path)
+    done = label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    assert (done["labelled"], done["skipped"], done["batch_reused"]) == (8, 0, 0)
+    with np.load(batch_path(folder, "own")) as npz:
+        assert npz["labels"].shape == (96, 128) and npz["log_likelihood"].shape == (8,)
+    with np.load(label_path(folder, "own", "random-walk", 1)) as npz:
+        assert npz["lengths"].tolist() == [5, 12]
+        # every pixel counted once per checkpoint, against 2 human classes and K = 8 batch topics
+        assert npz["human"].shape == (2, 8, 2) and (npz["human"].sum(axis=(1, 2)) == 96 * 128).all()
+        assert npz["batch"].shape == (2, 8, 8) and (npz["batch"].sum(axis=(1, 2)) == 96 * 128).all()
+    with np.load(example_path(folder, "own", "topic-perplexity", 0, 12)) as npz:
+        assert npz["labels"].shape == (96, 128)
+
+    again = label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    assert (again["labelled"], again["skipped"], again["batch_reused"]) == (0, 8, 1)
+
+    evaluation = evaluate_experiment(folder)
+    mi = pd.read_csv(folder / "mi.csv")
+    assert list(mi.columns) == [
+        "dataset", "weight_function", "restart", "path_length", "mi_human", "mi_batch", "nmi_human", "nmi_batch", "seed"
+    ]
+    assert len(mi) == 16 and (mi[["mi_human", "mi_batch"]] >= 0).all().all()
+    assert (mi[["nmi_human", "nmi_batch"]] <= 1).all().all()
+    pd.testing.assert_frame_equal(pd.read_parquet(folder / "mi.parquet"), mi, check_dtype=False)
+    summary = pd.read_csv(folder / "summary.csv")
+    assert len(summary) == 4 * 2 * 2 and (summary["n"] == 2).all()
+    block = mi[(mi.weight_function == "random-walk") & (mi.path_length == 12)]["mi_human"]
+    row = summary[(summary.weight_function == "random-walk") & (summary.path_length == 12) & (summary.against == "human")]
+    assert row["mean"].item() == pytest.approx(block.mean()) and row["std"].item() == pytest.approx(block.std())
+    # t(0.975, 1) = 12.706: the CI half-width of a mean of two
+    assert (row["ci_high"] - row["mean"]).item() == pytest.approx(12.7062 * block.std() / np.sqrt(2), rel=1e-4)
+    tests = pd.read_csv(folder / "tests.csv")
+    assert len(tests) == 2 * 2 * 6 and tests["p_value"].between(0, 1).all()
+    assert evaluation.headline.empty, "no 80-step checkpoint, so no headline ratio"
+
+
+def test_a_corrupt_label_file_is_reported_and_left_out(own_map, tmp_path):
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    label_path(folder, "own", "word-perplexity", 0).write_bytes(b"garbage")
+    evaluation = evaluate_experiment(folder)
+    assert len(evaluation.skipped) == 1 and "word-perplexity/restart-000.npz: corrupt" in evaluation.skipped[0]
+    assert len(evaluation.mi) == 14
+    assert json.loads((folder / "skipped.json").read_text()) == evaluation.skipped
+
+
+def test_labels_from_another_word_store_are_refused_naming_both(own_map, tmp_path):
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    meta_path = run_folder(folder, "own", "random-walk", 0) / "run.json"
+    meta = json.loads(meta_path.read_text())
+    real = meta["store"]
+    meta["store"] = "own-0000000000000000.npz"
+    meta_path.write_text(json.dumps(meta))
+    with pytest.raises(EvaluationError, match=f"labels made from word store {real}, but the run .* from own-0000000000000000.npz"):
+        evaluate_experiment(folder)
+    with pytest.raises(LabelError, match=f"made from word store own-0000000000000000.npz, but own's words are now {real}"):
+        label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1, force=True)
+
+
+def test_a_corrupt_checkpoint_is_named_and_the_other_runs_are_labelled(own_map, tmp_path):
+    config, folder = small_experiment(own_map, tmp_path)
+    (run_folder(folder, "own", "random-walk", 1) / "checkpoints.npz").write_bytes(b"garbage")
+    with pytest.raises(LabelError, match=r"1 of 8 runs could not be labelled .*random-walk/restart-001/checkpoints.npz: corrupt"):
+        label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    assert len(list((folder / "labels" / "own").glob("*/restart-*.npz"))) == 7
+
+
+def test_nothing_to_label_or_evaluate_says_which_command_comes_first(own_map, tmp_path):
+    config = grid_config(own_map)
+    with pytest.raises(LabelError, match="grid/runs: no finished runs; run `curiosity explore` first"):
+        label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    with pytest.raises(EvaluationError, match="grid/labels: no label files; run `curiosity label` first"):
+        evaluate_experiment(tmp_path / "grid")
+
+
+def test_the_commands_through_the_cli(own_map, tmp_path):
+    config = grid_yaml(own_map, tmp_path)
+    common = ["--jobs", "1", "--cache-dir", str(tmp_path / "cache")]
+    folder = tmp_path / "results" / "grid"
+    result = runner.invoke(app, ["label", str(folder)])
+    assert result.exit_code == 1 and "grid/config.yaml: not found; run `curiosity explore`" in result.stderr
+
+    sets = ["--set", "label.sweeps=2", "--set", "label.batch_sweeps=5"]
+    result = runner.invoke(app, ["reproduce", str(config), *sets, *common, "--results-dir", str(tmp_path / "results")])
+    assert result.exit_code == 0, result.output
+    assert "wrote" in result.stdout and "REPORT.md" in result.stdout
+    report = (folder / "REPORT.md").read_text()
+    assert "## Mutual information" in report and "| own | topic-perplexity |" in report and "](figures/" in report
+
+    result = runner.invoke(app, ["label", str(folder), *sets, *common])
+    assert result.exit_code == 0, result.output
+    assert "labelled 0 runs" in result.stdout and "8 were up to date" in result.stdout
+    result = runner.invoke(app, ["evaluate", str(folder)])
+    assert result.exit_code == 0 and "wrote" in result.stdout and "(16 rows)" in result.stdout

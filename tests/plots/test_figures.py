@@ -1,0 +1,138 @@
+"""`write_figures` on synthetic experiment folders: real PNG and PDF files, and missing inputs skipped."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+from synthetic_experiment import make_experiment
+
+from curiosity_cli.errors import CuriosityError
+from curiosity_cli.plots.experiment_inputs import PlotError
+from curiosity_cli.plots.figures import weight_style, write_figures
+
+LENGTHS = (10, 20, 40, 80)
+
+
+@pytest.fixture
+def bare_map(own_map: Path) -> Path:
+    """The own map again under another name, without human labels."""
+    data = yaml.safe_load(own_map.read_text())
+    data.update(name="bare", labels=None, legend=None)
+    path = own_map.parent / "bare.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+@pytest.fixture
+def experiment(tmp_path, own_map, bare_map) -> Path:
+    return make_experiment(tmp_path / "results", [str(own_map), str(bare_map)], restarts=3, lengths=LENGTHS, n_topics=12, sweeps=30)
+
+
+def names(paths) -> list[str]:
+    return [p.name for p in paths]
+
+
+def test_every_figure_is_written_as_png_and_pdf(experiment):
+    import matplotlib
+
+    rc = dict(matplotlib.rcParams)
+    write_figures(experiment)
+    written = write_figures(experiment)  # a second time replaces the files
+    assert dict(matplotlib.rcParams) == rc  # styles are set in a context, not globally
+    stems = [
+        "mi-vs-length-human", "mi-vs-length-batch",
+        "path-own", "labelings-own", "path-bare", "labelings-bare", "batch-convergence",
+    ]
+    assert names(written) == [f"{stem}{suffix}" for stem in stems for suffix in (".png", ".pdf")]
+    assert written.skipped == []
+    for path in written:
+        assert path.parent == experiment / "figures"
+        if path.suffix == ".png":
+            image = cv2.imread(str(path))
+            assert image is not None and image.shape[1] >= 600 and image.std() > 10  # drawn, not blank
+        else:
+            assert path.read_bytes().startswith(b"%PDF")
+    assert sorted(p.name for p in (experiment / "figures").iterdir()) == sorted(names(written))  # no temp files
+
+
+def test_a_map_without_human_labels_gets_no_human_panel(tmp_path, bare_map):
+    experiment = make_experiment(tmp_path, [str(bare_map)], restarts=2, lengths=(10, 20, 40), n_topics=8, sweeps=5)
+    written = write_figures(experiment)
+    assert "mi-vs-length-human.png" not in names(written)
+    assert "mi-vs-length-batch.png" in names(written) and "labelings-bare.png" in names(written)
+    assert written.skipped == ["mi-vs-length-human: summary.csv has no MI against human labels (no map has them)"]
+
+
+def test_missing_labelings_and_config_skip_their_figures_only(experiment):
+    shutil.rmtree(experiment / "batch")
+    shutil.rmtree(experiment / "labels" / "bare")
+    written = write_figures(experiment)
+    assert names(written) == [
+        f"{stem}{suffix}"
+        for stem in ("mi-vs-length-human", "mi-vs-length-batch", "path-own", "labelings-own")
+        for suffix in (".png", ".pdf")
+    ]
+    skipped = "\n".join(written.skipped)
+    assert "batch/own.npz: not found (run `curiosity label` first)" in skipped
+    assert "path-bare: no example path labelling under labels/bare/examples/" in skipped
+    assert "labelings-bare: neither a batch nor a path labelling to draw" in skipped
+    assert "batch-convergence: no batch log-likelihood trace" in skipped
+
+    (experiment / "config.yaml").unlink()
+    written = write_figures(experiment)
+    assert names(written) == ["mi-vs-length-human.png", "mi-vs-length-human.pdf", "mi-vs-length-batch.png", "mi-vs-length-batch.pdf"]
+    assert any("config.yaml: not found, so no map figures" in note for note in written.skipped)
+
+
+def test_corrupt_or_misshapen_inputs_are_named_and_skipped(experiment):
+    (experiment / "batch" / "own.npz").write_bytes(b"not a zip file")
+    example = next((experiment / "labels" / "bare" / "examples").glob("topic-perplexity-restart-000-*.npz"))
+    np.savez(example, labels=np.zeros((5, 5), np.int16))
+    (experiment / "runs" / "own" / "topic-perplexity" / "restart-000" / "path.csv").unlink()
+    summary = pd.read_csv(experiment / "summary.csv")
+    summary["mean"] = summary["mean"].astype(object)
+    summary.loc[0, "mean"] = "oops"  # a stray text cell: that point is left out
+    summary.to_csv(experiment / "summary.csv", index=False)
+    written = write_figures(experiment)
+    skipped = written.skipped
+    assert sum("batch/own.npz: corrupt" in note for note in skipped) == 1
+    assert any(f"{example.name}: labels are int16 of shape (5, 5)" in note for note in skipped)
+    assert any("restart-000/path.csv: not found; no path figure" in note for note in skipped)
+    assert "path-own.png" not in names(written)
+    assert {"mi-vs-length-human.png", "labelings-own.png", "labelings-bare.png", "batch-convergence.png"} <= set(names(written))
+
+
+def test_other_weight_functions_get_grey_styles(tmp_path, own_map):
+    experiment = make_experiment(
+        tmp_path, [str(own_map)], restarts=2, lengths=(10, 20), weights=("random-walk", "levy-flight", "greedy"), n_topics=6
+    )
+    written = write_figures(experiment)
+    assert "mi-vs-length-human.png" in names(written)
+    others = ["greedy", "levy-flight"]
+    styles = {weight_style(name, others) for name in ["random-walk", *others]}
+    assert len(styles) == 3 and weight_style("greedy", others)[0].startswith("0.")
+    # no topic-perplexity run: figs. 2 and 3 fall back to another weight function's example
+    assert "path-own.png" in names(written)
+
+
+def test_missing_folder_or_mi_table_is_a_plot_error(tmp_path, experiment):
+    with pytest.raises(PlotError, match=r"no such experiment folder; run `curiosity explore` first"):
+        write_figures(tmp_path / "nowhere")
+    (experiment / "summary.csv").unlink()
+    written = write_figures(experiment)
+    assert not any(p.name.startswith("mi-vs-length") for p in written)
+    assert any("summary.csv: not found; run `curiosity evaluate` first" in note for note in written.skipped)
+
+    mi = pd.read_csv(experiment / "mi.csv")
+    mi.drop(columns="mi_batch").to_csv(experiment / "mi.csv", index=False)
+    with pytest.raises(PlotError, match=r"mi.csv: no column 'mi_batch'"):
+        write_figures(experiment)
+    (experiment / "mi.csv").unlink()
+    with pytest.raises(CuriosityError, match=r"mi.csv: not found; run `curiosity evaluate` first"):
+        write_figures(experiment)
