@@ -43,11 +43,15 @@ def reproduce(
     cache_dir: Path = Path("results/cache"),
     jobs: int | None = None,
     force: bool = False,
+    backend: str = "loky",
+    scheduler: str | None = None,
     on_stage: Callable[[str, int], None] | None = None,
     on_done: Callable[[], None] | None = None,
 ) -> Path:
     """Run the whole pipeline for ``config`` and return the path of its ``REPORT.md``.
 
+    ``backend`` and ``scheduler`` say where the exploration runs go (see
+    :func:`~curiosity_cli.explore.grid.run_grid`); labelling runs on this machine.
     ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
     of it done, for a progress display.
     """
@@ -73,7 +77,7 @@ def reproduce(
     stage("words and exploration set-up", 0)
     run_grid(
         config, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-        on_prepared=lambda to_run, skipped: stage(f"exploring ({skipped} runs already done)", to_run), on_run=done,
+        backend=backend, scheduler=scheduler, on_prepared=lambda to_run, skipped: stage(f"exploring ({skipped} runs already done)", to_run), on_run=done,
     )
     seconds["extract and explore"] = time.perf_counter() - started
     mark = time.perf_counter()
@@ -89,4 +93,4 @@ def reproduce(
     seconds["plot"] = time.perf_counter() - mark
     seconds["total"] = time.perf_counter() - started
     provenance = yaml.safe_load((folder / "provenance.yaml").read_text())
-    return write_report(folder, config, evaluation, list(figures), seconds, provenance)
+    return write_report(folder, config, evaluation, list(figures), figures.skipped, seconds, provenance)

@@ -58,12 +58,14 @@ def run_scenario(folder: Path, frames: int, cores: int | None, interval: float, 
         port = robot.stdout.readline().strip()
         env = {**os.environ, **(ONE_THREAD if cores == 1 else {})}
         out = folder / "run"
-        subprocess.run(
+        result = subprocess.run(
             [CURIOSITY, "drive", "--serial", port, "--camera", "sim", "--sim-map", "reef-mosaic", "--out", str(out),
              "--max-frames", str(frames + skip), *FRAME, "--set", f"drive.sim_frame_interval={interval}"],
-            check=True, env=env, capture_output=True, text=True,
+            env=env, capture_output=True, text=True,
             preexec_fn=lambda: os.sched_setaffinity(0, driver_cores),
         )
+        if result.returncode != 0:
+            sys.exit(f"curiosity drive failed ({result.returncode}): {result.stderr.strip().splitlines()[-1]}")
     finally:
         robot.terminate()
         robot.communicate(timeout=30)

@@ -36,7 +36,7 @@ def test_help_imports_no_heavy_library():
         "import sys\n"
         "from curiosity_cli.cli import app\n"
         "try:\n    app(['--help'])\nexcept SystemExit:\n    pass\n"
-        "heavy = [m for m in ('numpy', 'numba', 'cv2', 'matplotlib', 'pandas', 'serial') if m in sys.modules]\n"
+        "heavy = [m for m in ('numpy', 'numba', 'cv2', 'matplotlib', 'pandas', 'serial', 'dask', 'distributed') if m in sys.modules]\n"
         "print('HEAVY', heavy)\n"
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

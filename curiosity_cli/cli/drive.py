@@ -50,8 +50,8 @@ def drive(
     dry_run: bool = typer.Option(False, "--dry-run", help="No serial port: commands are computed and logged, not sent (with --camera sim the robot is simulated in this process, one frame period per command)."),
     camera: str = typer.Option("0", "--camera", help="A device index, a video file, a stream URL, or 'sim' for the simulated robot's camera."),
     sim_map: str = typer.Option(None, "--sim-map", help="With --camera sim: the map the simulated robot is on (name or dataset YAML)."),
-    start: str = typer.Option(None, "--start", metavar="ROW,COL", help="With --dry-run --camera sim: " + _START_HELP),
-    heading_deg: float = typer.Option(0.0, "--heading-deg", help="With --dry-run --camera sim: start heading, degrees clockwise from the map's +col axis."),
+    start: str = typer.Option(None, "--start", metavar="ROW,COL", help="With --dry-run --camera sim: start position ROW,COL in map pixels; default the map's centre."),
+    heading_deg: float = typer.Option(None, "--heading-deg", help="With --dry-run --camera sim: start heading, degrees clockwise from the map's +col axis (default 0)."),
     config: Path = typer.Option(CONFIG_DIR / "paper-grid.yaml", "--config", help=_CONFIG_HELP),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a config key, e.g. --set drive.gamma=0.5."),
     seed: int = typer.Option(None, "--seed", min=0, help="Seed of the topic models; default the config's seed."),
@@ -62,10 +62,9 @@ def drive(
 ) -> None:
     """Steer a robot towards what its camera finds most curious (paper section 5.2).
 
-    Each frame's visual words go into a live topic model; each image cell is scored by
-    topic perplexity with a decaying memory, and the most curious cell steers the
-    robot. Protocol: curiosity_cli/drive/PROTOCOL.md. Ctrl-C (or SIGTERM) sends STOP
-    and exits with 130 (143).
+    Image cells are scored by topic perplexity in a live topic model, with a decaying memory.
+
+    Protocol: curiosity_cli/drive/PROTOCOL.md. Ctrl-C sends STOP, then exits with 130.
     """
     from curiosity_cli.drive.driver import StopRequest, stopping_on_signals
 
@@ -73,9 +72,10 @@ def drive(
         raise typer.BadParameter("--dry-run sends nothing; leave out --serial", param_hint="--dry-run")
     if (camera == "sim") != (sim_map is not None):
         raise typer.BadParameter("--camera sim and --sim-map go together", param_hint="--sim-map")
-    if start is not None and not (dry_run and camera == "sim"):
+    if (start is not None or heading_deg is not None) and not (dry_run and camera == "sim"):
         raise typer.BadParameter(
-            "only a dry run simulates the robot here; give the start to `curiosity simrobot`", param_hint="--start"
+            "only a dry run simulates the robot here; give the start to `curiosity simrobot`",
+            param_hint="--start" if start is not None else "--heading-deg",
         )
     resolved = _load(config, overrides)
     port = serial or resolved.drive.port
@@ -97,7 +97,7 @@ def drive(
                 )
             row, col = _parse_start(start, map_data.image.shape[:2])
             mpp = resolved.drive.sim_metres_per_pixel
-            start_pose = Pose(col * mpp, row * mpp, math.radians(heading_deg))
+            start_pose = Pose(col * mpp, row * mpp, math.radians(heading_deg or 0.0))
 
     with stopping_on_signals(StopRequest()) as stop:
         outcome, folder = _drive(
@@ -188,8 +188,7 @@ def simrobot(
 ) -> None:
     """A simulated robot on a pseudo-terminal, for `curiosity drive --camera sim`.
 
-    Prints the pseudo-terminal's path on the first line of its output, then serves
-    the robot side of the protocol (curiosity_cli/drive/PROTOCOL.md) until Ctrl-C.
+    Prints the pseudo-terminal's path, then serves the robot side of the protocol until Ctrl-C.
     """
     import math
     import os

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import enum
 import sys
 from pathlib import Path
 
@@ -11,6 +12,13 @@ import typer
 
 from curiosity_cli.cli import app
 from curiosity_cli.config import CONFIG_DIR
+
+
+class Backend(str, enum.Enum):
+    """Where runs are computed (``curiosity_cli.explore.grid.BACKENDS``)."""
+
+    loky = "loky"
+    dask = "dask"
 
 
 @app.command("explore")
@@ -25,6 +33,8 @@ def explore(
     force: bool = typer.Option(False, "--force", help="Redo runs that are already finished."),
     results_dir: Path = typer.Option(Path("results"), "--results-dir", help="Experiment folders go here."),
     cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
+    backend: Backend = typer.Option(Backend.loky, "--backend", help="loky: processes on this machine; dask: a Dask cluster (needs the distributed extra)."),
+    scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler, e.g. tcp://10.0.0.5:8786; default a local cluster of --jobs workers."),
 ) -> None:
     """Run every weight function from every restart on every map, and save paths and topic models.
 
@@ -36,6 +46,8 @@ def explore(
     from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS
     from curiosity_cli.files import display_path
 
+    if scheduler is not None and backend is not Backend.dask:
+        raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")
     options = []
     if maps:
         try:
@@ -70,7 +82,7 @@ def explore(
 
         summary = run_grid(
             resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-            on_prepared=prepared, on_run=finished,
+            on_prepared=prepared, on_run=finished, backend=backend.value, scheduler=scheduler,
         )
     typer.echo(
         f"wrote {summary.ran} runs ({summary.bytes_written / 1e6:.1f} MB) to {display_path(summary.folder)} "

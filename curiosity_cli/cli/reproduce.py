@@ -9,6 +9,7 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli import app
+from curiosity_cli.cli.explore import Backend
 from curiosity_cli.config import CONFIG_DIR
 
 
@@ -19,6 +20,8 @@ def reproduce(
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override any config key, e.g. --set seed=1."),
     jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
     force: bool = typer.Option(False, "--force", help="Redo runs and labels that are already finished."),
+    backend: Backend = typer.Option(Backend.loky, "--backend", help="Where exploration runs: loky (this machine) or dask (a Dask cluster; labelling stays local)."),
+    scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler; default a local cluster."),
     results_dir: Path = typer.Option(Path("results"), "--results-dir", help="Experiment folders go here."),
     cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
 ) -> None:
@@ -30,6 +33,8 @@ def reproduce(
     from curiosity_cli.files import display_path
     from curiosity_cli.reproduce import quick_config, reproduce as run_pipeline
 
+    if scheduler is not None and backend is not Backend.dask:
+        raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")
     resolved = load_config(config, overrides)
     if quick:
         resolved = quick_config(resolved)
@@ -46,6 +51,6 @@ def reproduce(
 
         report = run_pipeline(
             resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-            on_stage=stage, on_done=lambda: bars and bars[0].update(1),
+            backend=backend.value, scheduler=scheduler, on_stage=stage, on_done=lambda: bars and bars[0].update(1),
         )
     typer.echo(f"wrote {display_path(report)}")

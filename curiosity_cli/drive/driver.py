@@ -40,11 +40,6 @@ def check_drive_config(drive: DriveConfig, where: str) -> None:
         (drive.carry_frames < drive.window_frames, "carry_frames", f"fewer than window_frames ({drive.window_frames})"),
         (drive.surge_min <= drive.surge_max, "surge_min", f"at most surge_max ({drive.surge_max})"),
         (drive.keepalive < drive.watchdog, "keepalive", f"shorter than the robot's watchdog ({drive.watchdog} s)"),
-        (
-            drive.orb_fill_threshold is None or drive.orb_fill_threshold < 20,
-            "orb_fill_threshold",
-            "below ORB's FAST threshold 20, or null",
-        ),
     ]
     for ok, key, expected in rules:
         if not ok:
@@ -52,13 +47,19 @@ def check_drive_config(drive: DriveConfig, where: str) -> None:
 
 
 class StopRequest:
-    """Set by SIGINT or SIGTERM; the loop checks it between frames."""
+    """Set by SIGINT or SIGTERM; the loop checks it between frames.
+
+    A second SIGINT raises KeyboardInterrupt, for a loop stuck in a camera that hangs;
+    the robot is still sent STOP on the way out.
+    """
 
     def __init__(self):
         self.signal: str | None = None
 
     def __call__(self, signum, frame) -> None:
-        # only a flag: the handler may interrupt the main thread anywhere, even inside a lock
+        if self.signal is not None and signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        # a flag, not an exception: the first request ends the run between frames, in order
         self.signal = signal.Signals(signum).name
 
 
@@ -167,11 +168,12 @@ def run(
             if stop.signal is not None:
                 outcome = Outcome(stop.signal, frames, f"stopped by {stop.signal}", None)
                 break
-            if robot is not None and robot.error:
-                raise LinkError(f"{robot.error}; STOP attempted")
+            # ESTOP first: a robot that stopped itself and then went quiet ended the run cleanly
             if robot is not None and robot.estop:
                 outcome = Outcome("estop", frames, f"the robot sent ESTOP ({robot.estop.reason})", None)
                 break
+            if robot is not None and robot.error:
+                raise LinkError(f"{robot.error}; STOP attempted")
             got = camera.read()
             if got is None:
                 outcome = Outcome("end of video", frames, "end of the video", None)

@@ -22,6 +22,8 @@ from curiosity_cli.errors import CuriosityError
 
 # How long one read waits for bytes: bounds how late a resend or keepalive can be.
 _POLL_SECONDS = 0.005
+# ACK latencies kept for the driver's log rows, which ask for the newest ones only.
+_KEPT_LATENCIES = 1024
 
 
 class LinkError(CuriosityError):
@@ -60,7 +62,7 @@ class LinkStats:
     naks: int = 0
     refused_lines: int = 0
     states: int = 0
-    ack_latencies: dict = field(default_factory=dict)  # seq of a VEL -> seconds to its ACK
+    ack_latencies: dict = field(default_factory=dict)  # seq of a recent VEL -> seconds to its ACK
 
 
 @dataclass
@@ -319,7 +321,10 @@ class RobotLink:
                 return  # the ACK of a frame already answered (its resend crossed the first ACK)
             self.stats.acked += 1
             if isinstance(inflight.frame, Vel):
-                self.stats.ack_latencies[item.seq] = time.monotonic() - inflight.first_sent
+                latencies = self.stats.ack_latencies
+                latencies[item.seq] = time.monotonic() - inflight.first_sent
+                if len(latencies) > _KEPT_LATENCIES:
+                    del latencies[next(iter(latencies))]  # the oldest: a run may last for hours
             self._answered(item.seq)
         elif isinstance(item, Nak):
             if inflight is None or item.seq != inflight.frame.seq:

@@ -59,8 +59,10 @@ def draw_overlay(frame: np.ndarray, scores: np.ndarray, target: tuple[int, int],
     out = (frame * (1 - weight) + paint * weight).round().astype(np.uint8)
     if caption:
         scale = max(0.35, width / 1000)
-        for colour, thickness in (((0, 0, 0), 3), ((255, 255, 255), 1)):
-            cv2.putText(out, caption, (6, int(20 * scale) + 4), cv2.FONT_HERSHEY_SIMPLEX, scale, colour, thickness, cv2.LINE_AA)
+        (text_width, text_height), baseline = cv2.getTextSize(caption, cv2.FONT_HERSHEY_SIMPLEX, scale, 1)
+        band = text_height + baseline + 8
+        out[:band, : text_width + 12] //= 3  # a dark band keeps the caption legible on any image
+        cv2.putText(out, caption, (6, text_height + 4), cv2.FONT_HERSHEY_SIMPLEX, scale, (255, 255, 255), 1, cv2.LINE_AA)
     return out
 
 

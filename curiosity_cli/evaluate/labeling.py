@@ -23,18 +23,9 @@ from curiosity_cli.words.store import WordStore
 
 
 def _whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_counts=None):
-    from curiosity_cli.topics.model import TopicModel
-    from curiosity_cli.topics.neighbours import grid_neighbours
+    from curiosity_cli.explore.walker import map_topic_model
 
-    topic_model = TopicModel(
-        model.topics,
-        store.vocabulary_size,
-        grid_neighbours(*store.grid_shape, model.spatial_neighbours),
-        alpha=model.alpha,
-        beta=model.beta,
-        seed=seed,
-        frozen_counts=frozen_counts,
-    )
+    topic_model = map_topic_model(store, model, seed, frozen_counts=frozen_counts)
     for cell in range(store.n_cells):
         topic_model.add_cell(cell, store.cell_words(cell))
     return topic_model

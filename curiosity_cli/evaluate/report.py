@@ -11,8 +11,6 @@ from curiosity_cli.config import ExperimentConfig, to_yaml
 from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation
 from curiosity_cli.files import atomic_path
 
-#: Path lengths the paper discusses: 80 (about a map's width) and 320 (the longest).
-REPORT_LENGTHS = (HEADLINE_LENGTH, 320)
 # the paper: "For short path lengths (40 steps or less), we do not see any statistical difference"
 _SHORT = 40
 _ALPHA = 0.05
@@ -72,12 +70,17 @@ def _significance(tests) -> list[str]:
 
 
 def write_report(
-    folder: Path, config: ExperimentConfig, evaluation: Evaluation, figures: list[Path], seconds: dict[str, float],
-    provenance: dict,
+    folder: Path, config: ExperimentConfig, evaluation: Evaluation, figures: list[Path], figure_notes: list[str],
+    seconds: dict[str, float], provenance: dict,
 ) -> Path:
-    """Write ``folder/REPORT.md`` and return its path."""
+    """Write ``folder/REPORT.md`` and return its path.
+
+    ``figure_notes`` says which figures were left out and why (from ``write_figures``).
+    """
     summary, tests, top = evaluation.summary, evaluation.tests, evaluation.headline
-    lengths = sorted({n for n in REPORT_LENGTHS if n in set(summary["path_length"])} or {int(summary["path_length"].max())})
+    # the lengths the paper discusses: 80 (about a map's width) and the longest
+    present = set(summary["path_length"])
+    lengths = sorted({n for n in (HEADLINE_LENGTH,) if n in present} | {int(max(present))})
     lines = [
         f"# Curiosity-driven exploration: experiment `{config.name}`",
         "",
@@ -106,8 +109,9 @@ def write_report(
     lines += ["Against the batch labeling Z_b (paper Fig. 4):", ""]
     lines += _mi_table(summary, "batch", lengths)
     lines += ["## Significance", ""] + _significance(tests)
-    if evaluation.skipped:
-        lines += ["## Left out", "", *[f"- {s}" for s in evaluation.skipped], ""]
+    left_out = [*evaluation.skipped, *figure_notes]
+    if left_out:
+        lines += ["## Left out", "", *[f"- {note}" for note in left_out], ""]
     lines += ["## Figures", ""]
     for path in figures:
         if Path(path).suffix == ".png":

@@ -20,11 +20,15 @@ import itertools
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import atomic_path, display_path
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 #: The paper's maps our embedded ones stand in for, and its headline ratios (section 5.1.2).
 PAPER_HEADLINES = {
@@ -44,10 +48,10 @@ class EvaluationError(CuriosityError):
 class Evaluation:
     """The tables of an experiment, and the runs that had to be left out (each with why)."""
 
-    mi: "object"  # pandas DataFrame
-    summary: "object"
-    tests: "object"
-    headline: "object"
+    mi: pd.DataFrame
+    summary: pd.DataFrame
+    tests: pd.DataFrame
+    headline: pd.DataFrame
     skipped: list[str]
 
 

@@ -12,6 +12,17 @@ Design, in the order a grid runs:
 - **Parallel.** Runs are joblib tasks (``loky`` processes by default). A worker loads
   the map's word store from the cache once and keeps it; each worker's numba threads
   are capped so the workers together use the cores once.
+- **Or on a Dask cluster** (``backend="dask"``): at ``scheduler``'s address, or on a
+  ``LocalCluster`` of ``jobs`` one-thread worker processes started for the grid and shut
+  down after it. Each map's store file goes to the cluster once, as the argument of a
+  task that loads it (no shared filesystem needed); runs depend on that task, so a
+  worker gets the loaded store once, from a peer, and if every copy is lost with its
+  workers the scheduler loads it again (scattered data could not be recomputed). Each
+  run is one task, all submitted at once and collected as they finish
+  (``distributed.as_completed``). A task lost with its worker is rescheduled on another
+  by the scheduler (up to ``distributed.scheduler.allowed-failures`` times); a run whose
+  workers keep dying is reported by name like a run that raised. The same
+  :func:`compute_run` computes every run on either backend, so results are identical.
 - **Written by the caller.** A task returns its :class:`Exploration`; this process
   writes the run folder atomically (:mod:`curiosity_cli.explore.runs`), so where a run
   was computed never matters and a killed grid loses only the runs in flight.
@@ -23,6 +34,7 @@ Design, in the order a grid runs:
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 import traceback
@@ -35,8 +47,14 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, to_dict, to_yaml
-from curiosity_cli.errors import ConfigError, CuriosityError
+from curiosity_cli.errors import ConfigError, CuriosityError, ParameterError
 from curiosity_cli.files import atomic_path, display_path
+
+#: Where the runs of a grid can be computed: joblib's loky processes, or a Dask cluster.
+BACKENDS = ("loky", "dask")
+
+#: Seconds a grid waits for a first worker to join a Dask scheduler that has none.
+WORKER_WAIT_SECONDS = 60
 
 #: The config sections a run's numbers depend on ...
 _RUN_SECTIONS = ("seed", "model", "words", "explore")
@@ -46,6 +64,10 @@ _SELECTION_KEYS = {("explore", "weight_functions"), ("explore", "restarts")}
 
 class GridError(CuriosityError):
     """Some runs of a grid failed; the others were written."""
+
+
+class BackendError(CuriosityError):
+    """The Dask backend cannot run: its optional dependency is missing, or its cluster is unusable."""
 
 
 @dataclass(frozen=True)
@@ -174,6 +196,8 @@ def run_grid(
     force: bool = False,
     on_prepared: Callable[[int, int], None] | None = None,
     on_run: Callable[[RunTask, int], None] | None = None,
+    backend: str = "loky",
+    scheduler: str | None = None,
 ) -> GridSummary:
     """Run every missing run of an experiment grid and write it under ``results_dir/<name>``.
 
@@ -183,26 +207,42 @@ def run_grid(
     results_dir, cache_dir : Path
         Experiment folders go under ``results_dir``; word stores are cached in ``cache_dir``.
     jobs : int, optional
-        Worker processes; default the number of cores.
+        Worker processes (of ``loky``, or of the local Dask cluster); default the number
+        of cores. Ignored with a ``scheduler``: the cluster's worker threads decide.
     force : bool
         Redo finished runs too.
     on_prepared : callable, optional
         Called as ``on_prepared(to_run, skipped)`` before the first run starts.
     on_run : callable, optional
         Called as ``on_run(task, bytes_written)`` as each run is written (bytes 0 if it failed).
+    backend : {"loky", "dask"}
+        Where runs are computed (module docstring); the results do not depend on it.
+    scheduler : str, optional
+        With ``backend="dask"``: a running scheduler's address, e.g.
+        ``tcp://10.0.0.5:8786``; without one, a local cluster is started for the grid.
 
     Raises
     ------
     ConfigError
         A saved config that disagrees, or a map too small for the grid.
+    ParameterError
+        An unknown backend, or a scheduler without ``backend="dask"``.
+    BackendError
+        ``backend="dask"`` without Dask distributed installed, a scheduler that cannot be
+        reached or gets no worker, or workers with other versions of the package, numpy
+        or numba than this process.
     GridError
         After the whole grid, if some runs raised: each named with its traceback's last line.
     """
-    from joblib import Parallel, delayed
-
     from curiosity_cli.explore.runs import is_complete, remove_partial_runs, run_folder
 
     started = time.perf_counter()
+    if backend not in BACKENDS:
+        raise ParameterError(f"backend: got {backend!r}, expected one of {', '.join(BACKENDS)}")
+    if scheduler is not None and backend != "dask":
+        raise ParameterError(f"scheduler: got {scheduler!r} with backend {backend!r}; a scheduler needs backend 'dask'")
+    if backend == "dask":
+        _import_distributed()  # a missing extra is reported before any work
     jobs = (os.cpu_count() or 1) if jobs is None else jobs
     folder = Path(results_dir) / config.name
     check_saved_config(folder, config)
@@ -215,22 +255,19 @@ def run_grid(
     todo = [t for t in tasks if force or not is_complete(run_folder(folder, t.dataset, t.weight_function, t.restart))]
     if on_prepared is not None:
         on_prepared(len(todo), len(tasks) - len(todo))
-    threads = max(1, (os.cpu_count() or 1) // max(1, jobs))
     failed, fallbacks, written = [], 0, 0
-    results = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")(
-        delayed(compute_run)(task, config, threads) for task in todo
-    )
-    for task, outcome in results:
-        size = 0
-        if isinstance(outcome, str):
-            failed.append(f"{task.dataset} / {task.weight_function} / restart {task.restart}: {outcome}")
-        else:
-            exploration, seconds = outcome
-            size = _write(folder, task, exploration, seconds, config, by_name[task.dataset])
-            fallbacks += int(exploration.fallback.sum())
-            written += size
-        if on_run is not None:
-            on_run(task, size)
+    with _computed_runs(todo, config, backend=backend, scheduler=scheduler, jobs=jobs) as results:
+        for task, outcome in results:
+            size = 0
+            if isinstance(outcome, str):
+                failed.append(f"{task.dataset} / {task.weight_function} / restart {task.restart}: {outcome}")
+            else:
+                exploration, seconds = outcome
+                size = _write(folder, task, exploration, seconds, config, by_name[task.dataset])
+                fallbacks += int(exploration.fallback.sum())
+                written += size
+            if on_run is not None:
+                on_run(task, size)
     summary = GridSummary(folder, len(todo) - len(failed), len(tasks) - len(todo), failed, fallbacks, written,
                           time.perf_counter() - started)
     if failed:
@@ -270,11 +307,12 @@ def _load_store(path: str):
     return load_store(Path(path))
 
 
-def compute_run(task: RunTask, config: ExperimentConfig, threads: int = 1):
+def compute_run(task: RunTask, config: ExperimentConfig, threads: int = 1, store=None):
     """Compute one run in a worker: ``(task, (Exploration, seconds))``, or ``(task, error text)``.
 
     An error comes back as text rather than raised so that one failing run does not
-    stop the others.
+    stop the others. ``store`` is the map's :class:`WordStore` when it was shipped to
+    the worker (Dask); without it the worker loads ``task.store_path`` once.
     """
     import numba
 
@@ -284,12 +322,163 @@ def compute_run(task: RunTask, config: ExperimentConfig, threads: int = 1):
     started = time.perf_counter()
     try:
         exploration = explore(
-            _load_store(task.store_path), task.weight_function, task.start_cell,
+            _load_store(task.store_path) if store is None else store, task.weight_function, task.start_cell,
             model=config.model, settings=config.explore, seed=task.seed,
         )
     except Exception as exc:  # noqa: BLE001 - reported with the run's name, the grid goes on
         return task, "".join(traceback.format_exception_only(exc)).strip()
     return task, (exploration, time.perf_counter() - started)
+
+
+@contextlib.contextmanager
+def _computed_runs(todo: list[RunTask], config: ExperimentConfig, *, backend: str, scheduler: str | None, jobs: int):
+    """An iterator of :func:`compute_run`'s ``(task, outcome)`` for every task, in the order they finish.
+
+    Whatever the backend, each run is ``compute_run(task, config, threads[, store])``
+    and its outcome is consumed (written) by the caller. Leaving the context early
+    stops the runs still in flight (and a local cluster).
+    """
+    if backend == "loky":
+        from joblib import Parallel, delayed
+
+        threads = max(1, (os.cpu_count() or 1) // max(1, jobs))
+        results = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")(
+            delayed(compute_run)(task, config, threads) for task in todo
+        )
+        with contextlib.closing(results):
+            yield results
+    elif not todo:  # nothing to compute: start no cluster
+        yield iter(())
+    else:
+        with _dask_client(scheduler, jobs) as (client, threads):
+            with contextlib.closing(_dask_runs(client, todo, config, threads)) as results:
+                yield results
+
+
+def _import_distributed():
+    try:
+        import distributed
+    except ImportError as exc:
+        raise BackendError(
+            f"the dask backend needs Dask distributed, which is not installed ({exc}); "
+            "install it with: pip install 'curiosity[distributed]'"
+        ) from None
+    return distributed
+
+
+@contextlib.contextmanager
+def _dask_client(scheduler: str | None, jobs: int):
+    """A client of the cluster at ``scheduler`` (or of a local cluster started here), and each run's numba threads.
+
+    On a local cluster of ``jobs`` one-thread processes, runs share the machine's cores
+    as with loky; on a cluster someone started, a run gets one numba thread per worker
+    thread (give workers one thread per core, ``dask worker``'s default).
+    """
+    import logging
+
+    distributed = _import_distributed()
+    with contextlib.ExitStack() as stack:
+        if scheduler is None:
+            cluster = stack.enter_context(distributed.LocalCluster(
+                n_workers=jobs, threads_per_worker=1, processes=True, host="127.0.0.1",
+                dashboard_address=None, silence_logs=logging.ERROR,
+                # no dashboard, and the scheduler's HTTP routes on a free port, not on 8787
+                scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+            ))
+            client = stack.enter_context(distributed.Client(cluster, set_as_default=False))
+            threads = max(1, (os.cpu_count() or 1) // max(1, jobs))
+        else:
+            try:
+                client = stack.enter_context(distributed.Client(scheduler, set_as_default=False))
+            except (OSError, ValueError) as exc:
+                raise BackendError(
+                    f"cannot reach the Dask scheduler at {scheduler} ({exc}); start one with `dask scheduler` "
+                    "and pass the address it prints"
+                ) from None
+            threads = 1
+        try:
+            client.wait_for_workers(1, timeout=WORKER_WAIT_SECONDS)
+        except TimeoutError:
+            raise BackendError(
+                f"the Dask scheduler at {scheduler} has no worker after {WORKER_WAIT_SECONDS} s; "
+                f"start some with `dask worker {scheduler}`"
+            ) from None
+        _check_worker_versions(client)
+        yield client, threads
+
+
+def _versions() -> tuple[str, str, str]:
+    """What a run's numbers depend on besides its inputs: this package's, numpy's and numba's versions."""
+    from importlib.metadata import version
+
+    from curiosity_cli import __version__
+
+    return __version__, version("numpy"), version("numba")
+
+
+def _check_worker_versions(client) -> None:
+    """Refuse workers whose runs could differ from this process's: other package, numpy or numba versions."""
+    try:
+        found = client.run(_versions)
+    except Exception as exc:  # noqa: BLE001 - e.g. the package is not installed on a worker
+        raise BackendError(
+            f"the Dask workers cannot run curiosity ({type(exc).__name__}: {exc}); "
+            "install the same version of curiosity on every worker machine"
+        ) from None
+    here = _versions()
+    for address, theirs in sorted(found.items()):
+        if tuple(theirs) != here:
+            names = ("curiosity", "numpy", "numba")
+            diff = ", ".join(f"{n} {t} (here {h})" for n, t, h in zip(names, theirs, here) if t != h)
+            raise BackendError(
+                f"the Dask worker at {address} has {diff}; its runs could differ, so install the same versions "
+                "on every worker machine"
+            )
+
+
+def _store_from_bytes(name: str, data: bytes):
+    """A word store from its file's bytes: how a Dask worker gets a map's store."""
+    import tempfile
+
+    from curiosity_cli.words.store import load_store
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / name
+        path.write_bytes(data)
+        return load_store(path)
+
+
+def _dask_runs(client, todo: list[RunTask], config: ExperimentConfig, threads: int):
+    """Yield ``(task, outcome)`` as the cluster finishes each run (module docstring)."""
+    import uuid
+
+    from distributed import KilledWorker, as_completed
+
+    token = uuid.uuid4().hex[:8]
+    shipped = {
+        path: client.submit(_store_from_bytes, Path(path).name, Path(path).read_bytes(), key=f"store-{Path(path).stem}-{token}")
+        for path in sorted({task.store_path for task in todo})
+    }
+    futures = {
+        client.submit(
+            compute_run, task, config, threads, shipped[task.store_path],
+            key=f"explore-{task.dataset}/{task.weight_function}/restart-{task.restart:03d}-{token}",
+        ): task
+        for task in todo
+    }
+    try:
+        for future in as_completed(futures, loop=client.loop):
+            task = futures[future]
+            try:
+                result = future.result()
+            except KilledWorker:
+                result = task, "KilledWorker: every worker that ran it died (out of memory?); see the workers' logs"
+            except Exception as exc:  # noqa: BLE001 - e.g. its store was lost with the workers; the grid goes on
+                result = task, f"{type(exc).__name__}: {exc}"
+            future.release()
+            yield result
+    finally:  # stopped early: the cluster need not finish the rest
+        client.cancel([future for future in futures if not future.done()])
 
 
 def _write(folder: Path, task: RunTask, exploration, seconds: float, config: ExperimentConfig, store: StoreInfo) -> int:

@@ -124,6 +124,27 @@ def in_bounds_neighbours(cell: int, grid_shape: tuple[int, int]) -> np.ndarray:
     return np.array(out, np.int64)
 
 
+def map_topic_model(store: WordStore, model: ModelConfig, seed: int, *, frozen_counts=None):
+    """An empty :class:`~curiosity_cli.topics.model.TopicModel` over a map's cell grid.
+
+    ``frozen_counts`` (V, K) fixes Φ (see the model); the vocabulary hashes of the store's
+    word types go into the model, so a saved model names what its word ids mean.
+    """
+    from curiosity_cli.topics.model import TopicModel
+    from curiosity_cli.topics.neighbours import grid_neighbours
+
+    return TopicModel(
+        model.topics,
+        store.vocabulary_size,
+        grid_neighbours(*store.grid_shape, model.spatial_neighbours),
+        alpha=model.alpha,
+        beta=model.beta,
+        seed=seed,
+        vocabulary_hashes=[t.sha256 for t in store.types],
+        frozen_counts=frozen_counts,
+    )
+
+
 def draw_move(weights: np.ndarray, rng: np.random.Generator) -> tuple[int, bool]:
     """Index drawn with probability proportional to ``weights``; ``(index, fell back to uniform)``.
 
@@ -174,8 +195,6 @@ def explore(
         An unknown weight function, a start cell off the grid, a single-cell map, or a
         weight function returning the wrong shape or negative weights.
     """
-    from curiosity_cli.topics.model import TopicModel
-    from curiosity_cli.topics.neighbours import grid_neighbours
     from curiosity_cli.topics.perplexity import topic_perplexity, word_perplexity
 
     if weight_function not in WEIGHT_FUNCTIONS:
@@ -191,15 +210,7 @@ def explore(
     grid_cols = store.grid_shape[1]
     model_seed, move_seed = np.random.SeedSequence(seed).spawn(2)
     rng = np.random.default_rng(move_seed)
-    topic_model = TopicModel(
-        model.topics,
-        store.vocabulary_size,
-        grid_neighbours(*store.grid_shape, model.spatial_neighbours),
-        alpha=model.alpha,
-        beta=model.beta,
-        seed=int(model_seed.generate_state(1, np.uint64)[0]),
-        vocabulary_hashes=[t.sha256 for t in store.types],
-    )
+    topic_model = map_topic_model(store, model, int(model_seed.generate_state(1, np.uint64)[0]))
 
     length = settings.path_length
     path = np.empty(length, np.int64)

@@ -242,7 +242,10 @@ def mi_figure(summary, against: str, datasets: list[str]):
         ax.grid(True, color="0.9", linewidth=0.8)
         ax.set_axisbelow(True)
         n = table["n"].dropna()
-        restarts = f"{int(n.min())}" if n.size and n.min() == n.max() else (f"{int(n.min())}-{int(n.max())}" if n.size else "?")
+        if n.empty:
+            restarts = "?"
+        else:
+            restarts = f"{int(n.min())}" if n.min() == n.max() else f"{int(n.min())}-{int(n.max())}"
         ax.set_title(f"{dataset}  ({restarts} restart{'' if restarts == '1' else 's'})")
         ax.set_xlabel("path length (steps)")
         ax.set_ylabel("mutual information (bits)")
@@ -302,8 +305,8 @@ def path_figure(m, path, example: Example, z_p: np.ndarray, z_b: np.ndarray | No
     line = LineCollection(segments, cmap=blue_red, norm=norm, linewidths=1.8, capstyle="round")
     line.set_array(np.arange(len(segments)))
     ax_path.add_collection(line)
-    ax_path.plot(pixel_cols[:1], pixel_rows[:1], marker="o", markersize=8, color=blue_red(0.0), markeredgecolor="white", linestyle="none")
-    ax_path.plot(pixel_cols[-1:], pixel_rows[-1:], marker="s", markersize=8, color=blue_red(1.0), markeredgecolor="white", linestyle="none")
+    for at, marker, colour in ((0, "o", blue_red(0.0)), (-1, "s", blue_red(1.0))):
+        ax_path.plot(pixel_cols[at], pixel_rows[at], marker=marker, markersize=8, color=colour, markeredgecolor="white")
     ax_path.set_title(f"{m.config.name}: {_label(example.weight_function)} path, restart {example.restart}")
     bar = fig.colorbar(line, ax=ax_path, location="bottom", shrink=0.8, pad=0.02, aspect=35)
     bar.set_label("step along the path (circle: start, square: end)")
@@ -313,7 +316,8 @@ def path_figure(m, path, example: Example, z_p: np.ndarray, z_b: np.ndarray | No
     n_topics = np.unique(z_p).size
     ax_labels.set_title(f"$Z_p$: labels from the model of its first {example.length} steps ({n_topics} topics)")
     matched = "colours matched to $Z_b$'s" if z_b is not None else "colours by topic size"
-    fig.supxlabel(_wrap(f"{m.config.cell_width} px cells; path drawn through cell centres. Topic {matched}, as in labelings-{m.config.name}.", 10.5))
+    note = f"{m.config.cell_width} px cells; path drawn through cell centres. Topic {matched}, as in labelings-{m.config.name}."
+    fig.supxlabel(_wrap(note, fig.get_figwidth()))
     return fig
 
 
@@ -339,10 +343,13 @@ def labelings_figure(m, z_b: np.ndarray | None, z_ps: list[tuple[Example, np.nda
     height, width_px = m.image.shape[:2]
     panels = [("input image", _shrink_image(m.image), None)]
     if m.labels is not None:
-        legend = [Patch(facecolor=np.array(c.colour) / 255, edgecolor="0.5", linewidth=0.5, label=c.name) for c in m.legend]
+        legend = [
+            Patch(facecolor=np.array(c.colour) / 255, edgecolor="0.5", linewidth=0.5, label=c.name) for c in m.legend
+        ]
         panels.append(("ground truth $Z_h$", colour_labels(_shrink_labels(m.labels), m.legend), legend))
     if z_b is not None:
-        panels.append((f"batch labels $Z_b$ ({np.unique(z_b).size} topics)", palette.paint_topics(_shrink_labels(z_b), palette.rank_topics(z_b)), None))
+        painted = palette.paint_topics(_shrink_labels(z_b), palette.rank_topics(z_b))
+        panels.append((f"batch labels $Z_b$ ({np.unique(z_b).size} topics)", painted, None))
     for example, z_p in z_ps:
         if z_b is not None:
             slots, _, agreement = palette.match_topics(z_p, z_b)
@@ -376,7 +383,10 @@ def labelings_figure(m, z_b: np.ndarray | None, z_ps: list[tuple[Example, np.nda
     path_from = ""
     if z_ps:
         e = z_ps[0][0]
-        path_from = f"$Z_p$: the map labelled with the model learned on the {_label(e.weight_function)} path of restart {e.restart}. "
+        path_from = (
+            f"$Z_p$: the map labelled with the model learned on the {_label(e.weight_function)} path "
+            f"of restart {e.restart}. "
+        )
     fig.suptitle(f"{m.config.name} ({height} x {width_px} px)")
     note = path_from + (_MATCH_NOTE if z_b is not None and z_ps else "Topic colours by topic size, largest first.")
     fig.supxlabel(_wrap(note, width))
@@ -384,7 +394,10 @@ def labelings_figure(m, z_b: np.ndarray | None, z_ps: list[tuple[Example, np.nda
 
 
 def convergence_figure(traces: dict[str, np.ndarray]):
-    """The batch model's mean per-word log-likelihood after each Gibbs sweep, one panel per map.
+    """The batch model's mean per-word log-likelihood after each Gibbs sweep, one column per map.
+
+    The top row shows every sweep; the bottom row zooms on the second half, where a model
+    that has converged is flat up to sampling noise.
 
     Parameters
     ----------
@@ -399,21 +412,26 @@ def convergence_figure(traces: dict[str, np.ndarray]):
     from matplotlib.ticker import MaxNLocator
 
     n = len(traces)
-    fig = Figure(figsize=(0.5 + 3.7 * n, 3.5), layout="constrained")
-    axes = fig.subplots(1, n, squeeze=False)[0]
-    for i, (ax, (name, trace)) in enumerate(zip(axes, traces.items())):
+    fig = Figure(figsize=(max(5.2, 0.5 + 3.7 * n), 5.6), layout="constrained")
+    axes = fig.subplots(2, n, squeeze=False)
+    for i, (name, trace) in enumerate(traces.items()):
         sweeps = np.arange(1, trace.size + 1)
-        ax.plot(sweeps, trace, color="tab:blue", linewidth=1.5, marker="." if trace.size <= 60 else None)
-        ax.axhline(trace[-1], color="0.5", linewidth=0.8, linestyle=":")
-        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-        ax.grid(True, color="0.9", linewidth=0.8)
-        ax.set_axisbelow(True)
+        half = trace.size // 2
         tail = trace[-max(1, trace.size // 10):]
-        ax.set_title(f"{name}\nlast {tail.size} sweeps within {np.ptp(tail):.2g} nats")
-        ax.set_xlabel("Gibbs sweep")
-        if i == 0:
-            ax.set_ylabel("mean log-likelihood per word (nats)")
-    fig.suptitle("Batch reference $Z_b$: convergence of the model learned on the whole map")
+        for ax, start in ((axes[0, i], 0), (axes[1, i], half)):
+            ax.plot(sweeps[start:], trace[start:], color="tab:blue", linewidth=1.5,
+                    marker="." if trace.size - start <= 60 else None)
+            ax.axhline(trace[-1], color="0.5", linewidth=0.8, linestyle=":")
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+            ax.grid(True, color="0.9", linewidth=0.8)
+            ax.set_axisbelow(True)
+        axes[0, i].set_title(f"{name}: all {trace.size} sweeps")
+        axes[1, i].set_title(f"second half, zoomed\nlast {tail.size} sweeps within {np.ptp(tail):.2g} nats")
+        axes[1, i].set_xlabel("Gibbs sweep")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("log-likelihood per word (nats)")
+    title = "Batch reference $Z_b$: mean log-likelihood per word of the model learned on the whole map"
+    fig.suptitle(_wrap(title, fig.get_figwidth(), _RC["figure.titlesize"]))
     return fig
 
 

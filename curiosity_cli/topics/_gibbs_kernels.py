@@ -12,7 +12,7 @@ import numpy as np
 from curiosity_cli._numba import njit
 from curiosity_cli.topics._intrinsics import fetch_add
 from curiosity_cli.topics._rng import below, next_state, stream_start, unit64
-from curiosity_cli.topics._sampler import gibbs_cell, refresh_inverse, row_dot
+from curiosity_cli.topics._sampler import gibbs_cell, refresh_inverse, row_dot, weights_scratch
 
 # threads refining a batch phase take cells in chunks of this many
 _CHUNK = 4
@@ -52,7 +52,7 @@ def refine_cells_kernel(
     update_phi,
 ):
     """Refine ``cells`` one after the other; the ``j``-th uses stream ``(counter + j, cell)``."""
-    p = np.zeros(nk.shape[0], np.float32)
+    p = weights_scratch(inv)
     for j in range(cells.shape[0]):
         cell = cells[j]
         state = stream_start(key, counter + np.uint64(j), cell)
@@ -64,7 +64,7 @@ def refine_cells_kernel(
 
 @njit
 def refine_phase_share(
-    taken, cells, previous, before, nwk, nk, inv, work_nk, work_inv, p,
+    taken, cells, previous, before, nwk, nk, inv, work_nk, work_inv,
     cell_first, cell_count, words, topics, ncz, ng, table, n_topics, alpha, beta, vbeta, key, counter, update_phi,
 ):
     """Refine cells of one batch phase until none is left; several threads run this at once.
@@ -95,11 +95,12 @@ def refine_phase_share(
         The phase-start topics of the words refined (of ``previous``: of the phase before).
     nwk, nk, inv : (V, Kp) int32, (Kp,) int32, (Kp,) float32 ndarrays
         The caller's copy of the counts.
-    work_nk, work_inv, p : (Kp,) ndarrays
+    work_nk, work_inv : (Kp,) int32, float32 ndarrays
         The caller's scratch, each on cache lines of its own.
     """
     if previous.shape[0]:
         merge_phase(previous, cell_first, cell_count, words, before, topics, nwk, nk, inv, n_topics, vbeta)
+    p = weights_scratch(work_inv)
     n = cells.shape[0]
     while True:
         start = fetch_add(taken, 0, _CHUNK)
@@ -171,7 +172,7 @@ def refine_realtime_kernel(
     """
     n_cells = ncz.shape[0]
     n_times = group_start.shape[0] - 1
-    p = np.zeros(nk.shape[0], np.float32)
+    p = weights_scratch(inv)
     picker = stream_start(key, counter, n_cells)
     done = 0
     idle = 0

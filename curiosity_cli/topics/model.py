@@ -405,10 +405,7 @@ class TopicModel:
         copies = [own] + [tuple(_aligned_copy(a) for a in own) if update else own for _ in range(threads - 1)]
         # each thread's scratch, and the shared chunk counter, on cache lines of their own:
         # two threads writing one line (false sharing) halved the speed
-        scratch = [
-            (*copy, _aligned_zeros(kp, np.int32), _aligned_zeros(kp, np.float32), _aligned_zeros(kp, np.float32))
-            for copy in copies
-        ]
+        scratch = [(*copy, _aligned_zeros(kp, np.int32), _aligned_zeros(kp, np.float32)) for copy in copies]
         taken = _aligned_zeros(1, np.int64)
         before = np.empty_like(self._topics)
         (cell_first, cell_count, words, topics, _, _, _, ncz, ng, table, alpha, beta, vbeta,

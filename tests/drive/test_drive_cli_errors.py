@@ -35,6 +35,9 @@ def test_options_that_do_not_go_together_are_usage_errors(tmp_path):
     assert "give the start to `curiosity simrobot`" in usage_error(
         runner.invoke(app, ["drive", "--serial", "/dev/null", "--camera", "sim", "--sim-map", "reef-mosaic", "--start", "1,1", *out])
     )
+    assert "Invalid value for --heading-deg: only a dry run simulates the robot here" in usage_error(
+        runner.invoke(app, ["drive", "--dry-run", "--camera", "0", "--heading-deg", "90", *out])
+    )
     result = runner.invoke(app, ["drive", "--dry-run", "--camera", "sim", "--sim-map", "reef-mosaic", "--start", "9999,1", *out])
     assert "expected a point inside the map (2500 x 2500 px)" in usage_error(result)
     assert not any(tmp_path.iterdir())  # refused before anything was written

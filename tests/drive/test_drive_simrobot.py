@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import threading
@@ -78,8 +79,6 @@ def sim():
     if made:
         made["thread"].join()
         made["host"].port.close()
-    import os
-
     os.close(master)
     os.close(slave)
 
