@@ -51,8 +51,9 @@ def _significance(tests) -> list[str]:
         cells = []
         for _, r in rows.sort_values("path_length").iterrows():
             sign = "+" if (r["median_difference"] > 0) == (a == HEADLINE_WEIGHT) else "−"
-            text = f"{sign} p={r['p_value']:.3f}" if np.isfinite(r["p_value"]) else "n/a"
-            cells.append(f"**{text}**" if r["p_value"] < _ALPHA else text)
+            p = r["p_value"]
+            text = "n/a" if not np.isfinite(p) else f"{sign} p<0.001" if p < 0.001 else f"{sign} p={p:.3f}"
+            cells.append(f"**{text}**" if p < _ALPHA else text)
         lines.append(f"| {dataset} | {other} | " + " | ".join(cells) + " |")
     short = block[block["path_length"] <= _SHORT]
     significant = short[short["p_value"] < _ALPHA]
