@@ -329,6 +329,10 @@ def print_corpus_table(name: str, results: dict[str, list[dict]]) -> dict[str, f
         f"(a) {median_of(results['a'], 'model_ll'):.4f}, (b) {median_of(results['b'], 'model_ll'):.4f}",
     ]
     print("  " + "; ".join(notes))
+    # every run's rate: on a shared machine one disturbed run shows here, not in the medians
+    print("  Mw/s of each run: " + "; ".join(
+        f"({label}) " + " ".join(f"{run['rate'] / 1e6:.1f}" for run in runs) for label, runs in results.items()
+    ))
     for label in ("a2", "b2"):
         if label in results:
             ratios[f"speed-up {label[0]}"] = median_of(results[label], "rate") / median_of(results[label[0]], "rate")
