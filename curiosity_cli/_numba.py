@@ -2,11 +2,47 @@
 
 Importing this module imports numba, so only kernel modules import it, and they are
 imported inside the public functions that need them (``curiosity --help`` stays instant).
+
+Compiled kernels are cached on disk (the CLI runs many short processes). Numba checks a
+cached kernel against its own source file only, not against the kernels it calls in other
+files, so after an edit or an update it could run stale machine code. The cache therefore
+lives in a folder named by a hash of every kernel source (the package's private
+``_*.py`` modules): any change to them starts a fresh cache. ``NUMBA_CACHE_DIR`` set by
+the user wins.
 """
 
 from __future__ import annotations
 
-import numba
+import hashlib
+import os
+from pathlib import Path
+
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def kernel_sources_hash(package: Path = _PACKAGE) -> str:
+    """A hash of every private module (``_*.py``, not dunder files) below ``package``."""
+    digest = hashlib.sha256()
+    for path in sorted(package.rglob("_*.py")):
+        if not path.name.startswith("__"):
+            digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def cache_dir() -> Path:
+    """Where this version of the kernels is cached: ``$XDG_CACHE_HOME/curiosity/numba-<hash>``."""
+    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "curiosity" / f"numba-{kernel_sources_hash()}"
+
+
+if "NUMBA_CACHE_DIR" not in os.environ:
+    os.environ["NUMBA_CACHE_DIR"] = str(cache_dir())
+
+import numba  # noqa: E402  (after the cache folder is chosen)
+import numba.core.config  # noqa: E402
+
+# numba reads its settings when first imported, which may have happened before this module
+numba.core.config.reload_config()
 
 # cache: compile once per machine, not once per process (the CLI runs many short processes).
 # nogil: kernels may run in threads. error_model="numpy": no ZeroDivisionError checks in loops.

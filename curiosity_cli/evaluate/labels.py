@@ -294,9 +294,6 @@ def label_experiment(
 
 def _label_task(run_path: Path, inputs: MapInputs, config: ExperimentConfig, threads: int):
     """``(run_path, (arrays, examples, meta))``, or ``(run_path, error text)`` so one bad run does not stop the rest."""
-    import numba
-
-    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     try:
         return run_path, label_run(run_path, inputs, config, threads)
     except CuriosityError as exc:
