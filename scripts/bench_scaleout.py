@@ -20,7 +20,7 @@ same state (warm against warm, cold against cold). The overhead per task is meas
 
     python scripts/bench_scaleout.py [--restarts 4] [--steps 80] [--repeats 3] [--workers 2]
 
-Prints and never asserts: timings depend on the machine. Needs curiosity[distributed].
+Prints and never asserts: timings depend on the machine. Needs the distributed extra (pip install -e '.[distributed]').
 """
 
 from __future__ import annotations

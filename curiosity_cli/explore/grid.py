@@ -361,7 +361,7 @@ def _import_distributed():
     except ImportError as exc:
         raise BackendError(
             f"the dask backend needs Dask distributed, which is not installed ({exc}); "
-            "install it with: pip install 'curiosity[distributed]'"
+            "install it from the checkout with: pip install -e '.[distributed]'"
         ) from None
     return distributed
 

@@ -163,7 +163,7 @@ def test_the_missing_extra_is_a_one_line_error(own_map, tmp_path, monkeypatch):
                                       "--results-dir", str(tmp_path / "results"), "--cache-dir", str(tmp_path / "cache")])
     assert result.exit_code == 1, result.output
     assert result.stderr.startswith("Error: the dask backend needs Dask distributed") and result.stderr.count("\n") == 1
-    assert "pip install 'curiosity[distributed]'" in result.stderr and "Traceback" not in result.output
+    assert "pip install -e '.[distributed]'" in result.stderr and "Traceback" not in result.output
     assert not (tmp_path / "results").exists(), "nothing is done before the error"
 
 
