@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import enum
-import sys
 from pathlib import Path
 
 import typer
 
 from curiosity_cli.cli import app
+from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.config import CONFIG_DIR
 
 
@@ -70,19 +69,15 @@ def explore(
             resolved, explore=dataclasses.replace(resolved.explore, path_length=steps, checkpoints=kept)
         )
 
-    with contextlib.ExitStack() as stack:
-        bars = []
+    with StagedProgress() as progress:
 
         def prepared(to_run: int, skipped: int) -> None:
             typer.echo(f"{resolved.name}: {to_run} runs to do, {skipped} already finished", err=True)
-            bars.append(stack.enter_context(typer.progressbar(length=to_run, label="exploring", file=sys.stderr)))
-
-        def finished(task, size: int) -> None:
-            bars[0].update(1)
+            progress.stage("exploring", to_run)
 
         summary = run_grid(
             resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-            on_prepared=prepared, on_run=finished, backend=backend.value, scheduler=scheduler,
+            on_prepared=prepared, on_run=progress.advance, backend=backend.value, scheduler=scheduler,
         )
     typer.echo(
         f"wrote {summary.ran} runs ({summary.bytes_written / 1e6:.1f} MB) to {display_path(summary.folder)} "

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import contextlib
-import sys
 from pathlib import Path
 
 import typer
 
 from curiosity_cli.cli import app
+from curiosity_cli.cli.progress import StagedProgress
 
 EXPERIMENT = typer.Argument(Path("results/quick"), help="Experiment folder written by `curiosity explore`.")
 
@@ -37,18 +36,10 @@ def label(
     from curiosity_cli.evaluate.labels import label_experiment
 
     config = experiment_config(folder, overrides)
-    with contextlib.ExitStack() as stack:
-        bars = []
-
-        def stage(description: str, units: int) -> None:
-            if bars:
-                stack.close()
-                bars.clear()
-            bars.append(stack.enter_context(typer.progressbar(length=units, label=description, file=sys.stderr)))
-
+    with StagedProgress() as progress:
         done = label_experiment(
             config, results_dir=folder.parent, cache_dir=cache_dir, jobs=jobs, force=force,
-            on_stage=stage, on_done=lambda: bars[0].update(1),
+            on_stage=progress.stage, on_done=progress.advance,
         )
     typer.echo(
         f"labelled {done['labelled']} runs in {done['seconds']:.0f} s ({done['skipped']} were up to date; "

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import contextlib
-import sys
 from pathlib import Path
 
 import typer
 
 from curiosity_cli.cli import app
+from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.cli.explore import Backend
 from curiosity_cli.config import CONFIG_DIR
 
@@ -38,19 +37,9 @@ def reproduce(
     resolved = load_config(config, overrides)
     if quick:
         resolved = quick_config(resolved)
-    with contextlib.ExitStack() as stack:
-        bars = []
-
-        def stage(description: str, units: int) -> None:
-            stack.close()
-            bars.clear()
-            if units:
-                bars.append(stack.enter_context(typer.progressbar(length=units, label=description, file=sys.stderr)))
-            else:
-                typer.echo(description, err=True)
-
+    with StagedProgress() as progress:
         report = run_pipeline(
             resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-            backend=backend.value, scheduler=scheduler, on_stage=stage, on_done=lambda: bars and bars[0].update(1),
+            backend=backend.value, scheduler=scheduler, on_stage=progress.stage, on_done=progress.advance,
         )
     typer.echo(f"wrote {display_path(report)}")

@@ -22,17 +22,20 @@ from __future__ import annotations
 
 import json
 import time
-import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, to_dict
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import atomic_path, display_path
+
+if TYPE_CHECKING:
+    from curiosity_cli.explore.grid import StoreInfo
 
 LABEL_FORMAT = 1
 #: Path lengths whose Z_p maps are kept for restart 0 (besides the last checkpoint).
@@ -79,19 +82,22 @@ def read_meta(npz) -> dict:
 
 
 def ensure_batch_reference(
-    folder: Path, config: ExperimentConfig, entry: str, *, cache_dir: Path, threads: int, force: bool = False,
+    folder: Path, config: ExperimentConfig, entry: str, info: StoreInfo, *, threads: int, force: bool = False,
     on_sweep: Callable[[int], None] | None = None,
 ) -> tuple[Path, bool]:
-    """Compute (or reuse) a map's batch reference Z_b; returns ``(its file, whether it was reused)``."""
+    """Compute (or reuse) a map's batch reference Z_b; returns ``(its file, whether it was reused)``.
+
+    ``entry`` is the config's datasets entry and ``info`` its word store (from
+    :func:`~curiosity_cli.explore.grid.prepare_stores`); the map and its store are only
+    loaded when the reference has to be computed.
+    """
     from curiosity_cli.data import load_map
     from curiosity_cli.evaluate.labeling import batch_labels, pixel_labels
-    from curiosity_cli.words.extract import extract_words
+    from curiosity_cli.explore.grid import name_key
+    from curiosity_cli.words.store import load_store
 
-    map_data = load_map(entry)
-    extraction = extract_words(map_data, config.words, cache_dir=cache_dir)
-    store = extraction.store
-    meta = _batch_meta(config, extraction.path.name, [t.sha256 for t in store.types])
-    path = batch_path(folder, map_data.config.name)
+    meta = _batch_meta(config, info.path.name, info.vocabulary_hashes)
+    path = batch_path(folder, info.name)
     if path.is_file() and not force:
         try:
             with np.load(path) as npz:
@@ -101,13 +107,14 @@ def ensure_batch_reference(
                     return path, True
         except (OSError, ValueError, KeyError):
             pass  # unreadable: compute it again
-    seed = int(np.random.SeedSequence((config.seed, zlib.crc32(map_data.config.name.encode()), _BATCH_TAG)).generate_state(1, np.uint64)[0])
+    store = load_store(info.path)
+    seed = int(np.random.SeedSequence((config.seed, name_key(info.name), _BATCH_TAG)).generate_state(1, np.uint64)[0])
     started = time.perf_counter()
     word_labels, trace = batch_labels(
         store, config.model, sweeps=config.label.batch_sweeps, seed=seed, threads=threads, on_sweep=on_sweep
     )
     meta["seconds"] = round(time.perf_counter() - started, 2)
-    labels = pixel_labels(store, word_labels, map_data.image.shape[:2])
+    labels = pixel_labels(store, word_labels, load_map(entry).image.shape[:2])
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as handle:
@@ -240,7 +247,7 @@ def label_experiment(
 
     from joblib import Parallel, delayed
 
-    from curiosity_cli.explore.grid import prepare_stores
+    from curiosity_cli.explore.grid import prepare_stores, threads_per_job
     from curiosity_cli.explore.runs import RunError, is_complete, read_run
 
     started = time.perf_counter()
@@ -258,7 +265,7 @@ def label_experiment(
         if on_stage is not None:
             on_stage(f"batch reference {info.name}", config.label.batch_sweeps)
         path, was_reused = ensure_batch_reference(
-            folder, config, entry, cache_dir=cache_dir, threads=jobs, force=force, on_sweep=lambda _: on_done and on_done()
+            folder, config, entry, info, threads=jobs, force=force, on_sweep=lambda _: on_done and on_done()
         )
         reused += was_reused
         inputs[info.name] = MapInputs(info.name, entry, str(info.path), str(path))
@@ -274,7 +281,7 @@ def label_experiment(
             todo.append(run_path)
     if on_stage is not None:
         on_stage("labelling runs", len(todo))
-    threads = max(1, (os.cpu_count() or 1) // max(1, jobs))
+    threads = threads_per_job(jobs)
     failed = []
     results = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")(
         delayed(_label_task)(p, inputs[p.parent.parent.name], config, threads) for p in todo

@@ -66,7 +66,7 @@ def mi_rows(folder: Path) -> tuple[list[dict], list[str]]:
     """
     from curiosity_cli.evaluate.information import mutual_information, normalised_mutual_information
     from curiosity_cli.evaluate.labels import batch_path, read_meta
-    from curiosity_cli.explore.runs import RunError, read_run
+    from curiosity_cli.explore.runs import RunError, read_run, run_folder
 
     folder = Path(folder)
     files = sorted((folder / "labels").glob("*/*/restart-*.npz"))
@@ -84,16 +84,16 @@ def mi_rows(folder: Path) -> tuple[list[dict], list[str]]:
         except (OSError, ValueError, KeyError, EOFError) as exc:
             skipped.append(f"{display_path(path)}: corrupt ({type(exc).__name__}); run `curiosity label --force`")
             continue
-        run_folder = folder / "runs" / meta["dataset"] / meta["weight_function"] / f"restart-{meta['restart']:03d}"
+        run_path = run_folder(folder, meta["dataset"], meta["weight_function"], meta["restart"])
         try:
-            run = read_run(run_folder)
+            run = read_run(run_path)
         except RunError as exc:
             skipped.append(str(exc))
             continue
         if (run.meta["store"], run.meta["vocabulary_hashes"]) != (meta["store"], meta["vocabulary_hashes"]):
             raise EvaluationError(
                 f"{display_path(path)}: labels made from word store {meta['store']}, but the run "
-                f"{display_path(run_folder)} from {run.meta['store']}; run `curiosity label --force`"
+                f"{display_path(run_path)} from {run.meta['store']}; run `curiosity label --force`"
             )
         if meta["dataset"] not in batch_stores:
             with np.load(batch_path(folder, meta["dataset"])) as npz:

@@ -106,7 +106,13 @@ class GridSummary:
     seconds: float
 
 
-def _key(name: str) -> int:
+def threads_per_job(jobs: int) -> int:
+    """Threads each of ``jobs`` parallel jobs may use so that together they use the cores once."""
+    return max(1, (os.cpu_count() or 1) // max(1, jobs))
+
+
+def name_key(name: str) -> int:
+    """A map's or weight function's name as seed entropy (CRC-32, the same on every machine)."""
     return zlib.crc32(name.encode())
 
 
@@ -120,7 +126,7 @@ def start_cells(seed: int, dataset: str, n_cells: int, restarts: int) -> np.ndar
     """
     if restarts > n_cells:
         raise ConfigError(f"explore.restarts: got {restarts}, but {dataset} has only {n_cells} cells to start from")
-    rng = np.random.default_rng(np.random.SeedSequence((seed, _key(dataset))))
+    rng = np.random.default_rng(np.random.SeedSequence((seed, name_key(dataset))))
     return rng.permutation(n_cells)[:restarts].astype(np.int64)
 
 
@@ -151,7 +157,7 @@ def plan_runs(config: ExperimentConfig, stores: dict[str, StoreInfo]) -> list[Ru
         starts = start_cells(config.seed, dataset, n_cells, config.explore.restarts)
         for restart, start in enumerate(starts):
             for weight_function in config.explore.weight_functions:
-                seed = (config.seed, _key(dataset), _key(weight_function), restart)
+                seed = (config.seed, name_key(dataset), name_key(weight_function), restart)
                 tasks.append(RunTask(dataset, weight_function, restart, int(start), seed, str(stores[entry].path)))
     return tasks
 
@@ -341,7 +347,7 @@ def _computed_runs(todo: list[RunTask], config: ExperimentConfig, *, backend: st
     if backend == "loky":
         from joblib import Parallel, delayed
 
-        threads = max(1, (os.cpu_count() or 1) // max(1, jobs))
+        threads = threads_per_job(jobs)
         results = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")(
             delayed(compute_run)(task, config, threads) for task in todo
         )
@@ -386,7 +392,7 @@ def _dask_client(scheduler: str | None, jobs: int):
                 scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
             ))
             client = stack.enter_context(distributed.Client(cluster, set_as_default=False))
-            threads = max(1, (os.cpu_count() or 1) // max(1, jobs))
+            threads = threads_per_job(jobs)
         else:
             try:
                 client = stack.enter_context(distributed.Client(scheduler, set_as_default=False))
