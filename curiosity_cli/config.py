@@ -43,9 +43,15 @@ def _spec(
     max_exclusive: bool = False,
     choices: tuple | None = None,
     must_exist: bool = False,
+    default: Any = dataclasses.MISSING,
 ):
-    """A dataclass field with the checks the validator applies to it (no default)."""
+    """A dataclass field with the checks the validator applies to it.
+
+    Only dataset YAMLs, which a user writes per map, have optional keys (``default``);
+    experiment configs name every key, their values coming from ``configs/paper.yaml``.
+    """
     return field(
+        default=default,
         metadata=dict(
             min=min,
             max=max,
@@ -76,9 +82,28 @@ class WordsConfig:
     orb_vocabulary: int = _spec(min=2, max=30000)
     texton_vocabulary: int = _spec(min=2, max=30000)
     orb_tile: int = _spec(min=1)
-    orb_per_tile: int = _spec(min=1)
+    orb_per_tile: int | None = _spec(min=1)
     orb_max_features: int | None = _spec(min=1)
+    orb_fast_threshold: int = _spec(min=1, max=255)
+    orb_fill_threshold: int | None = _spec(min=1, max=255)
     colour_words: bool = _spec()
+
+
+def _check_words(words: WordsConfig, raw: _Raw) -> None:
+    """ORB keys that tie together: a top-up fills capped tiles, below the FAST threshold."""
+    fill = words.orb_fill_threshold
+    if fill is None:
+        return
+    if words.orb_per_tile is None:
+        raise ConfigError(
+            f"{_where(raw, ('words', 'orb_fill_threshold'))}: got {fill}, expected null when "
+            "words.orb_per_tile is null (the top-up only fills tiles capped by orb_per_tile)"
+        )
+    if fill > words.orb_fast_threshold:
+        raise ConfigError(
+            f"{_where(raw, ('words', 'orb_fill_threshold'))}: got {fill}, expected an integer "
+            f"between 1 and words.orb_fast_threshold ({words.orb_fast_threshold})"
+        )
 
 
 @dataclass(frozen=True)
@@ -114,6 +139,7 @@ class DriveConfig:
     grid_cols: int = _spec(min=1)
     texton_stride: int = _spec(min=1)
     orb_levels: int = _spec(min=1, max=16)
+    orb_per_tile: int = _spec(min=1)
     orb_fill_threshold: int | None = _spec(min=1, max=19)
     samples_per_frame: int = _spec(min=0)
     window_frames: int = _spec(min=2)
@@ -158,18 +184,27 @@ class ExperimentConfig:
 
 @dataclass(frozen=True)
 class DatasetConfig:
-    """A map: an image, optional ground-truth labels with their legend, and its grid."""
+    """A map: an image, optional ground-truth labels with their legend, and its grid.
+
+    ``image`` is required unless ``fetch`` names a map made on first use from a pinned
+    source archive (:mod:`curiosity_cli.fetched`); then image, labels and legend are the
+    files it makes. Every key with a default may be left out of the YAML.
+    """
 
     name: str = _spec()
-    description: str = _spec()
-    image: Path = _spec(must_exist=True)
-    labels: Path | None = _spec(must_exist=True)
-    legend: Path | None = _spec(must_exist=True)
     cell_width: int = _spec(min=1)
     word_stride: int = _spec(min=1)
-    size: tuple[int, ...] | None = _spec(min=1)
-    source: str = _spec()
-    licence: str = _spec()
+    image: Path | None = _spec(must_exist=True, default=None)
+    labels: Path | None = _spec(must_exist=True, default=None)
+    legend: Path | None = _spec(must_exist=True, default=None)
+    fetch: str | None = _spec(default=None)
+    bands: tuple[int, ...] | None = _spec(min=0, default=None)
+    stretch: tuple[float, ...] = _spec(min=0, max=100, default=(2.0, 98.0))
+    size: tuple[int, ...] | None = _spec(min=1, default=None)
+    description: str = _spec(default="")
+    source: str = _spec(default="")
+    licence: str = _spec(default="")
+    stands_in_for: str | None = _spec(default=None)
 
 
 # --------------------------------------------------------------------------- loading
@@ -285,28 +320,56 @@ def load_words_config(path: str | Path, overrides: typing.Iterable[str] = ()) ->
         if not _parse_override(text)[0][0] == "words":
             raise ConfigError(f"--set {text!r}: expected a words.* key; this command reads only words")
     _apply_overrides(raw, overrides)
-    return _build(WordsConfig, raw.data.get("words"), ("words",), raw)
+    words = _build(WordsConfig, raw.data.get("words"), ("words",), raw)
+    _check_words(words, raw)
+    return words
 
 
 def load_dataset_config(path: str | Path) -> DatasetConfig:
     """Load a dataset YAML; relative paths in it are relative to the YAML file.
+
+    A fetched map's ``image``, ``labels`` and ``legend`` become the files it is made into
+    (:func:`curiosity_cli.fetched.fetched_files`); they need not exist yet.
 
     Raises
     ------
     ConfigError
         The file, key, value and expectation, in one line.
     """
+    from curiosity_cli.fetched import FETCHED_MAPS, fetched_files
+    from curiosity_cli.paper import PAPER_MAPS
+
     path = Path(path)
+    where = display_path(path)
     raw = _Raw(str(path.resolve()))
     raw.merge(read_yaml(path, "dataset file"), str(path.resolve()))
     config = _build(DatasetConfig, raw.data, (), raw)
+    if config.fetch is not None:
+        if config.fetch not in FETCHED_MAPS:
+            raise ConfigError(
+                f"{where}: fetch: got {config.fetch!r}, expected one of {', '.join(sorted(FETCHED_MAPS))}"
+            )
+        given = [key for key in ("image", "labels", "legend") if key in raw.data]
+        if given:
+            raise ConfigError(f"{where}: {given[0]}: a fetched map's files are made on first use; leave {given[0]} out")
+        config = dataclasses.replace(config, **fetched_files(config.fetch))
+    elif config.image is None:
+        raise ConfigError(f"{where}: image: missing key; expected the path of the map's image")
     if config.labels is not None and config.legend is None:
-        raise ConfigError(
-            f"{display_path(path)}: legend: missing; a dataset with labels needs a legend YAML"
-        )
+        raise ConfigError(f"{where}: legend: missing; a dataset with labels needs a legend YAML")
     if config.size is not None and len(config.size) != 2:
+        raise ConfigError(f"{where}: size: got {list(config.size)}, expected [rows, cols]")
+    if config.bands is not None and len(config.bands) not in (1, 3):
         raise ConfigError(
-            f"{display_path(path)}: size: got {list(config.size)}, expected [rows, cols]"
+            f"{where}: bands: got {list(config.bands)}, expected [r, g, b] (0-based band indices) or [k] for grey"
+        )
+    if len(config.stretch) != 2 or config.stretch[0] >= config.stretch[1]:
+        raise ConfigError(
+            f"{where}: stretch: got {list(config.stretch)}, expected [low, high] percentiles with 0 <= low < high <= 100"
+        )
+    if config.stands_in_for is not None and config.stands_in_for not in PAPER_MAPS:
+        raise ConfigError(
+            f"{where}: stands_in_for: got {config.stands_in_for!r}, expected one of {', '.join(PAPER_MAPS)} or null"
         )
     return config
 
@@ -407,6 +470,9 @@ def _build(cls, data: Any, keys: tuple, raw: _Raw):
     values = {}
     for f in dataclasses.fields(cls):
         if f.name not in data:
+            if f.default is not dataclasses.MISSING:
+                values[f.name] = f.default
+                continue
             raise ConfigError(f"{_where(raw, keys + (f.name,))}: missing key")
         values[f.name] = _convert(hints[f.name], f.metadata, data[f.name], keys + (f.name,), raw)
     return cls(**values)
@@ -482,6 +548,7 @@ def _resolve_path(value: str, keys: tuple, raw: _Raw) -> Path:
 
 def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:
     """Rules that tie keys together; dataset paths become absolute so a saved config travels."""
+    _check_words(config.words, raw)
     if not _NAME_PATTERN.match(config.name):
         raise ConfigError(
             f"{_where(raw, ('name',))}: got {config.name!r}, expected letters, digits, '-', '_' or '.'"

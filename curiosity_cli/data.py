@@ -9,6 +9,7 @@ is wrong in one line naming the file.
 from __future__ import annotations
 
 import re
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,6 +18,7 @@ import numpy as np
 from curiosity_cli.config import DatasetConfig, dataset_names, dataset_path, load_dataset_config
 from curiosity_cli.errors import ConfigError, DatasetError
 from curiosity_cli.files import display_path, read_yaml
+from curiosity_cli.images import Rendering
 
 _COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
 
@@ -44,12 +46,15 @@ class MapData:
         Class ids, each one of ``legend``'s.
     legend : tuple of MapClass
         Empty when the dataset has no labels.
+    rendering : Rendering
+        How the image file's bands and values became ``image``.
     """
 
     config: DatasetConfig
     image: np.ndarray
     labels: np.ndarray | None
     legend: tuple[MapClass, ...]
+    rendering: Rendering
 
     @property
     def grid_shape(self) -> tuple[int, int]:
@@ -124,26 +129,22 @@ def load_legend(path: Path) -> tuple[MapClass, ...]:
     return tuple(sorted(classes, key=lambda c: c.id))
 
 
-def _read_image(path: Path, flags: int, what: str, key: str, dataset_file: Path) -> np.ndarray:
-    import cv2
-
-    where = f"{display_path(dataset_file)}: {key}"
-    if path.stat().st_size == 0:
-        raise DatasetError(f"{where}: {display_path(path)} is empty; expected a PNG, JPEG or TIFF {what}")
-    # imdecode over bytes rather than imread: no warning spam, and a path with any characters works
-    image = cv2.imdecode(np.fromfile(path, dtype=np.uint8), flags)
-    if image is None or image.size == 0:
-        raise DatasetError(f"{where}: cannot read {display_path(path)}; expected a PNG, JPEG or TIFF {what}")
-    return image
+def _to_stderr(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
 
 
-def load_map(name_or_path: str | Path) -> MapData:
+def load_map(name_or_path: str | Path, *, announce=_to_stderr) -> MapData:
     """Load a dataset by registered name or YAML path, and check it is usable.
+
+    A fetched map (``fetch:`` in its YAML) is downloaded and made on first use.
 
     Parameters
     ----------
     name_or_path : str or Path
         ``aerial-mosaic`` or ``path/to/my-map.yaml``.
+    announce : callable, optional
+        Called with a line of text before a fetched map is downloaded or made; by
+        default the line goes to stderr, so a first run says why it waits.
 
     Returns
     -------
@@ -154,17 +155,24 @@ def load_map(name_or_path: str | Path) -> MapData:
     ConfigError
         The YAML itself does not validate.
     DatasetError
-        Unreadable or empty image, labels of another size or not single-channel, label ids
-        missing from the legend, a cell wider than the image, a size other than declared.
+        Unreadable or empty image, a multi-band image without ``bands``, labels of another
+        size or not single-channel, label ids missing from the legend, a cell wider than
+        the image, a size other than declared, a fetch that fails.
     """
-    import cv2
+    from curiosity_cli.fetched import ensure_fetched
+    from curiosity_cli.images import read_raster, render_rgb
 
     yaml_path = dataset_path(name_or_path)
     config = load_dataset_config(yaml_path)
     where = display_path(yaml_path)
+    if config.fetch is not None:
+        try:
+            ensure_fetched(config.fetch, announce=announce)
+        except DatasetError as exc:
+            embedded = [n for n in dataset_names() if load_dataset_config(dataset_path(n)).fetch is None]
+            raise DatasetError(f"{where}: {exc}; the embedded maps {', '.join(embedded)} need no network") from None
 
-    image = _read_image(config.image, cv2.IMREAD_COLOR, "image", "image", yaml_path)
-    image = np.ascontiguousarray(image[:, :, ::-1])  # OpenCV decodes BGR; the package speaks RGB
+    image, rendering = render_rgb(read_raster(config.image, f"{where}: image"), config.bands, config.stretch, where)
     rows, cols = image.shape[:2]
     if config.size is not None and tuple(config.size) != (rows, cols):
         raise DatasetError(
@@ -180,13 +188,13 @@ def load_map(name_or_path: str | Path) -> MapData:
     labels, legend = None, ()
     if config.labels is not None:
         legend = load_legend(config.legend)
-        labels = _read_image(config.labels, cv2.IMREAD_UNCHANGED, "label image", "labels", yaml_path)
-        if labels.ndim != 2 or labels.dtype.kind != "u":
+        pixels = read_raster(config.labels, f"{where}: labels").pixels
+        if pixels.shape[2] != 1 or pixels.dtype not in (np.uint8, np.uint16):
             raise DatasetError(
-                f"{where}: labels: {display_path(config.labels)} is {labels.dtype} with "
-                f"{1 if labels.ndim == 2 else labels.shape[2]} channels; expected a single-channel "
-                "8- or 16-bit image of class ids"
+                f"{where}: labels: {display_path(config.labels)} is {pixels.dtype} with "
+                f"{pixels.shape[2]} channels; expected a single-channel 8- or 16-bit image of class ids"
             )
+        labels = pixels[:, :, 0]
         if labels.shape != (rows, cols):
             raise DatasetError(
                 f"{where}: labels: {display_path(config.labels)} is [{labels.shape[0]}, {labels.shape[1]}] "
@@ -198,7 +206,7 @@ def load_map(name_or_path: str | Path) -> MapData:
                 f"{where}: labels: class ids {missing.tolist()} in {display_path(config.labels)} "
                 f"are missing from the legend {display_path(config.legend)}"
             )
-    return MapData(config=config, image=image, labels=labels, legend=legend)
+    return MapData(config=config, image=image, labels=labels, legend=legend, rendering=rendering)
 
 
 __all__ = ["MapClass", "MapData", "dataset_names", "grid_shape", "load_legend", "load_map"]

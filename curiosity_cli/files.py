@@ -71,3 +71,16 @@ def atomic_path(path: Path):
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def user_cache_dir() -> Path:
+    """The user's cache of downloads and derived data: ``$CURIOSITY_CACHE``, else
+    ``$XDG_CACHE_HOME/curiosity``, else ``~/.cache/curiosity``.
+
+    Source archives go to its ``sources/`` folder, maps made from them to ``maps/<name>/``.
+    Nothing here is committed; deleting it costs only a download.
+    """
+    env = os.environ.get("CURIOSITY_CACHE")
+    if env:
+        return Path(env).expanduser()
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "curiosity"

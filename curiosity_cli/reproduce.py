@@ -6,34 +6,11 @@ so a stopped reproduction picks up where it was.
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 from curiosity_cli.config import ExperimentConfig
-
-#: ``--quick``: one map, this many restarts, paths up to this length.
-QUICK_RESTARTS = 5
-QUICK_LENGTH = 160
-
-
-def quick_config(config: ExperimentConfig) -> ExperimentConfig:
-    """The config shrunk for a look in minutes: its first map, 5 restarts, paths up to 160 steps.
-
-    The experiment is renamed ``<name>-quick`` so it does not mix with the full one.
-    """
-    length = min(QUICK_LENGTH, config.explore.path_length)
-    checkpoints = tuple(c for c in config.explore.checkpoints if c < length) + (length,)
-    return dataclasses.replace(
-        config,
-        name=config.name if config.name.endswith("quick") else f"{config.name}-quick",
-        datasets=config.datasets[:1],
-        explore=dataclasses.replace(
-            config.explore, restarts=min(QUICK_RESTARTS, config.explore.restarts), path_length=length,
-            checkpoints=checkpoints,
-        ),
-    )
 
 
 def reproduce(

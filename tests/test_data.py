@@ -121,7 +121,7 @@ def test_declared_size_must_match(own_map):
 
 
 def test_unknown_dataset_name():
-    with pytest.raises(ConfigError, match="no dataset 'nowhere': expected one of aerial-mosaic, reef-mosaic, sentinel-coast"):
+    with pytest.raises(ConfigError, match="no dataset 'nowhere': expected one of aerial-mosaic, reef-mosaic, sentinel-coast, zurich-zh17"):
         load_map("nowhere")
 
 
@@ -149,5 +149,5 @@ def test_duplicate_legend_ids(tmp_path):
         load_legend(path)
 
 
-def test_registry_lists_the_embedded_maps():
-    assert dataset_names() == sorted(EMBEDDED)
+def test_registry_lists_the_embedded_maps_and_the_fetched_one():
+    assert dataset_names() == sorted([*EMBEDDED, "zurich-zh17"])

@@ -21,25 +21,37 @@ def _table(header: list[str], rows: list[list[str]]) -> str:
 
 @datasets_app.command("list")
 def list_datasets() -> None:
-    """The maps registered in configs/datasets/, with size, grid and provenance."""
-    from curiosity_cli.data import dataset_names, load_map
+    """The maps registered in configs/datasets/, with size, grid and provenance.
+
+    A fetched map that is not cached yet is listed from its YAML; nothing is downloaded.
+    """
+    from curiosity_cli.config import dataset_path, load_dataset_config
+    from curiosity_cli.data import dataset_names, grid_shape, load_map
+    from curiosity_cli.fetched import is_fetched
 
     rows = []
     for name in dataset_names():
-        m = load_map(name)
-        grid = m.grid_shape
+        config = load_dataset_config(dataset_path(name))
+        cached = "embedded" if config.fetch is None else ("cached" if is_fetched(config.fetch) else "fetched on first use")
+        if config.fetch is None or cached == "cached":
+            m = load_map(name)
+            size, classes = m.image.shape[:2], str(len(m.legend))
+        else:
+            size, classes = config.size, "?"
+        grid = grid_shape(size, config.cell_width) if size is not None else None
         rows.append(
             [
                 name,
-                f"{m.image.shape[0]} x {m.image.shape[1]}",
-                str(m.config.cell_width),
-                f"{grid[0] * grid[1]} ({grid[0]} x {grid[1]})",
-                str(len(m.legend)),
-                m.config.source,
-                m.config.licence,
+                f"{size[0]} x {size[1]}" if size is not None else "?",
+                str(config.cell_width),
+                f"{grid[0] * grid[1]} ({grid[0]} x {grid[1]})" if grid is not None else "?",
+                classes,
+                cached,
+                config.source,
+                config.licence,
             ]
         )
-    typer.echo(_table(["name", "size (px)", "cell width", "cells", "classes", "source", "licence"], rows))
+    typer.echo(_table(["name", "size (px)", "cell width", "cells", "classes", "pixels", "source", "licence"], rows))
 
 
 @datasets_app.command("show")
@@ -56,6 +68,7 @@ def show(
     import numpy as np
 
     from curiosity_cli.data import load_map
+    from curiosity_cli.fetched import made_notes
     from curiosity_cli.files import display_path
     from curiosity_cli.plots.preview import write_preview
 
@@ -66,6 +79,12 @@ def show(
             f"{m.config.name}: {m.image.shape[0]} x {m.image.shape[1]} px, {m.config.cell_width} px cells "
             f"({rows} x {cols} = {rows * cols}), words every {m.config.word_stride} px"
         )
+        typer.echo(f"  image: {m.rendering.describe()}")
+        if m.config.fetch is not None:
+            notes = made_notes(m.config.fetch)
+            for key in ("crop", "image"):
+                if key in notes:
+                    typer.echo(f"  made from: {notes[key]}")
         if m.labels is None:
             typer.echo("  no labels\n")
             continue

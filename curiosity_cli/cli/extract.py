@@ -41,6 +41,7 @@ def extract(
     )
     for t in store.types:
         typer.echo(f"  {t.kind:<7} {store.count_by_type()[t.kind]:>10,}  ids {t.offset}..{t.offset + t.size - 1} ({t.name})")
+    typer.echo(f"ORB share: {100 * result.orb_share:.1f} % of {len(store.words):,} words")
     typer.echo(f"words per cell: min {per_cell.min()}, median {int(np.median(per_cell))}, max {per_cell.max()}")
     if result.seconds:
         typer.echo("seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in result.seconds.items()))

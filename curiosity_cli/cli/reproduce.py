@@ -14,8 +14,8 @@ from curiosity_cli.config import CONFIG_DIR
 
 @app.command("reproduce")
 def reproduce(
-    config: Path = typer.Argument(CONFIG_DIR / "paper-grid.yaml", help="Experiment YAML; default the paper's full grid."),
-    quick: bool = typer.Option(False, "--quick", help="First map only, 5 restarts, paths up to 160 steps: minutes, not the full grid."),
+    config: Path = typer.Argument(None, help="Experiment YAML; default the paper's full grid, configs/paper-grid.yaml.", show_default=False),
+    quick: bool = typer.Option(False, "--quick", help="Run configs/quick.yaml instead: the real Zurich map, 10 restarts, paths up to 160 steps; minutes, not the full grid."),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override any config key, e.g. --set seed=1."),
     jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
     force: bool = typer.Option(False, "--force", help="Redo runs and labels that are already finished."),
@@ -30,13 +30,15 @@ def reproduce(
     """
     from curiosity_cli.config import load_config
     from curiosity_cli.files import display_path
-    from curiosity_cli.reproduce import quick_config, reproduce as run_pipeline
+    from curiosity_cli.reproduce import reproduce as run_pipeline
 
     if scheduler is not None and backend is not Backend.dask:
         raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")
+    if quick and config is not None:
+        raise typer.BadParameter(f"runs configs/quick.yaml; give it or a CONFIG ({config}), not both", param_hint="--quick")
+    if config is None:
+        config = CONFIG_DIR / ("quick.yaml" if quick else "paper-grid.yaml")
     resolved = load_config(config, overrides)
-    if quick:
-        resolved = quick_config(resolved)
     with StagedProgress() as progress:
         report = run_pipeline(
             resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,

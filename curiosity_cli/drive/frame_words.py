@@ -3,8 +3,10 @@
 The same extractors and vocabularies as ``curiosity extract`` (texton words from the
 MR8 filter bank, ORB words, optional hue words, one id space), on a frame first resized
 to ``drive.frame_width``: at camera resolution the filter bank alone would take longer
-than a frame. The ORB pyramid depth and top-up threshold are the driver's own settings
-(``drive.orb_levels``, ``drive.orb_fill_threshold``) for the same reason.
+than a frame. The ORB pyramid depth, the cap per tile and the top-up threshold are the
+driver's own settings (``drive.orb_levels``, ``drive.orb_per_tile``,
+``drive.orb_fill_threshold``) for the same reason: a frame of 192 px is too small for
+every keypoint to describe its cells, while a map keeps them all.
 """
 
 from __future__ import annotations
@@ -104,8 +106,9 @@ class FrameWords:
         features = detect_orb(
             grey,
             tile=words.orb_tile,
-            per_tile=words.orb_per_tile,
+            per_tile=drive.orb_per_tile,
             max_features=words.orb_max_features,
+            fast_threshold=words.orb_fast_threshold,
             n_levels=drive.orb_levels,
             fill_threshold=drive.orb_fill_threshold,
         )

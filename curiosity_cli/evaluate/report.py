@@ -70,6 +70,29 @@ def _significance(tests) -> list[str]:
     return lines
 
 
+def _maps_table(maps) -> list[str]:
+    """Each map's words and ORB share beside the paper's map it stands in for (Table 1)."""
+    from curiosity_cli.paper import PAPER_MAPS
+
+    if maps is None or maps.empty:
+        return []
+    lines = [
+        "## The maps",
+        "",
+        "Visual words per map, and the share of ORB words, beside the paper's map each stands in for "
+        "(the paper's share is implied by its Table 1 with a texton word at every pixel, every 2nd on "
+        "SouthBellairs):",
+        "",
+        "| dataset | cells | words | ORB share | paper's map | paper's words | paper's ORB share |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in maps.itertuples():
+        paper = PAPER_MAPS.get(r.stands_in_for) if isinstance(r.stands_in_for, str) else None
+        theirs = f"| {paper.name} | {paper.words:,} | {100 * paper.orb_share:.0f} % |" if paper else "| | | |"
+        lines.append(f"| {r.dataset} | {r.cells:,} | {r.words:,} | {100 * r.orb_share:.1f} % {theirs}")
+    return lines + [""]
+
+
 def write_report(
     folder: Path, config: ExperimentConfig, evaluation: Evaluation, figures: list[Path], figure_notes: list[str],
     seconds: dict[str, float], provenance: dict,
@@ -100,11 +123,16 @@ def write_report(
     if top.empty:
         lines += [f"(no human labels or no {HEADLINE_LENGTH}-step checkpoint: no headline ratio)", ""]
     else:
-        lines += ["| dataset | ratio | next best | paper's map | paper's ratio |", "|---|---|---|---|---|"]
+        lines += [
+            "| dataset | ratio | next best | paired Wilcoxon p (pairs) | paper's map | paper's ratio |",
+            "|---|---|---|---|---|---|",
+        ]
         for r in top.itertuples():
             paper = f"{r.paper_ratio:.2f}" if np.isfinite(r.paper_ratio) else ""
-            lines.append(f"| {r.dataset} | {r.ratio:.2f} | {r.next_best} | {r.paper_map} | {paper} |")
+            p = "" if not np.isfinite(r.p_value) else ("< 0.001" if r.p_value < 0.001 else f"{r.p_value:.3f}")
+            lines.append(f"| {r.dataset} | {r.ratio:.2f} | {r.next_best} | {p} ({r.pairs}) | {r.paper_map} | {paper} |")
         lines.append("")
+    lines += _maps_table(evaluation.maps)
     lines += ["## Mutual information (bits, mean ± 95 % CI half-width)", "", "Against human labels (paper Fig. 5):", ""]
     lines += _mi_table(summary, "human", lengths)
     lines += ["Against the batch labeling Z_b (paper Fig. 4):", ""]

@@ -11,7 +11,8 @@ Written under ``results/<experiment>/``:
   Wilcoxon signed-rank test over the restarts both have (paired by restart, which
   share start cells).
 - ``headline.csv``: per dataset, topic-perplexity MI against human labels at 80 steps
-  divided by the next best weight function's (the paper reports 1.51, 1.20 and 1.05).
+  divided by the next best weight function's, with the paired Wilcoxon p of the two
+  and the paper's ratio for the map the dataset stands in for (1.51, 1.20 and 1.05).
 """
 
 from __future__ import annotations
@@ -30,12 +31,6 @@ from curiosity_cli.files import atomic_path, display_path
 if TYPE_CHECKING:
     import pandas as pd
 
-#: The paper's maps our embedded ones stand in for, and its headline ratios (section 5.1.2).
-PAPER_HEADLINES = {
-    "aerial-mosaic": ("Montreal1", 1.51),
-    "sentinel-coast": ("Montreal2", 1.20),
-    "reef-mosaic": ("SouthBellairs", 1.05),
-}
 HEADLINE_LENGTH = 80
 HEADLINE_WEIGHT = "topic-perplexity"
 
@@ -53,6 +48,7 @@ class Evaluation:
     tests: pd.DataFrame
     headline: pd.DataFrame
     skipped: list[str]
+    maps: pd.DataFrame | None  # maps.csv, None for folders from before it existed
 
 
 def mi_rows(folder: Path) -> tuple[list[dict], list[str]]:
@@ -163,9 +159,16 @@ def paired_tests(mi):
     return pd.DataFrame(rows, columns=["dataset", "path_length", "against", "a", "b", "n", "median_difference", "p_value"])
 
 
-def headline(summary):
-    """Per dataset: topic-perplexity mean MI vs human labels at 80 steps over the next best's."""
+def headline(summary, tests, stands_in_for: dict[str, str]):
+    """Per dataset: topic-perplexity mean MI vs human labels at 80 steps over the next best's.
+
+    With the paired Wilcoxon p of topic perplexity against that next best, and the
+    paper's ratio for the map the dataset stands in for (``stands_in_for``: dataset name
+    to paper map name; datasets without one get no paper ratio).
+    """
     import pandas as pd
+
+    from curiosity_cli.paper import PAPER_MAPS
 
     rows = []
     at = summary[(summary["against"] == "human") & (summary["path_length"] == HEADLINE_LENGTH)]
@@ -174,13 +177,35 @@ def headline(summary):
         if HEADLINE_WEIGHT not in means or len(means) < 2:
             continue
         others = means.drop(HEADLINE_WEIGHT)
-        paper_map, paper_ratio = PAPER_HEADLINES.get(dataset, ("", np.nan))
+        next_best = others.idxmax()
+        pair = tests[
+            (tests["dataset"] == dataset) & (tests["path_length"] == HEADLINE_LENGTH) & (tests["against"] == "human")
+            & (((tests["a"] == HEADLINE_WEIGHT) & (tests["b"] == next_best)) | ((tests["a"] == next_best) & (tests["b"] == HEADLINE_WEIGHT)))
+        ]
+        paper = PAPER_MAPS.get(stands_in_for.get(dataset, ""))
         rows.append({
-            "dataset": dataset, "topic_perplexity": means[HEADLINE_WEIGHT], "next_best": others.idxmax(),
+            "dataset": dataset, "topic_perplexity": means[HEADLINE_WEIGHT], "next_best": next_best,
             "next_best_mi": others.max(), "ratio": means[HEADLINE_WEIGHT] / others.max(),
-            "paper_map": paper_map, "paper_ratio": paper_ratio,
+            "p_value": float(pair["p_value"].iloc[0]) if len(pair) else np.nan,
+            "pairs": int(pair["n"].iloc[0]) if len(pair) else 0,
+            "paper_map": paper.name if paper else "", "paper_ratio": paper.headline_ratio if paper else np.nan,
         })
-    return pd.DataFrame(rows, columns=["dataset", "topic_perplexity", "next_best", "next_best_mi", "ratio", "paper_map", "paper_ratio"])
+    columns = ["dataset", "topic_perplexity", "next_best", "next_best_mi", "ratio", "p_value", "pairs", "paper_map", "paper_ratio"]
+    return pd.DataFrame(rows, columns=columns)
+
+
+def read_maps(folder: Path):
+    """``maps.csv`` of an experiment (each map's words and the paper map it stands in
+    for, written by ``explore``), or None for a folder from before it existed."""
+    import pandas as pd
+
+    path = Path(folder) / "maps.csv"
+    if not path.is_file():
+        return None
+    try:
+        return pd.read_csv(path, keep_default_na=False, na_values=[""])
+    except (ValueError, OSError) as exc:
+        raise EvaluationError(f"{display_path(path)}: cannot read the table of maps: {exc}") from None
 
 
 def evaluate_experiment(folder: Path) -> Evaluation:
@@ -200,7 +225,9 @@ def evaluate_experiment(folder: Path) -> Evaluation:
     mi = pd.DataFrame(rows).sort_values(["dataset", "weight_function", "restart", "path_length"], ignore_index=True)
     summary = summarise(mi)
     tests = paired_tests(mi)
-    top = headline(summary)
+    maps = read_maps(folder)
+    stands_in_for = {} if maps is None else {r.dataset: r.stands_in_for for r in maps.itertuples() if isinstance(r.stands_in_for, str)}
+    top = headline(summary, tests, stands_in_for)
     for name, table in (("mi", mi), ("summary", summary), ("tests", tests), ("headline", top)):
         with atomic_path(folder / f"{name}.csv") as tmp:
             table.to_csv(tmp, index=False)
@@ -208,4 +235,4 @@ def evaluate_experiment(folder: Path) -> Evaluation:
         mi.to_parquet(tmp, index=False)
     with atomic_path(folder / "skipped.json") as tmp:
         tmp.write_text(json.dumps(skipped, indent=2) + "\n")
-    return Evaluation(mi, summary, tests, top, skipped)
+    return Evaluation(mi, summary, tests, top, skipped, maps)

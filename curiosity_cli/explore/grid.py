@@ -91,6 +91,8 @@ class StoreInfo:
     grid_shape: tuple[int, int]
     vocabulary_size: int
     vocabulary_hashes: list[str]
+    word_counts: dict[str, int]  # words of each kind ("orb", "texton", "hue")
+    stands_in_for: str | None  # the paper's map it compares with
 
 
 @dataclass(frozen=True)
@@ -301,7 +303,8 @@ def prepare_stores(config: ExperimentConfig, cache_dir: Path) -> dict[str, Store
         extraction = extract_words(map_data, config.words, cache_dir=cache_dir)
         store = extraction.store
         stores[entry] = StoreInfo(
-            name, extraction.path, store.grid_shape, store.vocabulary_size, [t.sha256 for t in store.types]
+            name, extraction.path, store.grid_shape, store.vocabulary_size, [t.sha256 for t in store.types],
+            store.count_by_type(), map_data.config.stands_in_for,
         )
     return stores
 
@@ -535,3 +538,13 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
         )
     with atomic_path(folder / "runs.csv") as tmp:
         pd.DataFrame(rows).to_csv(tmp, index=False)
+    maps = []
+    for name, info in stores.items():
+        total = sum(info.word_counts.values())
+        maps.append(
+            {"dataset": name, "stands_in_for": info.stands_in_for or "", "cells": info.grid_shape[0] * info.grid_shape[1],
+             "words": total, **{f"{kind}_words": n for kind, n in info.word_counts.items()},
+             "orb_share": info.word_counts.get("orb", 0) / total if total else float("nan"), "store": info.path.name}
+        )
+    with atomic_path(folder / "maps.csv") as tmp:
+        pd.DataFrame(maps).to_csv(tmp, index=False)

@@ -35,6 +35,12 @@ class Extraction:
     reused: bool
     seconds: dict[str, float]  # per stage; empty when reused
 
+    @property
+    def orb_share(self) -> float:
+        """Fraction of the store's words that are ORB words (0 for an empty store)."""
+        total = len(self.store.words)
+        return self.store.count_by_type()["orb"] / total if total else 0.0
+
 
 def _word_types(orb: Vocabulary, texton: Vocabulary, colour_words: bool) -> tuple[WordType, ...]:
     types = [
@@ -57,8 +63,24 @@ def _params(map_data: MapData, words: WordsConfig, stride: int, cell_width: int)
         "orb_tile": words.orb_tile,
         "orb_per_tile": words.orb_per_tile,
         "orb_max_features": words.orb_max_features,
+        "orb_fast_threshold": words.orb_fast_threshold,
+        "orb_fill_threshold": words.orb_fill_threshold,
         "colour_words": words.colour_words,
     }
+
+
+def map_orb_features(grey: np.ndarray, words: WordsConfig):
+    """The ORB keypoints of a map's (H, W) uint8 grey image with the ``words`` settings."""
+    from curiosity_cli.words.orb import detect_orb
+
+    return detect_orb(
+        grey,
+        tile=words.orb_tile,
+        per_tile=words.orb_per_tile,
+        max_features=words.orb_max_features,
+        fast_threshold=words.orb_fast_threshold,
+        fill_threshold=words.orb_fill_threshold,
+    )
 
 
 def store_path(cache_dir: Path, params: dict, types: tuple[WordType, ...]) -> Path:
@@ -125,7 +147,6 @@ def extract_words(
         return Extraction(load_store(path), path, reused=True, seconds={})
 
     from curiosity_cli.words.hamming import nearest_binary_words
-    from curiosity_cli.words.orb import detect_orb
     from curiosity_cli.words.textons import texton_words
 
     seconds = {}
@@ -135,9 +156,7 @@ def extract_words(
     seconds["texton"] = time.perf_counter() - start
 
     mark = time.perf_counter()
-    features = detect_orb(
-        grey, tile=words.orb_tile, per_tile=words.orb_per_tile, max_features=words.orb_max_features
-    )
+    features = map_orb_features(grey, words)
     o_words = nearest_binary_words(features.descriptors, orb.centres)
     seconds["orb"] = time.perf_counter() - mark
 

@@ -1,9 +1,11 @@
-"""ORB words: keypoints spread over the whole map, and exact nearest-word assignment.
+"""ORB words: the map's ORB keypoints, and exact nearest-word assignment.
 
 Paper section 5.1 describes local features with ORB words from a 5000-word vocabulary.
-:func:`detect_orb` finds ORB keypoints (OpenCV) everywhere on the map, smooth regions
-included, and :func:`curiosity_cli.words.hamming.nearest_binary_words` maps each 256-bit descriptor to its nearest
-vocabulary word by Hamming distance. Vocabularies are learned with
+:func:`detect_orb` finds every ORB keypoint (OpenCV) of the map, so their density follows
+the image content as in the paper's Table 1 (many on roofs and roads, few on water), or
+optionally at most a few per tile, topped up with weak corners so smooth regions get some
+too. :func:`curiosity_cli.words.hamming.nearest_binary_words` maps each 256-bit descriptor
+to its nearest vocabulary word by Hamming distance. Vocabularies are learned with
 :func:`curiosity_cli.words.binary_kmeans.binary_kmeans`.
 
 Positions are (row, col) image pixels; OpenCV's (x, y) appears only inside
@@ -67,7 +69,8 @@ def _orb_keypoints(window: np.ndarray, fast_threshold: int, n_levels: int, scale
 
     # nfeatures caps keypoints per level by Harris response; above the window's pixel
     # count (level 0 gets the largest share, ~(1 - 1/scale) of it) it never binds, so
-    # the selection is ours (per tile) rather than OpenCV's (global).
+    # every keypoint comes back and any selection is ours (per tile) rather than
+    # OpenCV's (global).
     area = window.shape[0] * window.shape[1]
     share = (1 - 1 / scale_factor) / (1 - scale_factor**-n_levels) if n_levels > 1 else 1.0
     nfeatures = min(2**30, math.ceil(area / share) + 16)
@@ -133,14 +136,16 @@ def _detect_window(
 
 
 def _select_per_tile(rows, cols, weak, response, octave, row_sub, col_sub, tile, per_tile):
-    """Indices of the ``per_tile`` best keypoints of each tile (strong before weak, then
-    by Harris response), and each one's rank within its tile."""
+    """Indices of the ``per_tile`` best keypoints of each tile (all of them for None;
+    strong before weak, then by Harris response), and each one's rank within its tile."""
     tile_id = (rows // tile) * (1 << 31) + cols // tile
     # lexsort: the last key sorts first. Sub-pixel positions make the order total.
     order = np.lexsort((col_sub, row_sub, octave, -response, weak, tile_id))
     sorted_tiles = tile_id[order]
     starts = np.flatnonzero(np.r_[True, sorted_tiles[1:] != sorted_tiles[:-1]])
     rank = np.arange(order.size) - np.repeat(starts, np.diff(np.r_[starts, order.size]))
+    if per_tile is None:
+        return order, rank
     keep = rank < per_tile
     return order[keep], rank[keep]
 
@@ -149,51 +154,65 @@ def detect_orb(
     image_gray,
     *,
     tile: int = 16,
-    per_tile: int = 2,
+    per_tile: int | None = None,
     max_features: int | None = None,
     fast_threshold: int = 20,
-    fill_threshold: int | None = 1,
+    fill_threshold: int | None = None,
     n_levels: int = 8,
     scale_factor: float = 1.2,
 ) -> OrbFeatures:
-    """ORB keypoints and descriptors spread over the whole map.
+    """ORB keypoints and descriptors of a map: all of them, or at most a few per tile.
 
-    OpenCV's ORB keeps the globally strongest corners, which all land on the most
-    textured parts of a map. Here the map is cut into ``tile`` x ``tile`` tiles and each
-    tile keeps its ``per_tile`` best keypoints: first the corners standard ORB finds
-    (FAST threshold ``fast_threshold``), strongest Harris response first; a tile with
-    too few of them is topped up with weaker corners found at FAST threshold
-    ``fill_threshold``, again strongest first. Smooth tiles (water, sand) so still get
-    keypoints; only a perfectly flat tile, with no corner at all, gets none. All
-    ``n_levels`` pyramid levels compete in the same tile.
+    By default (``per_tile`` None) every keypoint OpenCV's ORB finds is kept, at every
+    pyramid level, with no cap on their number (OpenCV's own ``nfeatures`` cap keeps
+    only the globally strongest): their density follows the image content, dense on
+    roofs and roads, sparse or nil on water and sand, as the paper's words were. With
+    the other defaults (FAST threshold 20, 8 levels, scale 1.2, 31 px patch and edge,
+    Harris score) these are OpenCV's ORB defaults.
+
+    With ``per_tile`` set, the map is cut into ``tile`` x ``tile`` tiles and each tile
+    keeps its ``per_tile`` best keypoints: first the corners standard ORB finds (FAST
+    threshold ``fast_threshold``), strongest Harris response first; with
+    ``fill_threshold`` set, a tile with too few of them is topped up with weaker corners
+    found at FAST threshold ``fill_threshold``, again strongest first, so smooth tiles
+    (water, sand) still get keypoints; only a perfectly flat tile, with no corner at
+    all, gets none. All ``n_levels`` pyramid levels compete in the same tile.
 
     The image is padded by reflection (OpenCV ``BORDER_REFLECT_101``) before detection,
     so pixels at the map border get keypoints at every pyramid level like the
     interior; keypoints found in the padding are dropped. Patches of keypoints near
     the border partly see mirrored pixels. Maps wider or taller than 2048 px are
-    detected in 2048 px blocks with a margin, to bound memory.
+    detected in 2048 px blocks with a margin, to bound memory; each keypoint is kept by
+    the one block holding its pixel. Level-0 keypoints are those of a single call, but a
+    block's coarser pyramid levels are resampled from the block's own origin, so their
+    keypoints can differ slightly from a single call's.
 
     Parameters
     ----------
     image_gray : (H, W) uint8 array_like
         Grey image, H, W >= 1.
     tile : int, default 16
-        Side of the selection tiles in pixels; tiles start at (0, 0). Matching the
-        cell width spreads keypoints over cells: on the embedded 1024 x 1024 maps,
-        16 px tiles put a keypoint in 100 % of 16 px cells, 64 px tiles (16 per tile)
-        in about 30 %.
-    per_tile : int, default 2
-        Most keypoints kept per tile.
+        Side of the tiles in pixels; tiles start at (0, 0). They hold the ``per_tile``
+        cap and rank keypoints for ``max_features``. Matching the cell width spreads
+        capped keypoints over cells: on the embedded 1024 x 1024 maps, 16 px tiles with
+        a top-up put a keypoint in 100 % of 16 px cells, 64 px tiles (16 per tile) in
+        about 30 %.
+    per_tile : int or None, default None
+        Most keypoints kept per tile; None: every keypoint.
     max_features : int or None, default None
-        Most keypoints kept in total. When the tiles hold more, keypoints are dropped
-        by rank within their tile (every tile's best first), so the cap thins all
-        tiles evenly rather than emptying the smooth ones; among equal ranks, strong
-        before weak, then the stronger response wins.
+        Most keypoints kept in total. When there are more, keypoints are dropped by
+        rank within their tile, the best of every tile kept first, so the cap thins
+        the densest tiles and keeps the few keypoints of sparse ones: without
+        ``per_tile`` it is as if the largest per-tile cap that fits were applied, the
+        last rank filled by response. Among equal ranks, strong before weak, then the
+        stronger response wins.
     fast_threshold : int, default 20
-        FAST intensity threshold (1..255) of the preferred corners; OpenCV's default.
-    fill_threshold : int or None, default 1
-        FAST threshold (1..``fast_threshold``) of the corners that top up tiles with
-        fewer than ``per_tile`` preferred ones; None: no top-up.
+        FAST intensity threshold (1..255) of the keypoints (with a top-up: of the
+        preferred ones); OpenCV's default.
+    fill_threshold : int or None, default None
+        With ``per_tile``: FAST threshold (1..``fast_threshold``) of the weaker corners
+        that top up tiles with fewer than ``per_tile`` preferred ones; None: no top-up.
+        Needs ``per_tile``: without a cap there is nothing to top up.
     n_levels : int, default 8
         ORB pyramid levels (1..16, with ``scale_factor ** (n_levels - 1) <= 16``);
         OpenCV's default.
@@ -220,12 +239,18 @@ def detect_orb(
     if height == 0 or width == 0:
         raise ParameterError(f"image_gray: got shape {image.shape}, expected (H, W) with H, W >= 1")
     tile = check_int("tile", tile, 1)
-    per_tile = check_int("per_tile", per_tile, 1)
+    if per_tile is not None:
+        per_tile = check_int("per_tile", per_tile, 1)
     if max_features is not None:
         max_features = check_int("max_features", max_features, 1)
     fast_threshold = check_int("fast_threshold", fast_threshold, 1, 255)
     if fill_threshold is not None:
         fill_threshold = check_int("fill_threshold", fill_threshold, 1, fast_threshold)
+        if per_tile is None:
+            raise ParameterError(
+                f"fill_threshold: got {fill_threshold} with per_tile None, expected None: "
+                "the top-up only fills tiles capped by per_tile"
+            )
         if fill_threshold == fast_threshold:
             fill_threshold = None
     n_levels = check_int("n_levels", n_levels, 1, 16)

@@ -37,7 +37,9 @@ SOURCE_IMAGES = (
 # ORB descriptors are taken at several image scales: one set of photos then yields about
 # 90 descriptors per word of a 5000-word vocabulary, and words cover a range of scales.
 ORB_SCALES = (0.5, 0.71, 1.0, 1.41, 2.0)
-ORB_TILE, ORB_PER_TILE = 16, 4
+# The shipped vocabulary was learned from keypoints capped per tile and topped up at FAST
+# threshold 1, so smooth photos count too; the recipe stays, so a rebuild is bit for bit.
+ORB_TILE, ORB_PER_TILE, ORB_FILL_THRESHOLD = 16, 4, 1
 TEXTON_SAMPLES_PER_IMAGE = 40_000
 ITERATIONS = 20
 
@@ -139,7 +141,8 @@ def build_orb_vocabulary(size: int, *, seed: int, log: Callable[[str], None] = l
     for name, image in _source_images().items():
         for scale in ORB_SCALES:
             scaled = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
-            descriptors.append(detect_orb(scaled, tile=ORB_TILE, per_tile=ORB_PER_TILE).descriptors)
+            features = detect_orb(scaled, tile=ORB_TILE, per_tile=ORB_PER_TILE, fill_threshold=ORB_FILL_THRESHOLD)
+            descriptors.append(features.descriptors)
         log(f"  orb: {name}: {sum(len(d) for d in descriptors)} descriptors so far")
     pool = np.concatenate(descriptors)
     log(f"  orb: clustering {len(pool)} descriptors into {size} words")

@@ -16,6 +16,7 @@ from curiosity_cli.evaluate.labels import LabelError, batch_path, example_path, 
 from curiosity_cli.evaluate.tables import EvaluationError, evaluate_experiment
 from curiosity_cli.explore.grid import run_grid
 from curiosity_cli.explore.runs import run_folder
+from curiosity_cli.words.store import load_store
 
 runner = CliRunner()
 
@@ -97,6 +98,28 @@ def test_a_corrupt_checkpoint_is_named_and_the_other_runs_are_labelled(own_map, 
     assert len(list((folder / "labels" / "own").glob("*/restart-*.npz"))) == 7
 
 
+def test_the_headline_is_the_ratio_to_the_next_best_with_its_paired_p():
+    from curiosity_cli.evaluate.tables import headline, paired_tests, summarise
+
+    rng = np.random.default_rng(3)
+    rows = []
+    for weight, centre in (("random-walk", 0.2), ("stochastic-coverage", 0.3), ("topic-perplexity", 0.45)):
+        for restart in range(10):
+            mi = centre + 0.01 * rng.standard_normal()
+            rows.append({"dataset": "zurich-zh17", "weight_function": weight, "restart": restart, "path_length": 80,
+                         "mi_human": mi, "mi_batch": mi, "nmi_human": mi, "nmi_batch": mi, "seed": restart})
+    mi = pd.DataFrame(rows)
+    top = headline(summarise(mi), paired_tests(mi), {"zurich-zh17": "Montreal1"})
+    row = top.iloc[0]
+    means = mi.groupby("weight_function")["mi_human"].mean()
+    assert row["next_best"] == "stochastic-coverage"
+    assert row["ratio"] == pytest.approx(means["topic-perplexity"] / means["stochastic-coverage"])
+    # every one of 10 pairs favours topic perplexity: the exact two-sided p is 2 / 2**10
+    assert row["p_value"] == pytest.approx(2 / 2**10) and row["pairs"] == 10
+    assert (row["paper_map"], row["paper_ratio"]) == ("Montreal1", 1.51)
+    assert np.isnan(headline(summarise(mi), paired_tests(mi), {})["paper_ratio"].item())
+
+
 def test_nothing_to_label_or_evaluate_says_which_command_comes_first(own_map, tmp_path):
     config = grid_config(own_map)
     with pytest.raises(LabelError, match="grid/runs: no finished runs; run `curiosity explore` first"):
@@ -118,6 +141,12 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
     assert "wrote" in result.stdout and "REPORT.md" in result.stdout
     report = (folder / "REPORT.md").read_text()
     assert "## Mutual information" in report and "| own | topic-perplexity |" in report and "](figures/" in report
+    maps = pd.read_csv(folder / "maps.csv")
+    store = load_store(tmp_path / "cache" / maps["store"].item())
+    counts = store.count_by_type()
+    assert maps["words"].item() == store.words.size == sum(counts.values())
+    assert maps["orb_share"].item() == pytest.approx(counts["orb"] / store.words.size)
+    assert f"| own | 48 | {store.words.size:,} | {100 * counts['orb'] / store.words.size:.1f} % | | | |" in report
 
     result = runner.invoke(app, ["label", str(folder), *sets, *common])
     assert result.exit_code == 0, result.output

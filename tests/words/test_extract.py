@@ -154,3 +154,30 @@ def test_the_cached_file_is_a_store(own_map, tmp_path):
     result = extract_words(load_map(own_map), WORDS, cache_dir=tmp_path)
     assert np.array_equal(load_store(result.path).words, result.store.words)
     assert result.store.params["dataset"] == "own" and result.store.params["stride"] == 1
+
+
+def test_a_change_of_orb_settings_gets_its_own_store(own_map, tmp_path):
+    m = load_map(own_map)
+    settings = [
+        [],
+        ["words.orb_per_tile=2"],
+        ["words.orb_per_tile=2", "words.orb_fill_threshold=1"],
+        ["words.orb_per_tile=2", "words.orb_fill_threshold=5"],
+        ["words.orb_fast_threshold=30"],
+        ["words.orb_tile=32", "words.orb_per_tile=2"],
+        ["words.orb_max_features=50"],
+    ]
+    paths = [
+        extract_words(m, load_words_config(CONFIG_DIR / "paper.yaml", overrides), cache_dir=tmp_path).path
+        for overrides in settings
+    ]
+    assert len(set(paths)) == len(settings)
+    assert extract_words(m, WORDS, cache_dir=tmp_path).reused
+
+
+def test_the_orb_share_counts_orb_words_among_all(own_map, tmp_path):
+    result = extract_words(load_map(own_map), WORDS, cache_dir=tmp_path)
+    n_orb = result.store.count_by_type()["orb"]
+    assert 0 < n_orb and result.orb_share == n_orb / len(result.store.words)
+    capped = load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_per_tile=1"])
+    assert extract_words(load_map(own_map), capped, cache_dir=tmp_path).orb_share < result.orb_share

@@ -1,4 +1,4 @@
-"""ORB keypoints spread over the map, and Hamming nearest-word assignment."""
+"""ORB keypoints of a map (all of them, or capped per tile), and Hamming nearest-word assignment."""
 
 from __future__ import annotations
 
@@ -162,8 +162,10 @@ def tile_counts(rows, cols, shape, tile):
     return counts
 
 
-def test_keypoints_reach_smooth_tiles_and_the_border(image, features):
-    counts = tile_counts(features.rows, features.cols, image.shape, 16)
+def test_capped_keypoints_reach_smooth_tiles_and_the_border(image):
+    # The per-tile mode with a top-up, the default before issue 13.
+    capped = detect_orb(image, per_tile=2, fill_threshold=1)
+    counts = tile_counts(capped.rows, capped.cols, image.shape, 16)
     assert counts.max() <= 2  # per_tile
     assert (counts > 0).mean() >= 0.95
     smooth = counts[:, counts.shape[1] // 2 :]
@@ -172,9 +174,73 @@ def test_keypoints_reach_smooth_tiles_and_the_border(image, features):
     for edge in (counts[0], counts[-1], counts[:, 0], counts[:, -1]):
         assert (edge > 0).mean() >= 0.8
 
-    strict = detect_orb(image, fill_threshold=None)
+    strict = detect_orb(image, per_tile=2)
     strict_smooth = tile_counts(strict.rows, strict.cols, image.shape, 16)[:, counts.shape[1] // 2 :]
     assert (strict_smooth > 0).mean() < 0.5  # what the top-up is for
+
+
+def test_every_keypoint_by_default_so_density_follows_the_texture(image, features):
+    counts = tile_counts(features.rows, features.cols, image.shape, 16)
+    textured, smooth = counts[:, : counts.shape[1] // 2], counts[:, counts.shape[1] // 2 :]
+    assert smooth.sum() == 0  # faint noise: no corner at FAST threshold 20
+    assert textured.mean() > 3 and textured.max() > 2  # more than the old cap of 2 per tile
+
+    capped = detect_orb(image, per_tile=2, fill_threshold=1)
+    capped_smooth = tile_counts(capped.rows, capped.cols, image.shape, 16)[:, counts.shape[1] // 2 :]
+    assert (capped_smooth > 0).mean() >= 0.9  # the top-up reaches the flat-but-noisy tiles
+
+
+def test_every_keypoint_is_the_one_opencv_finds_on_the_padded_image():
+    image = textured_and_smooth(90, 130, seed=5)
+    pad = orb.pad_for_levels(8, 1.2)
+    padded = cv2.copyMakeBorder(image, pad, pad, pad, pad, cv2.BORDER_REFLECT_101)
+    opencv = cv2.ORB_create(
+        nfeatures=10**6,  # far above the keypoints there are: no cap
+        scaleFactor=1.2,
+        nlevels=8,
+        edgeThreshold=31,
+        firstLevel=0,
+        WTA_K=2,
+        scoreType=cv2.ORB_HARRIS_SCORE,
+        patchSize=31,
+        fastThreshold=20,
+    )
+    keypoints, descriptors = opencv.detectAndCompute(padded, None)
+    row_sub = np.array([kp.pt[1] for kp in keypoints]) - pad
+    col_sub = np.array([kp.pt[0] for kp in keypoints]) - pad
+    octave = np.array([kp.octave for kp in keypoints])
+    rows, cols = np.rint(row_sub).astype(int), np.rint(col_sub).astype(int)
+    inside = (rows >= 0) & (rows < image.shape[0]) & (cols >= 0) & (cols < image.shape[1])
+    assert inside.sum() > 50 and (~inside).sum() > 0  # some keypoints fall in the padding
+    order = np.lexsort((col_sub, row_sub, octave, cols, rows))
+    order = order[inside[order]]
+
+    ours = detect_orb(image)
+    np.testing.assert_array_equal(ours.rows, rows[order])
+    np.testing.assert_array_equal(ours.cols, cols[order])
+    np.testing.assert_array_equal(ours.descriptors, descriptors[order])
+
+
+def test_max_features_without_a_tile_cap_thins_the_densest_tiles_first(image, features):
+    counts = tile_counts(features.rows, features.cols, image.shape, 16)
+    thinned = detect_orb(image, max_features=int((counts > 0).sum()))
+    # Rank within tile: every tile with keypoints keeps its best one.
+    np.testing.assert_array_equal(tile_counts(thinned.rows, thinned.cols, image.shape, 16), (counts > 0).astype(int))
+    everything = set(zip(features.rows.tolist(), features.cols.tolist(), map(bytes, features.descriptors)))
+    assert set(zip(thinned.rows.tolist(), thinned.cols.tolist(), map(bytes, thinned.descriptors))) <= everything
+    untouched = detect_orb(image, max_features=len(features.rows))
+    for a, b in zip(features, untouched, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_blocks_keep_every_keypoint_once(image, monkeypatch):
+    # One pyramid level: the block margin covers every patch, so blocking changes nothing.
+    whole = detect_orb(image, n_levels=1)
+    monkeypatch.setattr(orb, "_BLOCK_SIDE", 64)
+    blocked = detect_orb(image, n_levels=1)
+    assert len(whole.rows) > 50
+    for a, b in zip(whole, blocked, strict=True):
+        np.testing.assert_array_equal(a, b)
 
 
 def test_positions_are_rows_and_cols_not_x_and_y():
@@ -189,19 +255,20 @@ def test_positions_are_rows_and_cols_not_x_and_y():
 
 
 def test_tile_caps(image):
-    rows, cols, _ = detect_orb(image, tile=32, per_tile=3)
+    rows, cols, _ = detect_orb(image, tile=32, per_tile=3, fill_threshold=1)
     counts = tile_counts(rows, cols, image.shape, 32)
     assert counts.max() == 3
 
-    capped = detect_orb(image, tile=32, per_tile=3, max_features=int((counts > 0).sum()))
+    capped = detect_orb(image, tile=32, per_tile=3, fill_threshold=1, max_features=int((counts > 0).sum()))
     # The overall cap drops by rank within tile: every tile keeps its best keypoint.
     np.testing.assert_array_equal(tile_counts(capped.rows, capped.cols, image.shape, 32), (counts > 0).astype(int))
     assert len(detect_orb(image, max_features=7).rows) == 7
 
 
-def test_blocks_give_the_same_kind_of_result(image, features, monkeypatch):
+def test_blocks_give_the_same_kind_of_result(image, monkeypatch):
+    features = detect_orb(image, per_tile=2, fill_threshold=1)
     monkeypatch.setattr(orb, "_BLOCK_SIDE", 64)
-    blocked = detect_orb(image)
+    blocked = detect_orb(image, per_tile=2, fill_threshold=1)
     assert blocked.rows.min() >= 0 and blocked.rows.max() < image.shape[0]
     assert blocked.cols.min() >= 0 and blocked.cols.max() < image.shape[1]
     counts = tile_counts(blocked.rows, blocked.cols, image.shape, 16)
@@ -237,6 +304,8 @@ def test_flat_image_has_no_keypoints():
         ({"per_tile": True}, r"^per_tile: got True"),
         ({"fast_threshold": 0}, r"^fast_threshold: got 0, expected an integer between 1 and 255$"),
         ({"fill_threshold": 30}, r"^fill_threshold: got 30, expected an integer between 1 and 20$"),
+        ({"fill_threshold": 1}, r"^fill_threshold: got 1 with per_tile None, expected None"),
+        ({"per_tile": 0}, r"^per_tile: got 0, expected an integer >= 1$"),
         ({"n_levels": 0}, r"^n_levels: got 0"),
         ({"n_levels": 9, "scale_factor": 2}, r"^n_levels: got 9 with scale_factor 2\.0, expected"),
         ({"scale_factor": 1.0}, r"^scale_factor: got 1\.0, expected a number in \(1, 2\]$"),
