@@ -125,6 +125,7 @@ class LabelConfig:
     """Labelling whole maps: with a path's model (Z_p) and in batch mode (Z_b) (paper section 5.1)."""
 
     sweeps: int = _spec(min=1)
+    warm_sweeps: int | None = _spec(min=1)
     batch_sweeps: int = _spec(min=1)
 
 

@@ -27,8 +27,9 @@ def reproduce(
 ) -> Path:
     """Run the whole pipeline for ``config`` and return the path of its ``REPORT.md``.
 
-    ``backend`` and ``scheduler`` say where the exploration runs go (see
-    :func:`~curiosity_cli.explore.grid.run_grid`); labelling runs on this machine.
+    ``backend`` and ``scheduler`` say where the exploration runs and the labelling go
+    (see :class:`~curiosity_cli.parallel.Workers`); both stages share the workers, so
+    ``backend="dask"`` without a scheduler starts one local cluster, not two.
     ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
     of it done, for a progress display.
     """
@@ -38,6 +39,7 @@ def reproduce(
     from curiosity_cli.evaluate.report import write_report
     from curiosity_cli.evaluate.tables import evaluate_experiment
     from curiosity_cli.explore.grid import run_grid
+    from curiosity_cli.parallel import Workers
     from curiosity_cli.plots.figures import write_figures
 
     def stage(description: str, units: int) -> None:
@@ -52,14 +54,17 @@ def reproduce(
     seconds = {}
     started = time.perf_counter()
     stage("words and exploration set-up", 0)
-    run_grid(
-        config, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-        backend=backend, scheduler=scheduler, on_prepared=lambda to_run, skipped: stage(f"exploring ({skipped} runs already done)", to_run), on_run=done,
-    )
-    seconds["extract and explore"] = time.perf_counter() - started
-    mark = time.perf_counter()
-    label_experiment(config, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, on_stage=stage, on_done=done)
-    seconds["label"] = time.perf_counter() - mark
+    with Workers(backend, scheduler, jobs) as workers:
+        run_grid(
+            config, results_dir=results_dir, cache_dir=cache_dir, force=force, workers=workers,
+            on_prepared=lambda to_run, skipped: stage(f"exploring ({skipped} runs already done)", to_run), on_run=done,
+        )
+        seconds["extract and explore"] = time.perf_counter() - started
+        mark = time.perf_counter()
+        label_experiment(
+            config, results_dir=results_dir, cache_dir=cache_dir, force=force, workers=workers, on_stage=stage, on_done=done
+        )
+        seconds["label"] = time.perf_counter() - mark
     mark = time.perf_counter()
     stage("evaluating", 0)
     evaluation = evaluate_experiment(folder)

@@ -1,17 +1,23 @@
 """Benchmark the labelling pipeline, and the full paper grid end to end.
 
 Part 1, one process (numba compiled first, untimed), on --map (default aerial-mosaic):
-- labelling one checkpoint: Z_p of the whole map from a path model's Φ (label.sweeps
-  frozen-Φ sweeps, ML topics, pixel labels, contingency tables), median of --repeats,
-  beside its reference in the same run: the frozen sweeps alone;
+- labelling one run: Z_p of the whole map at each of its 6 checkpoints (the label
+  settings of --config: a random start with label.sweeps, then label.warm_sweeps from
+  the checkpoint before; pixel labels; contingency tables), median of --repeats, beside
+  its reference in the same run: building a whole-map model per checkpoint and sweeping
+  it from a random start with label.sweeps (how labelling worked before a run's
+  checkpoints shared one model), and the frozen sweeps alone;
 - the batch reference Z_b of each map of --config (label.batch_sweeps sweeps on
   --threads threads), once each.
 Part 2 (--full-grid): `curiosity reproduce CONFIG --jobs N` in a fresh process, words
-already cached, into --results-dir (a temporary folder unless given): wall time, and the
-seconds per stage from its REPORT.md.
+already cached, into --results-dir (a temporary folder unless given), for --config and,
+with --paper-maps, for the paper's own grid (its three embedded maps only): wall time,
+and the seconds per stage from its REPORT.md, beside the figures of commit 8f4a5d2 (the
+paper's grid with 4 frozen sweeps from a random start at every checkpoint, measured on a
+2-core machine: explore 4.6, label 7.9, all 12.7 minutes).
 
     python scripts/bench_pipeline.py                                   # part 1, a few minutes
-    python scripts/bench_pipeline.py --full-grid --results-dir results # and the paper grid
+    python scripts/bench_pipeline.py --full-grid --paper-maps          # and both grids
 
 Prints and never asserts: timings depend on the machine.
 """
@@ -27,12 +33,16 @@ import tempfile
 import time
 from pathlib import Path
 
-from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.config import CONFIG_DIR, dataset_path, load_config, load_dataset_config
 from curiosity_cli.data import load_map
 from curiosity_cli.evaluate.information import contingency
-from curiosity_cli.evaluate.labeling import _whole_map_model, batch_labels, label_with_phi, pixel_labels
+from curiosity_cli.evaluate.labeling import PathLabeller, _whole_map_model, batch_labels, pixel_labels
 from curiosity_cli.explore.walker import explore
 from curiosity_cli.words.extract import extract_words
+
+
+#: Minutes per stage of the paper's grid at commit 8f4a5d2 (README, issue 14), 2 cores.
+BEFORE = {"explore": 4.6, "label": 7.9, "all": 12.7}
 
 
 def main() -> None:
@@ -42,6 +52,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--full-grid", action="store_true")
+    parser.add_argument("--paper-maps", action="store_true", help="with --full-grid: also the paper's grid of 3 embedded maps")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--results-dir", type=Path, default=None)
     args = parser.parse_args()
@@ -49,28 +60,42 @@ def main() -> None:
     config = load_config(args.config)
     map_data = load_map(args.map)
     store = extract_words(map_data, config.words).store
-    sweeps = config.label.sweeps
-    # a path model to label with: 80 steps of topic-perplexity exploration
-    settings = dataclasses.replace(config.explore, path_length=80, checkpoints=(80,))
-    phi = explore(store, "topic-perplexity", 0, model=config.model, settings=settings, seed=0).checkpoints[80].dense()
-    label_with_phi(store, phi, config.model, sweeps=1, seed=0)
+    label = config.label
+    # a path's checkpoints to label: 320 steps of topic-perplexity exploration
+    run = explore(store, "topic-perplexity", 0, model=config.model, settings=config.explore, seed=0)
+    phis = [run.checkpoints[n].dense() for n in config.explore.checkpoints]
+    labeller = PathLabeller(store, config.model)
+    labeller.label_path(phis[:1], seed=0, sweeps=1, warm_sweeps=None)
+    n_classes = int(map_data.labels.max()) + 1
 
-    whole, alone = [], []
+    def tables(words):
+        pixels = pixel_labels(store, words, map_data.image.shape[:2])
+        contingency(pixels, map_data.labels, config.model.topics, n_classes)
+
+    ours, rebuilt, alone = [], [], []
     for repeat in range(args.repeats):
         began = time.perf_counter()
-        words = label_with_phi(store, phi, config.model, sweeps=sweeps, seed=repeat)
-        pixels = pixel_labels(store, words, map_data.image.shape[:2])
-        contingency(pixels, map_data.labels, config.model.topics, int(map_data.labels.max()) + 1)
-        whole.append(time.perf_counter() - began)
-        model = _whole_map_model(store, config.model, repeat, frozen_counts=phi)
+        for words in labeller.label_path(phis, seed=repeat, sweeps=label.sweeps, warm_sweeps=label.warm_sweeps):
+            tables(words)
+        ours.append(time.perf_counter() - began)
         began = time.perf_counter()
-        model.refine_batch(sweeps, threads=1)
+        for j, phi in enumerate(phis):
+            model = _whole_map_model(store, config.model, repeat + j, frozen_counts=phi)
+            model.refine_batch(label.sweeps, threads=1)
+            tables(model.ml_topics())
+        rebuilt.append(time.perf_counter() - began)
+        model = _whole_map_model(store, config.model, repeat, frozen_counts=phis[-1])
+        began = time.perf_counter()
+        model.refine_batch(label.sweeps, threads=1)
         alone.append(time.perf_counter() - began)
-    n = len(store.words)
-    print(f"{args.map}: {n:,} words; label.sweeps = {sweeps}, one core, median of {args.repeats}")
-    print(f"  labelling one checkpoint   {statistics.median(whole):6.2f} s")
-    print(f"  its frozen sweeps alone    {statistics.median(alone):6.2f} s  "
-          f"({sweeps * n / statistics.median(alone) / 1e6:.1f} M words/s; ratio {statistics.median(whole) / statistics.median(alone):.2f})")
+    n, median = len(store.words), statistics.median
+    warm = "random start each" if label.warm_sweeps is None else f"then {label.warm_sweeps} warm"
+    print(f"{args.map}: {n:,} words; one run of {len(phis)} checkpoints, label.sweeps = {label.sweeps} ({warm}); "
+          f"one core, median of {args.repeats}")
+    print(f"  labelling the run, one model               {median(ours):6.2f} s")
+    print(f"  a model per checkpoint, {label.sweeps} sweeps each      {median(rebuilt):6.2f} s  (x {median(rebuilt) / median(ours):.2f})")
+    print(f"  {label.sweeps} frozen sweeps alone                     {median(alone):6.2f} s  "
+          f"({label.sweeps * n / median(alone) / 1e6:.1f} M words/s)")
 
     print(f"\nbatch reference, {config.label.batch_sweeps} sweeps on {args.threads} threads:")
     for entry in config.datasets:
@@ -83,17 +108,27 @@ def main() -> None:
               f"{trace[0]:.3f} -> {trace[len(trace) // 2]:.3f} -> {trace[-1]:.3f} (first, middle, last sweep)")
 
     if args.full_grid:
-        with tempfile.TemporaryDirectory() as tmp:
-            results = args.results_dir or Path(tmp)
-            command = [sys.executable, "-m", "curiosity_cli", "reproduce", str(args.config), "--jobs", str(args.jobs),
-                       "--results-dir", str(results)]
-            began = time.perf_counter()
-            subprocess.run(command, check=True)
-            minutes = (time.perf_counter() - began) / 60
-            report = (results / config.name / "REPORT.md").read_text()
-        print(f"\nfull grid, `curiosity reproduce {args.config.name} --jobs {args.jobs}`: {minutes:.1f} min end to end")
-        times = report[report.index("## Time"):report.index("## Config")]
-        print(times.strip())
+        grids = [("paper-grid.yaml as it stands", args.config, [])]
+        if args.paper_maps:
+            embedded = [e for e in config.datasets if load_dataset_config(dataset_path(e)).fetch is None]
+            grids.insert(0, ("the paper's grid: 3 embedded maps", args.config,
+                             ["--set", f"datasets={embedded}", "--set", f"name={config.name}-paper-maps"]))
+        print(f"\nbefore (commit 8f4a5d2, paper's grid, 2 cores): explore {BEFORE['explore']} min, "
+              f"label {BEFORE['label']} min, all {BEFORE['all']} min")
+        for title, path, sets in grids:
+            with tempfile.TemporaryDirectory() as tmp:
+                results = args.results_dir or Path(tmp)
+                command = [sys.executable, "-m", "curiosity_cli", "reproduce", str(path), *sets, "--jobs", str(args.jobs),
+                           "--results-dir", str(results)]
+                began = time.perf_counter()
+                subprocess.run(command, check=True)
+                minutes = (time.perf_counter() - began) / 60
+                name = sets[-1].split("=", 1)[1] if sets else config.name
+                report = (results / name / "REPORT.md").read_text()
+            print(f"\n{title}, `curiosity reproduce {path.name} {' '.join(sets)} --jobs {args.jobs}`: "
+                  f"{minutes:.1f} min end to end")
+            times = report[report.index("## Time"):report.index("## Config")]
+            print(times.strip())
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Benchmark the experiment grid on loky and on a Dask cluster of this machine: runs per minute and overhead per task.
+"""Benchmark the grid and its labelling on loky and on a Dask cluster of this machine: runs per minute, overhead per task.
 
 A small grid (one map, 4 weight functions x --restarts, --steps steps) is run whole
 (``run_grid(..., force=True)`` into a temporary folder, the map's word store cached),
@@ -14,11 +14,14 @@ A small grid (one map, 4 weight functions x --restarts, --steps steps) is run wh
   one-thread workers and shuts it down, as a command does.
 
 The table gives the median wall time, runs per minute, and the cost over loky in the
-same state (warm against warm, cold against cold). The overhead per task is measured apart, with --noop tasks that do nothing: wall time x W
+same state (warm against warm, cold against cold). The labelling of the grid's runs
+(``label_experiment``, its label files deleted before each repeat; the map's batch
+reference, of --batch-sweeps sweeps, computed once untimed and reused) is timed the same
+way, in a second table. The overhead per task is measured apart, with --noop tasks that do nothing: wall time x W
 / tasks, i.e. the worker time each task costs the backend (joblib's loky pool, and
 ``client.submit`` + ``as_completed`` on the running cluster).
 
-    python scripts/bench_scaleout.py [--restarts 4] [--steps 80] [--repeats 3] [--workers 2]
+    python scripts/bench_scaleout.py [--restarts 4] [--steps 80] [--repeats 3] [--workers 2] [--batch-sweeps 20]
 
 Prints and never asserts: timings depend on the machine. Needs the distributed extra (pip install -e '.[distributed]').
 """
@@ -28,12 +31,14 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import logging
+import shutil
 import statistics
 import tempfile
 import time
 from pathlib import Path
 
 from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.evaluate.labels import label_experiment
 from curiosity_cli.explore.grid import run_grid
 
 
@@ -44,6 +49,34 @@ def noop(i: int) -> int:
 def timed_grid(config, results: Path, cache: Path, **backend) -> tuple[float, int]:
     summary = run_grid(config, results_dir=results, cache_dir=cache, force=True, **backend)
     return summary.seconds, summary.ran
+
+
+def timed_labels(config, results: Path, cache: Path, **backend) -> tuple[float, int]:
+    shutil.rmtree(results / config.name / "labels", ignore_errors=True)
+    done = label_experiment(config, results_dir=results, cache_dir=cache, **backend)
+    return done["seconds"], done["labelled"]
+
+
+def timed_backends(timed, backends: dict, repeats: int) -> dict[str, list[float]]:
+    """Wall times of ``timed(**backend)`` for each backend, ``repeats`` times, after a warm-up of the warm ones."""
+    from joblib.externals.loky import get_reusable_executor
+
+    for name in ("loky, warm", "dask, warm"):  # word store, pools, numba; for labels also the batch reference
+        timed(**backends[name])
+    times = {name: [] for name in backends}
+    for _ in range(repeats):  # interleaved, so a slow phase of the machine hits all four
+        for name, backend in backends.items():
+            if name == "loky, cold":
+                get_reusable_executor().shutdown(wait=True)
+            times[name].append(timed(**backend)[0])
+    return times
+
+
+def print_table(times: dict[str, list[float]], runs: int) -> None:
+    print(f"{'backend':<20} {'wall s':>8} {'runs/min':>9} {'vs loky':>8}")
+    for name, values in times.items():
+        wall, loky = statistics.median(values), statistics.median(times[name.replace("dask", "loky")])
+        print(f"{name:<20} {wall:>8.2f} {runs / wall * 60:>9.1f} {(wall / loky - 1) * 100:>+7.1f}%")
 
 
 def loky_noop_seconds(tasks: int, workers: int) -> float:
@@ -69,7 +102,6 @@ def dask_noop_seconds(client, tasks: int) -> float:
 
 def main() -> None:
     from distributed import Client, LocalCluster
-    from joblib.externals.loky import get_reusable_executor
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--map", default="aerial-mosaic")
@@ -78,6 +110,8 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--noop", type=int, default=500, help="no-op tasks for the overhead per task")
+    parser.add_argument("--batch-sweeps", type=int, default=20,
+                        help="of the batch reference, computed once and untimed (it does not change the labelling's speed)")
     parser.add_argument("--cache-dir", type=Path, default=Path("results/cache"))
     args = parser.parse_args()
 
@@ -86,9 +120,9 @@ def main() -> None:
         base, name="bench", datasets=(args.map,),
         explore=dataclasses.replace(base.explore, restarts=args.restarts, path_length=args.steps,
                                     checkpoints=tuple(c for c in base.explore.checkpoints if c < args.steps) + (args.steps,)),
+        label=dataclasses.replace(base.label, batch_sweeps=args.batch_sweeps),
     )
     w = args.workers
-    times: dict[str, list[float]] = {"loky, warm": [], "dask, warm": [], "loky, cold": [], "dask, cold": []}
     with tempfile.TemporaryDirectory() as tmp, LocalCluster(
         n_workers=w, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
         silence_logs=logging.ERROR, scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
@@ -100,22 +134,20 @@ def main() -> None:
             "loky, cold": dict(jobs=w),
             "dask, cold": dict(jobs=w, backend="dask"),
         }
-        timed_grid(config, results, args.cache_dir, **backends["loky, warm"])  # warm-ups: word store, pools, numba
-        _, runs = timed_grid(config, results, args.cache_dir, **backends["dask, warm"])
-        for _ in range(args.repeats):  # interleaved, so a slow phase of the machine hits all four
-            for name, backend in backends.items():
-                if name == "loky, cold":
-                    get_reusable_executor().shutdown(wait=True)
-                times[name].append(timed_grid(config, results, args.cache_dir, **backend)[0])
+        times = timed_backends(lambda **backend: timed_grid(config, results, args.cache_dir, **backend), backends, args.repeats)
+        label_times = timed_backends(
+            lambda **backend: timed_labels(config, results, args.cache_dir, **backend), backends, args.repeats
+        )
+        runs = len(list((results / config.name / "runs").glob("*/*/restart-*")))
         noop_loky = [loky_noop_seconds(args.noop, w) for _ in range(args.repeats)]
         noop_dask = [dask_noop_seconds(client, args.noop) for _ in range(args.repeats)]
 
     print(f"{args.map}: {runs} runs of {args.steps} steps (4 weight functions x {args.restarts} restarts), "
           f"{w} workers of 1 thread, median of {args.repeats}")
-    print(f"{'backend':<20} {'wall s':>8} {'runs/min':>9} {'vs loky':>8}")
-    for name, values in times.items():
-        wall, loky = statistics.median(values), statistics.median(times[name.replace("dask", "loky")])
-        print(f"{name:<20} {wall:>8.2f} {runs / wall * 60:>9.1f} {(wall / loky - 1) * 100:>+7.1f}%")
+    print_table(times, runs)
+    print(f"\nlabelling the same {runs} runs ({config.label.sweeps} sweeps per checkpoint, "
+          f"warm_sweeps {config.label.warm_sweeps}; batch reference reused), median of {args.repeats}")
+    print_table(label_times, runs)
     per_run = statistics.median(times["loky, warm"]) * w / runs
     print(f"\noverhead per task ({args.noop} no-op tasks, worker time = wall x {w} / tasks), "
           f"against {per_run * 1e3:.0f} ms of worker time per run on loky:")

@@ -308,6 +308,19 @@ def add_cell_naive(state: NaiveModel, cell: int, words, time: int | None = None)
     state.counter += 1
 
 
+def restart_naive(state: NaiveModel, seed: int) -> None:
+    """Twin of ``TopicModel.restart``: a new key, and every observed cell's topics drawn
+    again as if added in cell order (the j-th from stream (j, cell))."""
+    state.key = mix(seed)
+    cells = sorted(state.topics)
+    for j, c in enumerate(cells):
+        stream = Stream(state.key, j, c)
+        state.topics[c] = np.array([below(stream.bits(), state.n_topics) for _ in state.words[c]], np.int64)
+    state.order = cells
+    state.times = list(range(len(cells)))
+    state.counter = len(cells)
+
+
 def gibbs_cell_naive(state: NaiveModel, cell: int, stream: Stream, stale_topics: dict | None = None) -> None:
     """One Gibbs pass over a cell's words, every count recounted without the word.
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli import app
+from curiosity_cli.cli.explore import Backend
 from curiosity_cli.cli.progress import StagedProgress
 
 EXPERIMENT = typer.Argument(Path("results/quick"), help="Experiment folder written by `curiosity explore`.")
@@ -31,15 +32,19 @@ def label(
     jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
     force: bool = typer.Option(False, "--force", help="Recompute labels that are up to date."),
     cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
+    backend: Backend = typer.Option(Backend.loky, "--backend", help="loky: processes on this machine; dask: a Dask cluster (needs the distributed extra)."),
+    scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler, e.g. tcp://10.0.0.5:8786; default a local cluster of --jobs workers."),
 ) -> None:
     """Label each map with every run's checkpoint models (Z_p) and in batch mode (Z_b)."""
     from curiosity_cli.evaluate.labels import label_experiment
 
+    if scheduler is not None and backend is not Backend.dask:
+        raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")
     config = experiment_config(folder, overrides)
     with StagedProgress() as progress:
         done = label_experiment(
             config, results_dir=folder.parent, cache_dir=cache_dir, jobs=jobs, force=force,
-            on_stage=progress.stage, on_done=progress.advance,
+            on_stage=progress.stage, on_done=progress.advance, backend=backend.value, scheduler=scheduler,
         )
     typer.echo(
         f"labelled {done['labelled']} runs in {done['seconds']:.0f} s ({done['skipped']} were up to date; "

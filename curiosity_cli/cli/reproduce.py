@@ -19,8 +19,8 @@ def reproduce(
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override any config key, e.g. --set seed=1."),
     jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
     force: bool = typer.Option(False, "--force", help="Redo runs and labels that are already finished."),
-    backend: Backend = typer.Option(Backend.loky, "--backend", help="Where exploration runs: loky (this machine) or dask (a Dask cluster; labelling stays local)."),
-    scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler; default a local cluster."),
+    backend: Backend = typer.Option(Backend.loky, "--backend", help="Where exploration and labelling run: loky (this machine) or dask (a Dask cluster, needs the distributed extra)."),
+    scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler; default a local cluster of --jobs workers, shared by both stages."),
     results_dir: Path = typer.Option(Path("results"), "--results-dir", help="Experiment folders go here."),
     cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
 ) -> None:

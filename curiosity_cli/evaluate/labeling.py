@@ -31,8 +31,87 @@ def _whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_cou
     return topic_model
 
 
+class PathLabeller:
+    """Z_p of a map for path models, on one whole-map model built once.
+
+    The model holds every word of the map with Φ frozen; labelling a path's checkpoints
+    swaps the frozen counts in turn instead of building a model per checkpoint.
+
+    Parameters
+    ----------
+    store : WordStore
+    model : ModelConfig
+        K, α, β and the neighbourhood.
+    """
+
+    def __init__(self, store: WordStore, model: ModelConfig):
+        self._store = store
+        self._config = model
+        zeros = np.zeros((store.vocabulary_size, model.topics), np.int32)
+        self._model = _whole_map_model(store, model, 0, frozen_counts=zeros)
+
+    def start(self, phi: np.ndarray, seed: int) -> None:
+        """Freeze Φ to ``phi`` (V, K) and give every word a uniformly random topic (stream ``seed``)."""
+        self.switch(phi)
+        self._model.restart(seed % 2**64)
+
+    def switch(self, phi: np.ndarray) -> None:
+        """Freeze Φ to ``phi`` (V, K), keeping every word's topic (a warm start)."""
+        if phi.shape != (self._store.vocabulary_size, self._config.topics):
+            raise ParameterError(f"phi: shape {phi.shape}, expected (V, K) = {(self._store.vocabulary_size, self._config.topics)}")
+        self._model.set_frozen_counts(phi)
+
+    def sweep(self, sweeps: int, threads: int = 1) -> None:
+        """``sweeps`` frozen-Φ Gibbs sweeps over the whole map (the result does not depend on ``threads``)."""
+        self._model.refine_batch(sweeps, threads=threads)
+
+    def labels(self) -> np.ndarray:
+        """(N,) int16: each word's maximum-likelihood topic now, in the store's order."""
+        return self._model.ml_topics().astype(np.int16)
+
+    def label_path(
+        self, phis: list[np.ndarray], *, seed: int, sweeps: int, warm_sweeps: int | None, threads: int = 1
+    ) -> list[np.ndarray]:
+        """Z_p of every word for each of a path's checkpoints, in order.
+
+        The first checkpoint starts from uniformly random topics (stream ``seed``) and
+        gets ``sweeps`` frozen-Φ Gibbs sweeps; each later one starts from the topics the
+        one before left and gets ``warm_sweeps`` (a warm start), or, with
+        ``warm_sweeps`` None, starts from random topics again (stream ``seed + j`` for
+        the ``j``-th) with ``sweeps``. Each label is the word's maximum-likelihood topic
+        after its sweeps. Every step is the exact sampler of eq. 5; only the starting
+        topics differ.
+
+        Parameters
+        ----------
+        phis : list of (V, K) int ndarrays
+            The word-topic counts of the path's checkpoints, shortest path first.
+        seed : int
+            0 .. 2**64 - 1.
+        sweeps, warm_sweeps : int
+            As above; ``warm_sweeps`` None for a cold start at every checkpoint.
+        threads : int
+            For the sweeps (the result does not depend on it).
+
+        Returns
+        -------
+        list of (N,) int16 ndarrays
+            The topic of each word of the store, in the store's order, per checkpoint.
+        """
+        out = []
+        for j, phi in enumerate(phis):
+            if j > 0 and warm_sweeps is not None:
+                self.switch(phi)
+                self.sweep(warm_sweeps, threads)
+            else:
+                self.start(phi, seed + j)
+                self.sweep(sweeps, threads)
+            out.append(self.labels())
+        return out
+
+
 def label_with_phi(store: WordStore, phi: np.ndarray, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1) -> np.ndarray:
-    """Z_p of every word of the map, given a path's word-topic counts.
+    """Z_p of every word of the map, given one path model's word-topic counts.
 
     Parameters
     ----------
@@ -42,7 +121,7 @@ def label_with_phi(store: WordStore, phi: np.ndarray, model: ModelConfig, *, swe
     model : ModelConfig
         K, α, β and the neighbourhood.
     sweeps : int
-        Frozen-Φ Gibbs sweeps before the maximum-likelihood topics.
+        Frozen-Φ Gibbs sweeps from uniformly random topics before the maximum-likelihood topics.
     seed : int
         Of the initial topics and the sweeps.
     threads : int
@@ -53,11 +132,7 @@ def label_with_phi(store: WordStore, phi: np.ndarray, model: ModelConfig, *, swe
     (N,) int16 ndarray
         The topic of each word of ``store``, in the store's order.
     """
-    if phi.shape != (store.vocabulary_size, model.topics):
-        raise ParameterError(f"phi: shape {phi.shape}, expected (V, K) = {(store.vocabulary_size, model.topics)}")
-    topic_model = _whole_map_model(store, model, seed, frozen_counts=phi)
-    topic_model.refine_batch(sweeps, threads=threads)
-    return topic_model.ml_topics().astype(np.int16)
+    return PathLabeller(store, model).label_path([phi], seed=seed, sweeps=sweeps, warm_sweeps=None, threads=threads)[0]
 
 
 def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1, on_sweep=None):

@@ -16,17 +16,28 @@ Written under ``results/<experiment>/``:
   last checkpoint, for the figures.
 
 Every file is written atomically; a killed ``label`` resumes with the runs not yet done.
+
+Batch references and runs are tasks of :class:`~curiosity_cli.parallel.Workers`. With
+loky, batch references are computed in this process, one map after the other on ``jobs``
+threads, and a worker reads each map's word store, human labels and Z_b once. On a Dask
+cluster, batch references are tasks too, each map's word store goes to the cluster once
+and its human labels and Z_b pixel labels once; each run's ``run.json`` and checkpoint
+counts Φ_p (a few kilobytes) travel with its task, so workers need no copy of the maps,
+stores or results. Either way this process writes every file, and the same functions
+compute the labels, so the results are identical.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -35,13 +46,20 @@ from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 
 if TYPE_CHECKING:
+    from curiosity_cli.evaluate.labeling import PathLabeller
     from curiosity_cli.explore.grid import StoreInfo
+    from curiosity_cli.explore.runs import Run
+    from curiosity_cli.parallel import Workers
+    from curiosity_cli.words.store import WordStore
 
 LABEL_FORMAT = 1
 #: Path lengths whose Z_p maps are kept for restart 0 (besides the last checkpoint).
 EXAMPLE_LENGTHS = (80,)
 # tags that keep the label streams apart from the runs' own
 _PATH_TAG, _BATCH_TAG = 1, 2
+#: Whole-map labelling models a thread keeps, one per map.
+_LABELLERS_PER_THREAD = 4
+_per_thread = threading.local()
 
 
 class LabelError(CuriosityError):
@@ -56,6 +74,51 @@ class MapInputs:
     entry: str  # the config's datasets entry (a name or a YAML path)
     store_path: str
     batch_path: str
+
+
+class MapArrays(NamedTuple):
+    """A map as its runs' labelling needs it in a worker: read there once (loky) or shipped once (Dask)."""
+
+    store: WordStore
+    human: np.ndarray | None  # (H, W) class ids
+    n_classes: int
+    batch: np.ndarray  # (H, W) Z_b
+    shape: tuple[int, int]
+
+
+@dataclass(frozen=True)
+class RunInputs:
+    """A run as labelling needs it, read by this process and sent with its task.
+
+    Attributes
+    ----------
+    folder : Path
+    meta : dict
+        Its ``run.json``.
+    checkpoints : dict of int to SparseCounts
+        The word-topic counts Φ_p at each checkpoint length, as stored.
+    """
+
+    folder: Path
+    meta: dict
+    checkpoints: dict
+
+    @classmethod
+    def of(cls, run: Run) -> RunInputs:
+        """Read a run's checkpoints.
+
+        Raises
+        ------
+        RunError
+            A missing or corrupt ``checkpoints.npz``, naming it.
+        """
+        from curiosity_cli.explore.walker import SparseCounts
+
+        return cls(run.folder, run.meta, {n: SparseCounts.of(run.phi(n)) for n in run.meta["checkpoints"]})
+
+    def phi(self, length: int) -> np.ndarray:
+        """(V, K) int32 ndarray: the word-topic counts Φ_p after ``length`` steps."""
+        return self.checkpoints[length].dense()
 
 
 def batch_path(folder: Path, dataset: str) -> Path:
@@ -81,89 +144,105 @@ def read_meta(npz) -> dict:
     return json.loads(str(npz["meta"]))
 
 
-def ensure_batch_reference(
-    folder: Path, config: ExperimentConfig, entry: str, info: StoreInfo, *, threads: int, force: bool = False,
-    on_sweep: Callable[[int], None] | None = None,
-) -> tuple[Path, bool]:
-    """Compute (or reuse) a map's batch reference Z_b; returns ``(its file, whether it was reused)``.
+def _batch_is_current(path: Path, config: ExperimentConfig, info: StoreInfo) -> bool:
+    """Whether a batch reference file exists and was made from this store with these settings."""
+    try:
+        with np.load(path) as npz:
+            stored = read_meta(npz)
+    except (OSError, ValueError, KeyError):
+        return False  # missing or unreadable: compute it again
+    stored.pop("seconds", None)
+    return stored == _batch_meta(config, info.path.name, info.vocabulary_hashes)
 
-    ``entry`` is the config's datasets entry and ``info`` its word store (from
-    :func:`~curiosity_cli.explore.grid.prepare_stores`); the map and its store are only
-    loaded when the reference has to be computed.
-    """
-    from curiosity_cli.data import load_map
+
+def _compute_batch(
+    info: StoreInfo, config: ExperimentConfig, store: WordStore, image_shape: tuple[int, int], *, threads: int = 1,
+    on_sweep: Callable[[int], None] | None = None,
+) -> tuple:
+    """A map's batch reference, in this process or a worker: ``(pixel labels, word labels, trace, seconds)``."""
     from curiosity_cli.evaluate.labeling import batch_labels, pixel_labels
     from curiosity_cli.explore.grid import name_key
-    from curiosity_cli.words.store import load_store
 
-    meta = _batch_meta(config, info.path.name, info.vocabulary_hashes)
-    path = batch_path(folder, info.name)
-    if path.is_file() and not force:
-        try:
-            with np.load(path) as npz:
-                stored = read_meta(npz)
-                stored.pop("seconds", None)
-                if stored == meta:
-                    return path, True
-        except (OSError, ValueError, KeyError):
-            pass  # unreadable: compute it again
-    store = load_store(info.path)
     seed = int(np.random.SeedSequence((config.seed, name_key(info.name), _BATCH_TAG)).generate_state(1, np.uint64)[0])
     started = time.perf_counter()
     word_labels, trace = batch_labels(
         store, config.model, sweeps=config.label.batch_sweeps, seed=seed, threads=threads, on_sweep=on_sweep
     )
-    meta["seconds"] = round(time.perf_counter() - started, 2)
-    labels = pixel_labels(store, word_labels, load_map(entry).image.shape[:2])
+    seconds = time.perf_counter() - started
+    return pixel_labels(store, word_labels, image_shape), word_labels, trace, seconds
+
+
+def _write_batch(path: Path, config: ExperimentConfig, info: StoreInfo, labels, word_labels, trace, seconds: float) -> None:
+    meta = {**_batch_meta(config, info.path.name, info.vocabulary_hashes), "seconds": round(seconds, 2)}
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as handle:
             np.savez_compressed(
                 handle, labels=labels, word_labels=word_labels, log_likelihood=trace, meta=json.dumps(meta, sort_keys=True)
             )
-    return path, False
 
 
-@lru_cache(maxsize=4)
-def _map_arrays(entry: str, store_path: str, batch_file: str):
-    """(store, human labels or None, number of classes, batch pixel labels, image shape), once per worker."""
+def path_seed(run_seed) -> int:
+    """The seed of a run's labelling chain, from the run's own seed entropy."""
+    return int(np.random.SeedSequence((*run_seed, _PATH_TAG)).generate_state(1, np.uint64)[0])
+
+
+def _labeller(store_path: str, model, store: WordStore) -> PathLabeller:
+    """One whole-map labelling model per map and thread, reused for every run.
+
+    Per thread, not per process: a labeller holds its chain's topics, and a Dask worker
+    runs tasks on several threads. ``store`` is the map's words, named by ``store_path``.
+    """
+    from curiosity_cli.evaluate.labeling import PathLabeller
+
+    cache = _per_thread.__dict__.setdefault("labellers", {})
+    key = (store_path, model)
+    if key not in cache:
+        if len(cache) == _LABELLERS_PER_THREAD:
+            del cache[next(iter(cache))]  # the oldest
+        cache[key] = PathLabeller(store, model)
+    return cache[key]
+
+
+def _map_references(entry: str, batch_file: str) -> tuple:
+    """A map's (human labels or None, number of classes, batch pixel labels, image shape)."""
     from curiosity_cli.data import load_map
-    from curiosity_cli.words.store import load_store
 
     map_data = load_map(entry)
     n_classes = max(c.id for c in map_data.legend) + 1 if map_data.labels is not None else 0
     with np.load(batch_file) as npz:
         batch = npz["labels"]
-    return load_store(Path(store_path)), map_data.labels, n_classes, batch, map_data.image.shape[:2]
+    return map_data.labels, n_classes, batch, map_data.image.shape[:2]
 
 
-def label_run(run_folder: Path, inputs: MapInputs, config: ExperimentConfig, threads: int = 1):
+@lru_cache(maxsize=4)
+def _map_arrays(entry: str, store_path: str, batch_file: str) -> MapArrays:
+    """A map's arrays, read once per (loky) worker."""
+    from curiosity_cli.words.store import load_store
+
+    return MapArrays(load_store(Path(store_path)), *_map_references(entry, batch_file))
+
+
+def label_run(run: RunInputs, inputs: MapInputs, arrays: MapArrays, config: ExperimentConfig, threads: int = 1):
     """Z_p of every checkpoint of one run, as contingency tables; ``(tables, examples, meta)``.
 
-    Raises
-    ------
-    LabelError
-        The run was made from another word store than the map's current one.
+    ``inputs`` names the map's files, ``arrays`` holds their contents; the run was made
+    from the map's current word store (:func:`label_experiment` checks).
     """
     from curiosity_cli.evaluate.information import contingency
-    from curiosity_cli.evaluate.labeling import label_with_phi, pixel_labels
-    from curiosity_cli.explore.runs import read_run
+    from curiosity_cli.evaluate.labeling import pixel_labels
 
-    run = read_run(run_folder)
-    store, human, n_classes, batch, shape = _map_arrays(inputs.entry, inputs.store_path, inputs.batch_path)
-    if run.meta["store"] != Path(inputs.store_path).name:
-        raise LabelError(
-            f"{display_path(run_folder)}: made from word store {run.meta['store']}, but {inputs.name}'s words are now "
-            f"{Path(inputs.store_path).name}; run `curiosity explore --force` to redo the runs"
-        )
+    store, human, n_classes, batch, shape = arrays
     k = config.model.topics
     lengths = run.meta["checkpoints"]
     tables = {"human": [], "batch": []}
     examples = {}
     last = lengths[-1]
-    for length in lengths:
-        seed = np.random.SeedSequence((*run.meta["seed"], length, _PATH_TAG)).generate_state(1, np.uint64)[0]
-        words = label_with_phi(store, run.phi(length), config.model, sweeps=config.label.sweeps, seed=int(seed), threads=threads)
+    labels = _labeller(inputs.store_path, config.model, store).label_path(
+        [run.phi(n) for n in lengths], seed=path_seed(run.meta["seed"]), sweeps=config.label.sweeps,
+        warm_sweeps=config.label.warm_sweeps, threads=threads,
+    )
+    for length, words in zip(lengths, labels):
         pixels = pixel_labels(store, words, shape)
         if human is not None:
             tables["human"].append(contingency(pixels, human, k, n_classes))
@@ -174,7 +253,7 @@ def label_run(run_folder: Path, inputs: MapInputs, config: ExperimentConfig, thr
         "format": LABEL_FORMAT, "dataset": inputs.name, "weight_function": run.meta["weight_function"],
         "restart": run.meta["restart"], "run_seed": run.meta["seed"], "store": run.meta["store"],
         "vocabulary_hashes": run.meta["vocabulary_hashes"], "sweeps": config.label.sweeps,
-        "batch": Path(inputs.batch_path).name,
+        "warm_sweeps": config.label.warm_sweeps, "batch": Path(inputs.batch_path).name,
     }
     arrays = {"lengths": np.array(lengths, np.int32), "batch": np.stack(tables["batch"])}
     if tables["human"]:
@@ -205,7 +284,10 @@ def is_labelled(folder: Path, run_meta: dict, config: ExperimentConfig) -> bool:
             meta = read_meta(npz)
     except (OSError, ValueError, KeyError):
         return False
-    return meta["run_seed"] == run_meta["seed"] and meta["store"] == run_meta["store"] and meta["sweeps"] == config.label.sweeps
+    return (
+        meta["run_seed"] == run_meta["seed"] and meta["store"] == run_meta["store"]
+        and meta["sweeps"] == config.label.sweeps and meta.get("warm_sweeps") == config.label.warm_sweeps
+    )
 
 
 def label_experiment(
@@ -217,6 +299,9 @@ def label_experiment(
     force: bool = False,
     on_stage: Callable[[str, int], None] | None = None,
     on_done: Callable[[], None] | None = None,
+    backend: str = "loky",
+    scheduler: str | None = None,
+    workers: Workers | None = None,
 ) -> dict:
     """Label every finished run of an experiment (and each map's batch reference).
 
@@ -225,13 +310,23 @@ def label_experiment(
     config : ExperimentConfig
         The experiment (its folder is ``results_dir / config.name``).
     jobs : int, optional
-        Worker processes for the runs; default the number of cores.
+        Worker processes (of ``loky``, or of the local Dask cluster); default the number
+        of cores. Ignored with a ``scheduler``.
     force : bool
         Recompute labels (and batch references) that are up to date.
     on_stage : callable, optional
         ``on_stage(description, units)`` when a stage starts (units of ``on_done``).
     on_done : callable, optional
         Called after each unit of work.
+    backend : {"loky", "dask"}
+        Where batch references and runs are computed (module docstring); the results do
+        not depend on it.
+    scheduler : str, optional
+        With ``backend="dask"``: a running scheduler's address; without one, a local
+        cluster of ``jobs`` workers is started for the labelling.
+    workers : Workers, optional
+        Where to compute instead of new workers from ``backend``, ``scheduler`` and
+        ``jobs``: open ones another stage shares (``curiosity reproduce``).
 
     Returns
     -------
@@ -241,18 +336,22 @@ def label_experiment(
     Raises
     ------
     LabelError
-        No finished runs, or runs made from another word store (all of them named).
+        No finished runs; or, after labelling the others, runs that could not be
+        labelled (corrupt, made from another word store, a task that raised, a batch
+        reference that failed), all of them named.
+    ParameterError, BackendError
+        As :class:`~curiosity_cli.parallel.Workers`; and a Dask scheduler that cannot be
+        reached or has unusable workers.
     """
-    import os
-
-    from joblib import Parallel, delayed
-
-    from curiosity_cli.explore.grid import prepare_stores, threads_per_job
+    from curiosity_cli.explore.grid import prepare_stores
     from curiosity_cli.explore.runs import RunError, is_complete, read_run
+    from curiosity_cli.parallel import Workers
+    from curiosity_cli.words.store import load_store
 
     started = time.perf_counter()
+    owned = Workers(backend, scheduler, jobs) if workers is None else None  # checks the backend before any work
+    workers = workers or owned
     folder = Path(results_dir) / config.name
-    jobs = (os.cpu_count() or 1) if jobs is None else jobs
     stores = prepare_stores(config, cache_dir)
     runs = sorted(p for p in (folder / "runs").glob("*/*/restart-*") if is_complete(p))
     names = {info.name for info in stores.values()}
@@ -260,48 +359,128 @@ def label_experiment(
     if not runs:
         raise LabelError(f"{display_path(folder / 'runs')}: no finished runs; run `curiosity explore` first")
 
-    inputs, reused = {}, 0
-    for entry, info in stores.items():
+    with owned or contextlib.nullcontext():  # new workers (a local cluster) stop with the labelling
+        batch_files, reused, problems = _batch_references(folder, config, stores, workers, force, on_stage, on_done)
+        inputs = {
+            info.name: MapInputs(info.name, entry, str(info.path), str(batch_files[info.name]))
+            for entry, info in stores.items() if info.name in batch_files
+        }
+        skipped, tasks = 0, []
+        for run_path in runs:
+            try:
+                run = read_run(run_path)
+                if not force and is_labelled(folder, run.meta, config):
+                    skipped += 1
+                elif run_path.parent.parent.name in inputs:  # else its batch reference failed, named in problems
+                    tasks.append(_run_task(run, inputs[run_path.parent.parent.name]))
+            except (RunError, LabelError) as exc:
+                problems.append(str(exc))
+        todo = len(runs) - skipped
+        shipped = {}  # loky workers read the maps' files themselves
+        if workers.ships:  # before the stage starts: an unusable cluster is the only message
+            for name, map_inputs in {m.name: m for _, m in tasks}.items():
+                store = workers.ship_file(map_inputs.store_path, load_store)
+                shipped[name] = workers.ship(
+                    MapArrays, store, *_map_references(map_inputs.entry, map_inputs.batch_path), key=f"map-{name}"
+                )
         if on_stage is not None:
-            on_stage(f"batch reference {info.name}", config.label.batch_sweeps)
-        path, was_reused = ensure_batch_reference(
-            folder, config, entry, info, threads=jobs, force=force, on_sweep=lambda _: on_done and on_done()
+            on_stage("labelling runs", len(tasks))
+        labelled = 0
+        computed = workers.compute(
+            _label_task, tasks, args=lambda task: (config, shipped.get(task[1].name)),
+            key=lambda task: "label-{dataset}/{weight_function}/restart-{restart:03d}".format(**task[0].meta),
         )
-        reused += was_reused
-        inputs[info.name] = MapInputs(info.name, entry, str(info.path), str(path))
+        with computed as results:
+            for (run, _), outcome in results:
+                if isinstance(outcome, str):
+                    problems.append("{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome)
+                else:
+                    write_labels(folder, *outcome)
+                    labelled += 1
+                if on_done is not None:
+                    on_done()
+    if problems:
+        raise LabelError(
+            f"{todo - labelled} of {todo} runs could not be labelled (the others are written): " + "; ".join(problems)
+        )
+    return {"labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": time.perf_counter() - started}
 
-    todo = []
-    for run_path in runs:
-        try:
-            meta = read_run(run_path).meta
-        except RunError:
-            todo.append(run_path)  # label_run reports it by name
-            continue
-        if force or not is_labelled(folder, meta, config):
-            todo.append(run_path)
-    if on_stage is not None:
-        on_stage("labelling runs", len(todo))
-    threads = threads_per_job(jobs)
-    failed = []
-    results = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")(
-        delayed(_label_task)(p, inputs[p.parent.parent.name], config, threads) for p in todo
-    )
-    for run_path, outcome in results:
-        if isinstance(outcome, str):
-            failed.append(outcome)
-        else:
-            write_labels(folder, *outcome)
+
+def _batch_references(
+    folder: Path, config: ExperimentConfig, stores: dict[str, StoreInfo], workers: Workers, force: bool,
+    on_stage: Callable[[str, int], None] | None, on_done: Callable[[], None] | None,
+) -> tuple[dict[str, Path], int, list[str]]:
+    """Each map's batch reference, computed where missing or out of date; ``(files by map, how many reused, problems)``.
+
+    With loky, in this process, one map after the other on ``jobs`` threads with a
+    progress unit per sweep; an error stops the command. On a Dask cluster, as tasks, a
+    map's sweeps counted when it arrives; a map whose reference failed is left out of the
+    files and named in the problems.
+    """
+    from curiosity_cli.data import load_map
+    from curiosity_cli.words.store import load_store
+
+    sweeps = config.label.batch_sweeps
+    files = {info.name: batch_path(folder, info.name) for info in stores.values()}
+    stale = {entry: info for entry, info in stores.items() if force or not _batch_is_current(files[info.name], config, info)}
+    problems = []
+
+    def swept(*_) -> None:
         if on_done is not None:
             on_done()
-    if failed:
-        raise LabelError(f"{len(failed)} of {len(todo)} runs could not be labelled (the others are written): " + "; ".join(failed))
-    return {"labelled": len(todo), "skipped": len(runs) - len(todo), "batch_reused": reused,
-            "seconds": time.perf_counter() - started}
+
+    if not workers.ships:
+        for entry, info in stale.items():
+            if on_stage is not None:
+                on_stage(f"batch reference {info.name}", sweeps)
+            image_shape = load_map(entry).image.shape[:2]
+            computed = _compute_batch(info, config, load_store(info.path), image_shape, threads=workers.jobs, on_sweep=swept)
+            _write_batch(files[info.name], config, info, *computed)
+    elif stale:
+        threads = workers.whole_machine_threads(len(stale))  # reaches a scheduler first: no stage for an unusable one
+        shapes = {info.name: load_map(entry).image.shape[:2] for entry, info in stale.items()}
+        if on_stage is not None:
+            on_stage(f"batch references of {', '.join(info.name for info in stale.values())}", len(stale) * sweeps)
+        computed = workers.compute(
+            _compute_batch, list(stale.values()),
+            args=lambda info: (config, workers.ship_file(info.path, load_store), shapes[info.name]),
+            key=lambda info: f"batch-{info.name}", threads=threads,
+        )
+        with computed as results:
+            for info, outcome in results:
+                if isinstance(outcome, str):
+                    problems.append(f"the batch reference of {info.name}: {outcome}; its runs were not labelled")
+                    del files[info.name]
+                else:
+                    _write_batch(files[info.name], config, info, *outcome)
+                for _ in range(sweeps):
+                    swept()
+    return files, len(stores) - len(stale), problems
 
 
-def _label_task(run_path: Path, inputs: MapInputs, config: ExperimentConfig, threads: int):
-    """``(run_path, (arrays, examples, meta))``, or ``(run_path, error text)`` so one bad run does not stop the rest."""
-    try:
-        return run_path, label_run(run_path, inputs, config, threads)
-    except CuriosityError as exc:
-        return run_path, str(exc)
+def _run_task(run: Run, inputs: MapInputs) -> tuple[RunInputs, MapInputs]:
+    """A run to label and its map, checked and read here (so a bad run is named without a worker).
+
+    Raises
+    ------
+    LabelError
+        The run was made from another word store than the map's current one.
+    RunError
+        Its checkpoints are missing or corrupt.
+    """
+    if run.meta["store"] != Path(inputs.store_path).name:
+        raise LabelError(
+            f"{display_path(run.folder)}: made from word store {run.meta['store']}, but {inputs.name}'s words are now "
+            f"{Path(inputs.store_path).name}; run `curiosity explore --force` to redo the runs"
+        )
+    return RunInputs.of(run), inputs
+
+
+def _label_task(
+    task: tuple[RunInputs, MapInputs], config: ExperimentConfig, arrays: MapArrays | None = None, *, threads: int = 1,
+):
+    """Label one run in a worker: ``(arrays, examples, meta)``; ``arrays`` are its map's when shipped (Dask), else read once."""
+    run, inputs = task
+    if arrays is None:
+        arrays = _map_arrays(inputs.entry, inputs.store_path, inputs.batch_path)
+    return label_run(run, inputs, arrays, config, threads)

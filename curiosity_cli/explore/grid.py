@@ -9,20 +9,16 @@ Design, in the order a grid runs:
 - **Seeds.** Each run draws from ``SeedSequence((seed, crc32(map), crc32(weight
   function), restart))``: the same numbers whatever ``jobs`` is and in whatever order
   runs finish.
-- **Parallel.** Runs are joblib tasks (``loky`` processes by default). A worker loads
-  the map's word store from the cache once and keeps it; each worker's numba threads
-  are capped so the workers together use the cores once.
-- **Or on a Dask cluster** (``backend="dask"``): at ``scheduler``'s address, or on a
-  ``LocalCluster`` of ``jobs`` one-thread worker processes started for the grid and shut
-  down after it. Each map's store file goes to the cluster once, as the argument of a
-  task that loads it (no shared filesystem needed); runs depend on that task, so a
-  worker gets the loaded store once, from a peer, and if every copy is lost with its
-  workers the scheduler loads it again (scattered data could not be recomputed). Each
-  run is one task, all submitted at once and collected as they finish
-  (``distributed.as_completed``). A task lost with its worker is rescheduled on another
-  by the scheduler (up to ``distributed.scheduler.allowed-failures`` times); a run whose
-  workers keep dying is reported by name like a run that raised. The same
-  :func:`compute_run` computes every run on either backend, so results are identical.
+- **Parallel.** Runs are tasks of :class:`~curiosity_cli.parallel.Workers`: joblib's
+  ``loky`` processes by default, where a worker loads the map's word store from the cache
+  once and keeps it, and each worker's numba threads are capped so the workers together
+  use the cores once.
+- **Or on a Dask cluster** (``backend="dask"``, :mod:`curiosity_cli.parallel`): each
+  map's store file goes to the cluster once and runs depend on the task that loads it;
+  each run is one task, all submitted at once and collected as they finish. A run lost
+  with its worker is computed again on another; a run whose workers keep dying is
+  reported by name like a run that raised. The same :func:`compute_run` computes every
+  run on either backend, so results are identical.
 - **Written by the caller.** A task returns its :class:`Exploration`; this process
   writes the run folder atomically (:mod:`curiosity_cli.explore.runs`), so where a run
   was computed never matters and a killed grid loses only the runs in flight.
@@ -35,9 +31,7 @@ Design, in the order a grid runs:
 from __future__ import annotations
 
 import contextlib
-import os
 import time
-import traceback
 import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -47,14 +41,9 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, to_dict, to_yaml
-from curiosity_cli.errors import ConfigError, CuriosityError, ParameterError
+from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
-
-#: Where the runs of a grid can be computed: joblib's loky processes, or a Dask cluster.
-BACKENDS = ("loky", "dask")
-
-#: Seconds a grid waits for a first worker to join a Dask scheduler that has none.
-WORKER_WAIT_SECONDS = 60
+from curiosity_cli.parallel import Workers
 
 #: The config sections a run's numbers depend on ...
 _RUN_SECTIONS = ("seed", "model", "words", "explore")
@@ -64,10 +53,6 @@ _SELECTION_KEYS = {("explore", "weight_functions"), ("explore", "restarts")}
 
 class GridError(CuriosityError):
     """Some runs of a grid failed; the others were written."""
-
-
-class BackendError(CuriosityError):
-    """The Dask backend cannot run: its optional dependency is missing, or its cluster is unusable."""
 
 
 @dataclass(frozen=True)
@@ -106,11 +91,6 @@ class GridSummary:
     fallbacks: int
     bytes_written: int
     seconds: float
-
-
-def threads_per_job(jobs: int) -> int:
-    """Threads each of ``jobs`` parallel jobs may use so that together they use the cores once."""
-    return max(1, (os.cpu_count() or 1) // max(1, jobs))
 
 
 def name_key(name: str) -> int:
@@ -206,6 +186,7 @@ def run_grid(
     on_run: Callable[[RunTask, int], None] | None = None,
     backend: str = "loky",
     scheduler: str | None = None,
+    workers: Workers | None = None,
 ) -> GridSummary:
     """Run every missing run of an experiment grid and write it under ``results_dir/<name>``.
 
@@ -228,6 +209,9 @@ def run_grid(
     scheduler : str, optional
         With ``backend="dask"``: a running scheduler's address, e.g.
         ``tcp://10.0.0.5:8786``; without one, a local cluster is started for the grid.
+    workers : Workers, optional
+        Where to compute instead of new workers from ``backend``, ``scheduler`` and
+        ``jobs``: open ones another stage shares (``curiosity reproduce``).
 
     Raises
     ------
@@ -240,18 +224,14 @@ def run_grid(
         reached or gets no worker, or workers with other versions of the package, numpy
         or numba than this process.
     GridError
-        After the whole grid, if some runs raised: each named with its traceback's last line.
+        After the whole grid, if some runs raised or kept killing their Dask workers: each named, with its error.
     """
     from curiosity_cli.explore.runs import is_complete, remove_partial_runs, run_folder
+    from curiosity_cli.words.store import load_store
 
     started = time.perf_counter()
-    if backend not in BACKENDS:
-        raise ParameterError(f"backend: got {backend!r}, expected one of {', '.join(BACKENDS)}")
-    if scheduler is not None and backend != "dask":
-        raise ParameterError(f"scheduler: got {scheduler!r} with backend {backend!r}; a scheduler needs backend 'dask'")
-    if backend == "dask":
-        _import_distributed()  # a missing extra is reported before any work
-    jobs = (os.cpu_count() or 1) if jobs is None else jobs
+    owned = Workers(backend, scheduler, jobs) if workers is None else None  # checks the backend before any work
+    workers = workers or owned
     folder = Path(results_dir) / config.name
     check_saved_config(folder, config)
     stores = prepare_stores(config, cache_dir)
@@ -264,18 +244,26 @@ def run_grid(
     if on_prepared is not None:
         on_prepared(len(todo), len(tasks) - len(todo))
     failed, fallbacks, written = [], 0, 0
-    with _computed_runs(todo, config, backend=backend, scheduler=scheduler, jobs=jobs) as results:
-        for task, outcome in results:
-            size = 0
-            if isinstance(outcome, str):
-                failed.append(f"{task.dataset} / {task.weight_function} / restart {task.restart}: {outcome}")
-            else:
-                exploration, seconds = outcome
-                size = _write(folder, task, exploration, seconds, config, by_name[task.dataset])
-                fallbacks += int(exploration.fallback.sum())
-                written += size
-            if on_run is not None:
-                on_run(task, size)
+    with owned or contextlib.nullcontext():  # new workers (a local cluster) stop with the grid
+        shipped = {}  # loky workers load the stores from the cache themselves
+        if workers.ships:
+            shipped = {path: workers.ship_file(path, load_store) for path in sorted({t.store_path for t in todo})}
+        computed = workers.compute(
+            compute_run, todo, args=lambda task: (config, shipped.get(task.store_path)),
+            key=lambda task: f"explore-{task.dataset}/{task.weight_function}/restart-{task.restart:03d}",
+        )
+        with computed as results:
+            for task, outcome in results:
+                size = 0
+                if isinstance(outcome, str):
+                    failed.append(f"{task.dataset} / {task.weight_function} / restart {task.restart}: {outcome}")
+                else:
+                    exploration, seconds = outcome
+                    size = _write(folder, task, exploration, seconds, config, by_name[task.dataset])
+                    fallbacks += int(exploration.fallback.sum())
+                    written += size
+                if on_run is not None:
+                    on_run(task, size)
     summary = GridSummary(folder, len(todo) - len(failed), len(tasks) - len(todo), failed, fallbacks, written,
                           time.perf_counter() - started)
     if failed:
@@ -316,12 +304,11 @@ def _load_store(path: str):
     return load_store(Path(path))
 
 
-def compute_run(task: RunTask, config: ExperimentConfig, threads: int = 1, store=None):
-    """Compute one run in a worker: ``(task, (Exploration, seconds))``, or ``(task, error text)``.
+def compute_run(task: RunTask, config: ExperimentConfig, store=None, *, threads: int = 1):
+    """Compute one run in a worker: ``(Exploration, seconds)``.
 
-    An error comes back as text rather than raised so that one failing run does not
-    stop the others. ``store`` is the map's :class:`WordStore` when it was shipped to
-    the worker (Dask); without it the worker loads ``task.store_path`` once.
+    ``store`` is the map's :class:`WordStore` when it was shipped to the worker (Dask);
+    without it the worker loads ``task.store_path`` once.
     """
     import numba
 
@@ -329,165 +316,11 @@ def compute_run(task: RunTask, config: ExperimentConfig, threads: int = 1, store
 
     numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     started = time.perf_counter()
-    try:
-        exploration = explore(
-            _load_store(task.store_path) if store is None else store, task.weight_function, task.start_cell,
-            model=config.model, settings=config.explore, seed=task.seed,
-        )
-    except Exception as exc:  # noqa: BLE001 - reported with the run's name, the grid goes on
-        return task, "".join(traceback.format_exception_only(exc)).strip()
-    return task, (exploration, time.perf_counter() - started)
-
-
-@contextlib.contextmanager
-def _computed_runs(todo: list[RunTask], config: ExperimentConfig, *, backend: str, scheduler: str | None, jobs: int):
-    """An iterator of :func:`compute_run`'s ``(task, outcome)`` for every task, in the order they finish.
-
-    Whatever the backend, each run is ``compute_run(task, config, threads[, store])``
-    and its outcome is consumed (written) by the caller. Leaving the context early
-    stops the runs still in flight (and a local cluster).
-    """
-    if backend == "loky":
-        from joblib import Parallel, delayed
-
-        threads = threads_per_job(jobs)
-        results = Parallel(n_jobs=jobs, backend="loky", return_as="generator_unordered")(
-            delayed(compute_run)(task, config, threads) for task in todo
-        )
-        with contextlib.closing(results):
-            yield results
-    elif not todo:  # nothing to compute: start no cluster
-        yield iter(())
-    else:
-        with _dask_client(scheduler, jobs) as (client, threads):
-            with contextlib.closing(_dask_runs(client, todo, config, threads)) as results:
-                yield results
-
-
-def _import_distributed():
-    try:
-        import distributed
-    except ImportError as exc:
-        raise BackendError(
-            f"the dask backend needs Dask distributed, which is not installed ({exc}); "
-            "install it from the checkout with: pip install -e '.[distributed]'"
-        ) from None
-    return distributed
-
-
-@contextlib.contextmanager
-def _dask_client(scheduler: str | None, jobs: int):
-    """A client of the cluster at ``scheduler`` (or of a local cluster started here), and each run's numba threads.
-
-    On a local cluster of ``jobs`` one-thread processes, runs share the machine's cores
-    as with loky; on a cluster someone started, a run gets one numba thread per worker
-    thread (give workers one thread per core, ``dask worker``'s default).
-    """
-    import logging
-
-    distributed = _import_distributed()
-    with contextlib.ExitStack() as stack:
-        if scheduler is None:
-            cluster = stack.enter_context(distributed.LocalCluster(
-                n_workers=jobs, threads_per_worker=1, processes=True, host="127.0.0.1",
-                dashboard_address=None, silence_logs=logging.ERROR,
-                # no dashboard, and the scheduler's HTTP routes on a free port, not on 8787
-                scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-            ))
-            client = stack.enter_context(distributed.Client(cluster, set_as_default=False))
-            threads = threads_per_job(jobs)
-        else:
-            try:
-                client = stack.enter_context(distributed.Client(scheduler, set_as_default=False))
-            except (OSError, ValueError) as exc:
-                raise BackendError(
-                    f"cannot reach the Dask scheduler at {scheduler} ({exc}); start one with `dask scheduler` "
-                    "and pass the address it prints"
-                ) from None
-            threads = 1
-        try:
-            client.wait_for_workers(1, timeout=WORKER_WAIT_SECONDS)
-        except TimeoutError:
-            raise BackendError(
-                f"the Dask scheduler at {scheduler} has no worker after {WORKER_WAIT_SECONDS} s; "
-                f"start some with `dask worker {scheduler}`"
-            ) from None
-        _check_worker_versions(client)
-        yield client, threads
-
-
-def _versions() -> tuple[str, str, str]:
-    """What a run's numbers depend on besides its inputs: this package's, numpy's and numba's versions."""
-    from importlib.metadata import version
-
-    from curiosity_cli import __version__
-
-    return __version__, version("numpy"), version("numba")
-
-
-def _check_worker_versions(client) -> None:
-    """Refuse workers whose runs could differ from this process's: other package, numpy or numba versions."""
-    try:
-        found = client.run(_versions)
-    except Exception as exc:  # noqa: BLE001 - e.g. the package is not installed on a worker
-        raise BackendError(
-            f"the Dask workers cannot run curiosity ({type(exc).__name__}: {exc}); "
-            "install the same version of curiosity on every worker machine"
-        ) from None
-    here = _versions()
-    for address, theirs in sorted(found.items()):
-        if tuple(theirs) != here:
-            names = ("curiosity", "numpy", "numba")
-            diff = ", ".join(f"{n} {t} (here {h})" for n, t, h in zip(names, theirs, here) if t != h)
-            raise BackendError(
-                f"the Dask worker at {address} has {diff}; its runs could differ, so install the same versions "
-                "on every worker machine"
-            )
-
-
-def _store_from_bytes(name: str, data: bytes):
-    """A word store from its file's bytes: how a Dask worker gets a map's store."""
-    import tempfile
-
-    from curiosity_cli.words.store import load_store
-
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / name
-        path.write_bytes(data)
-        return load_store(path)
-
-
-def _dask_runs(client, todo: list[RunTask], config: ExperimentConfig, threads: int):
-    """Yield ``(task, outcome)`` as the cluster finishes each run (module docstring)."""
-    import uuid
-
-    from distributed import KilledWorker, as_completed
-
-    token = uuid.uuid4().hex[:8]
-    shipped = {
-        path: client.submit(_store_from_bytes, Path(path).name, Path(path).read_bytes(), key=f"store-{Path(path).stem}-{token}")
-        for path in sorted({task.store_path for task in todo})
-    }
-    futures = {
-        client.submit(
-            compute_run, task, config, threads, shipped[task.store_path],
-            key=f"explore-{task.dataset}/{task.weight_function}/restart-{task.restart:03d}-{token}",
-        ): task
-        for task in todo
-    }
-    try:
-        for future in as_completed(futures, loop=client.loop):
-            task = futures[future]
-            try:
-                result = future.result()
-            except KilledWorker:
-                result = task, "KilledWorker: every worker that ran it died (out of memory?); see the workers' logs"
-            except Exception as exc:  # noqa: BLE001 - e.g. its store was lost with the workers; the grid goes on
-                result = task, f"{type(exc).__name__}: {exc}"
-            future.release()
-            yield result
-    finally:  # stopped early: the cluster need not finish the rest
-        client.cancel([future for future in futures if not future.done()])
+    exploration = explore(
+        _load_store(task.store_path) if store is None else store, task.weight_function, task.start_cell,
+        model=config.model, settings=config.explore, seed=task.seed,
+    )
+    return exploration, time.perf_counter() - started
 
 
 def _write(folder: Path, task: RunTask, exploration, seconds: float, config: ExperimentConfig, store: StoreInfo) -> int:

@@ -12,7 +12,7 @@ import numpy as np
 from curiosity_cli._numba import njit
 from curiosity_cli.topics._intrinsics import fetch_add
 from curiosity_cli.topics._rng import below, next_state, stream_start, unit64
-from curiosity_cli.topics._sampler import gibbs_cell, refresh_inverse, row_dot, weights_scratch
+from curiosity_cli.topics._sampler import gibbs_cell, gibbs_cell_frozen, refresh_inverse, row_dot, weights_scratch
 
 # threads refining a batch phase take cells in chunks of this many
 _CHUNK = 4
@@ -47,6 +47,19 @@ def add_cell_kernel(
 
 
 @njit
+def redraw_topics_kernel(cells, cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, n_topics, vbeta, key, update_phi):
+    """Draw every word's topic anew, the ``j``-th of ``cells`` from stream ``(j, cell)``,
+    as :func:`add_cell_kernel` did when the cells were added in that order. The counts
+    must be zero (``nwk``, ``nk`` only when ``update_phi``)."""
+    for j in range(cells.shape[0]):
+        cell = cells[j]
+        add_cell_kernel(
+            cell, cell_first[cell], cell_count[cell], words, topics, nwk, nk, inv, ncz, ng, table, n_topics, vbeta,
+            key, np.uint64(j), update_phi,
+        )
+
+
+@njit
 def refine_cells_kernel(
     cells, cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, alpha, beta, vbeta, key, counter,
     update_phi,
@@ -65,7 +78,7 @@ def refine_cells_kernel(
 @njit
 def refine_phase_share(
     taken, cells, previous, before, nwk, nk, inv, work_nk, work_inv,
-    cell_first, cell_count, words, topics, ncz, ng, table, n_topics, alpha, beta, vbeta, key, counter, update_phi,
+    cell_first, cell_count, words, topics, ncz, ng, table, n_topics, alpha, beta, vbeta, key, counter,
 ):
     """Refine cells of one batch phase until none is left; several threads run this at once.
 
@@ -82,8 +95,7 @@ def refine_phase_share(
     it (``work_nk``, ``work_inv``), and its changes are taken back out of the copy. So
     every cell sees the counts of the phase's start plus its own changes and draws from
     stream ``(counter, cell)``, whichever caller refines it and however many there are.
-    With ``update_phi`` False (frozen counts) the copy may be the model's own: nothing
-    writes it, and ``previous`` must be empty.
+    A model with frozen counts uses :func:`refine_frozen_phase` instead.
 
     Parameters
     ----------
@@ -93,7 +105,7 @@ def refine_phase_share(
         The phase's cells and the phase before's.
     before : (capacity,) ndarray of the topic type
         Receives the phase-start topics of the words refined; holds those of
-        ``previous``. Not used with ``update_phi`` False.
+        ``previous``.
     nwk, nk, inv : (V, Kp) int32, (Kp,) int32, (Kp,) float32 ndarrays
         The caller's copy of the counts.
     work_nk, work_inv : (Kp,) int32, float32 ndarrays
@@ -111,23 +123,43 @@ def refine_phase_share(
             cell = cells[index]
             first = cell_first[cell]
             last = first + cell_count[cell]
-            if update_phi:
-                for i in range(first, last):
-                    before[i] = topics[i]
+            for i in range(first, last):
+                before[i] = topics[i]
             for k in range(nk.shape[0]):
                 work_nk[k] = nk[k]
                 work_inv[k] = inv[k]
             gibbs_cell(
                 cell, first, cell_count[cell], words, topics, nwk, work_nk, work_inv, ncz, ng, table, p,
-                alpha, beta, vbeta, stream_start(key, counter, cell), update_phi,
+                alpha, beta, vbeta, stream_start(key, counter, cell), True,
             )
-            if update_phi:
-                # take the cell's changes back out, the next cell must not see them
-                # (unconditionally: a no-op for an unchanged word, and no branch to mispredict)
-                for i in range(first, last):
-                    w = words[i]
-                    nwk[w, topics[i]] -= 1
-                    nwk[w, before[i]] += 1
+            # take the cell's changes back out, the next cell must not see them
+            # (unconditionally: a no-op for an unchanged word, and no branch to mispredict)
+            for i in range(first, last):
+                w = words[i]
+                nwk[w, topics[i]] -= 1
+                nwk[w, before[i]] += 1
+
+
+@njit
+def refine_frozen_phase(taken, cells, phiw, cell_first, cell_count, words, topics, ncz, ng, table, alpha, key, counter):
+    """:func:`refine_phase_share` for a model with frozen word-topic counts.
+
+    Nothing any cell writes is read by another cell of the phase, so the callers share
+    everything but their weights scratch: no copies, no merge. ``phiw`` is
+    :func:`~curiosity_cli.topics._sampler.gibbs_cell_frozen`'s.
+    """
+    p = np.zeros(phiw.shape[1], np.float32)
+    n = cells.shape[0]
+    while True:
+        start = fetch_add(taken, 0, _CHUNK)
+        if start >= n:
+            break
+        for index in range(start, min(start + _CHUNK, n)):
+            cell = cells[index]
+            gibbs_cell_frozen(
+                cell, cell_first[cell], cell_count[cell], words, topics, phiw, ncz, ng, table, p, alpha,
+                stream_start(key, counter, cell),
+            )
 
 
 @njit
@@ -240,13 +272,17 @@ def mean_log_likelihood_kernel(cells, cell_first, cell_count, words, nwk, nk, ng
 
     ``phi_k(w) = (nwk[w, k] + beta) / (nk[k] + V beta)`` and ``theta_c(k) = (ng[c, k] +
     alpha) / (sum_k ng[c, k] + K alpha)``, every count including the word itself; 0.0
-    when there are no words.
+    when there are no words. A word id repeated in a cell (aerial cells hold ~260 words
+    of ~25 ids) has the same term each time: it is computed once per cell and added as
+    often, in word order, so the sum is the same to the last bit as term by term.
     """
     kp = nk.shape[0]
     norm = np.zeros(kp)
     for k in range(n_topics):
         norm[k] = 1.0 / (nk[k] + vbeta)
     mixture = np.zeros(kp)
+    term = np.zeros(nwk.shape[0])
+    seen = np.full(nwk.shape[0], -1, np.int64)  # the cell whose term `term[w]` holds
     total = 0.0
     n = 0
     for j in range(cells.shape[0]):
@@ -259,7 +295,11 @@ def mean_log_likelihood_kernel(cells, cell_first, cell_count, words, nwk, nk, ng
         for k in range(n_topics):
             mixture[k] = norm[k] * (ng[cell, k] + alpha) * scale
         for i in range(first, first + cell_count[cell]):
-            total += np.log(row_dot(nwk, words[i], beta, mixture))
+            w = words[i]
+            if seen[w] != cell:
+                term[w] = np.log(row_dot(nwk, w, beta, mixture))
+                seen[w] = cell
+            total += term[w]
             n += 1
     if n == 0:
         return 0.0

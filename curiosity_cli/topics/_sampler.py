@@ -245,3 +245,53 @@ def gibbs_cell(
                 if d >= 0:
                     ng[d, k] += change
     return state
+
+
+@njit
+def gibbs_cell_frozen(cell, first, count, words, topics, phiw, ncz, ng, table, p, alpha, state):
+    """:func:`gibbs_cell` for a model whose word-topic counts are frozen, the same draws.
+
+    ``phiw`` (V, Kp) float32 holds ``(float32(nwk[w, k]) + beta) * inv[k]``, the first two
+    factors of every weight, which frozen counts never change: each weight is then one
+    product, ``phiw[w, k] * (float32(ng[cell, k]) + alpha)``, the same float32 value as
+    :func:`weight` computes left to right. The deferred neighbourhood update is that of
+    :func:`gibbs_cell`, for the same reason.
+    """
+    kp = p.shape[0]
+    width = table.shape[1]
+    last = first + count
+    held = False  # whether the previous word moved and ng[cell] does not show it yet
+    held_old = held_new = 0
+    for i in range(first, last + 1):
+        if i < last:
+            w = words[i]
+            for k in range(kp):
+                p[k] = phiw[w, k] * (np.float32(ng[cell, k]) + alpha)
+        if held:
+            ng[cell, held_old] -= 1
+            ng[cell, held_new] += 1
+        if i == last:
+            break
+        if held:
+            p[held_old] = phiw[w, held_old] * (np.float32(ng[cell, held_old]) + alpha)
+            p[held_new] = phiw[w, held_new] * (np.float32(ng[cell, held_new]) + alpha)
+        old = topics[i]
+        p[old] = phiw[w, old] * (np.float32(ng[cell, old] - 1) + alpha)
+        state, bits = next_state(state)
+        new = lane_draw(p, bits)
+        topics[i] = new
+        held, held_old, held_new = new != old, old, new
+    for k in range(kp):
+        now = ng[cell, k]
+        for j in range(width):
+            d = table[cell, j]
+            if d >= 0:
+                now -= ncz[d, k]
+        change = now - ncz[cell, k]
+        ncz[cell, k] = now
+        if change != 0:
+            for j in range(width):
+                d = table[cell, j]
+                if d >= 0:
+                    ng[d, k] += change
+    return state

@@ -335,6 +335,58 @@ class TopicModel:
         )
         self._counter += 1
 
+    def restart(self, seed: int) -> None:
+        """Every word back to a uniformly random topic, with a new seed.
+
+        The state becomes exactly that of a new model with ``seed`` (and this one's other
+        parameters and frozen counts) to which the observed cells were added in cell
+        order: a labelling can reuse one whole-map model for many runs instead of
+        building it again for each.
+
+        Raises
+        ------
+        ParameterError
+            ``seed`` outside 0 .. 2**64 - 1.
+        """
+        from curiosity_cli.topics._gibbs_kernels import redraw_topics_kernel
+
+        self._seed = check_int("seed", seed, 0, 2**64 - 1)
+        cells = np.sort(self._order[: self._n_observed]).astype(np.int64)
+        self._order[: self._n_observed] = cells
+        self._times[: self._n_observed] = np.arange(cells.size)
+        self._ncz[:] = 0
+        self._ng[:] = 0
+        if not self._frozen:
+            self._nwk[:] = 0
+            self._nk[:] = 0
+            self._refresh_inverse()
+        redraw_topics_kernel(
+            cells, self._cell_first, self._cell_count, self._words, self._topics, self._nwk, self._nk, self._inv,
+            self._ncz, self._ng, self._table, self._k, self._v * self._beta, self._key(), not self._frozen,
+        )
+        self._counter = cells.size
+
+    def set_frozen_counts(self, counts) -> None:
+        """Replace the frozen word-topic counts (Φ) of a frozen model, keeping every topic.
+
+        Labelling the checkpoints of one path in turn, each can start from the topics the
+        previous one left (a warm start) rather than from random ones.
+
+        Parameters
+        ----------
+        counts : (V, K) int ndarray
+
+        Raises
+        ------
+        ParameterError
+            The model is not frozen, or ``counts`` has another shape or negative entries.
+        """
+        if not self._frozen:
+            raise ParameterError("counts: the model's word-topic counts are not frozen; they follow its topics")
+        self._nwk[:, : self._k] = _check_frozen(counts, self._v, self._k)
+        self._nk[:] = self._nwk.sum(axis=0, dtype=np.int64)
+        self._refresh_inverse()
+
     def refine_cells(self, cells) -> int:
         """One Gibbs pass over the words of each listed cell, in the order given.
 
@@ -395,14 +447,15 @@ class TopicModel:
         if sweeps == 0 or self._n_observed == 0:
             return 0
         phases = self._phases()
+        if self._frozen:
+            return self._refine_frozen(sweeps, threads, phases)
         if len(phases) == 1:
             # one observed cell: the threads would merge the one phase into their copies
             # while it is being refined, and only one of them would have work
             threads = 1
-        update = not self._frozen
         kp = self._kp
         own = (self._nwk, self._nk, self._inv)
-        copies = [own] + [tuple(_aligned_copy(a) for a in own) if update else own for _ in range(threads - 1)]
+        copies = [own] + [tuple(_aligned_copy(a) for a in own) for _ in range(threads - 1)]
         # each thread's scratch, and the shared chunk counter, on cache lines of their own:
         # two threads writing one line (false sharing) halved the speed
         scratch = [(*copy, _aligned_zeros(kp, np.int32), _aligned_zeros(kp, np.float32)) for copy in copies]
@@ -414,7 +467,7 @@ class TopicModel:
         def refine(mine: tuple, phase: np.ndarray, previous: np.ndarray, counter: np.uint64) -> None:
             refine_phase_share(
                 taken, phase, previous, before, *mine, cell_first, cell_count, words, topics, ncz, ng, table,
-                self._k, alpha, beta, vbeta, key, counter, update,
+                self._k, alpha, beta, vbeta, key, counter,
             )
 
         # the phase whose changes are not yet in the counts: every thread merges it into
@@ -430,10 +483,42 @@ class TopicModel:
                     refine(scratch[0], phase, previous, counter)
                     for other in others:
                         other.result()  # waits, and re-raises an error of that thread
-                    if update:
-                        previous = phase
-        if update:
-            merge_phase(previous, cell_first, cell_count, words, before, topics, *own, self._k, vbeta)
+                    previous = phase
+        merge_phase(previous, cell_first, cell_count, words, before, topics, *own, self._k, vbeta)
+        self._counter += sweeps
+        return sweeps * self._n_words
+
+    def _refine_frozen(self, sweeps: int, threads: int, phases: list[np.ndarray]) -> int:
+        """:meth:`refine_batch` of a frozen model: the same draws, on shared read-only weights.
+
+        With Φ fixed, ``(n_kw + β) / (n_k + Vβ)`` is computed once per call, and the
+        threads of a phase share it: no copies of the counts, nothing to merge.
+        """
+        from concurrent.futures import ThreadPoolExecutor
+
+        from curiosity_cli.topics._gibbs_kernels import refine_frozen_phase
+
+        beta = np.float32(self._beta)
+        phiw = _aligned_zeros(self._nwk.shape, np.float32)
+        np.multiply(self._nwk.astype(np.float32) + beta, self._inv, out=phiw)
+        taken = _aligned_zeros(1, np.int64)
+        alpha, key = np.float32(self._alpha), self._key()
+
+        def refine(phase: np.ndarray, counter: np.uint64) -> None:
+            refine_frozen_phase(
+                taken, phase, phiw, self._cell_first, self._cell_count, self._words, self._topics, self._ncz,
+                self._ng, self._table, alpha, key, counter,
+            )
+
+        with ThreadPoolExecutor(max(threads - 1, 1)) as pool:
+            for sweep in range(sweeps):
+                counter = np.uint64(self._counter + sweep)
+                for phase in phases:
+                    taken[0] = 0
+                    others = [pool.submit(refine, phase, counter) for _ in range(threads - 1)]
+                    refine(phase, counter)
+                    for other in others:
+                        other.result()
         self._counter += sweeps
         return sweeps * self._n_words
 

@@ -61,3 +61,58 @@ def test_a_phi_of_the_wrong_shape_is_refused():
     store = synthetic_store(np.zeros((2, 2), int))
     with pytest.raises(ParameterError, match=r"phi: shape \(3, 8\), expected \(V, K\) = \(100, 8\)"):
         label_with_phi(store, np.zeros((3, 8)), small_config().model, sweeps=1, seed=0)
+
+
+def test_a_path_labelling_is_the_exact_sampler_cold_then_warm():
+    from naive import NaiveModel, ml_topics_naive, refine_batch_naive, restart_naive
+
+    from curiosity_cli.evaluate.labeling import PathLabeller
+
+    store = synthetic_store(np.arange(12).reshape(3, 4) % 3, words_per_cell=10)
+    model = dataclasses.replace(small_config().model, topics=5)
+    rng = np.random.default_rng(4)
+    phis = [rng.integers(0, 6, (store.vocabulary_size, 5)) for _ in range(3)]
+    labeller = PathLabeller(store, model)
+    got = labeller.label_path(phis, seed=21, sweeps=3, warm_sweeps=2, threads=2)
+
+    twin = NaiveModel.of(labeller._model)
+    cells = sorted(twin.topics)
+    twin.frozen = phis[0]
+    restart_naive(twin, 21)
+    refine_batch_naive(twin, 3)
+    expected = [ml_topics_naive(twin, cells)]
+    for phi in phis[1:]:
+        twin.frozen = phi  # warm: the topics stay, only Φ changes
+        refine_batch_naive(twin, 2)
+        expected.append(ml_topics_naive(twin, cells))
+    for a, b in zip(got, expected):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_warm_started_checkpoints_reach_the_labels_of_a_long_cold_chain():
+    from curiosity_cli.evaluate.information import contingency, mutual_information
+    from curiosity_cli.evaluate.labeling import PathLabeller
+
+    regions = np.zeros((8, 8), int)
+    regions[:, 4:] = 1
+    regions[5:, :] = 2
+    store = synthetic_store(regions)
+    model = small_config().model
+    truth = regions.ravel()[np.repeat(np.arange(64), 64)]
+    # a path's Φ as it grows: the counts of the batch model's labels on more and more cells
+    batch, _ = batch_labels(store, model, sweeps=30, seed=3)
+    phis = []
+    for cells in (8, 24, 64):
+        keep = np.repeat(np.arange(64) < cells, 64)
+        phi = np.zeros((store.vocabulary_size, model.topics), np.int64)
+        np.add.at(phi, (store.words[keep].astype(np.int64), batch[keep].astype(np.int64)), 1)
+        phis.append(phi)
+    labeller = PathLabeller(store, model)
+
+    def mi(words):
+        return mutual_information(contingency(words, truth, model.topics, 3))
+
+    cold = [np.mean([mi(labeller.label_path([phi], seed=s, sweeps=64, warm_sweeps=None)[0]) for s in range(4)]) for phi in phis]
+    warm = np.mean([[mi(w) for w in labeller.label_path(phis, seed=s, sweeps=16, warm_sweeps=4)] for s in range(4)], axis=0)
+    assert cold[-1] > 1.0  # the planted regions are found
+    np.testing.assert_allclose(warm, cold, atol=0.02)

@@ -18,10 +18,12 @@ from naive import (
     refine_batch_naive,
     refine_cells_naive,
     refine_realtime_naive,
+    restart_naive,
     unit32,
     unit64,
 )
 
+from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics import _rng
 from curiosity_cli.topics._gibbs_kernels import distance2_colouring
 from curiosity_cli.topics._sampler import lane_draw as lane_draw_kernel
@@ -240,6 +242,41 @@ def test_frozen_refine_batch_matches_twin(threads):
     model.refine_batch(3, threads=threads)
     refine_batch_naive(twin, 3)
     assert_matches(model, twin)
+
+
+@pytest.mark.parametrize("frozen", [False, True])
+def test_restart_matches_twin_and_a_fresh_model(frozen):
+    model = frozen_model(14)[0] if frozen else small_model(14)
+    model.refine_batch(2)
+    model.restart(99)
+    twin = NaiveModel.of(model)
+    before = NaiveModel.of(small_model(14, frozen=twin.frozen) if frozen else small_model(14))
+    restart_naive(before, 99)
+    assert twin.topics.keys() == before.topics.keys()
+    for c in twin.topics:
+        np.testing.assert_array_equal(twin.topics[c], before.topics[c])
+    assert (twin.counter, twin.key) == (before.counter, before.key)
+    assert_matches(model, twin)  # the cached counts agree with the redrawn topics
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_swapping_the_frozen_counts_keeps_the_topics_and_matches_twin(threads):
+    model, _ = frozen_model(15, **BATCH_GRID)
+    model.refine_batch(2, threads=threads)
+    topics = model.topics()
+    other = np.random.default_rng(7).integers(0, 9, (12, 5))
+    model.set_frozen_counts(other)
+    np.testing.assert_array_equal(model.topics(), topics)
+    np.testing.assert_array_equal(model.topic_word_counts(), other)
+    twin = NaiveModel.of(model)
+    model.refine_batch(2, threads=threads)
+    refine_batch_naive(twin, 2)
+    assert_matches(model, twin)
+
+
+def test_counts_of_a_model_that_learns_cannot_be_swapped():
+    with pytest.raises(ParameterError, match="not frozen"):
+        small_model(16).set_frozen_counts(np.zeros((12, 5), int))
 
 
 # --- ML topics and log-likelihood -----------------------------------------------------

@@ -1,0 +1,117 @@
+"""Labelling on a Dask cluster: a real local cluster on loopback, label files as with loky."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import zipfile
+
+import dask
+import distributed
+import numpy as np
+import pytest
+from small_maps import grid_yaml
+from test_pipeline import small_experiment
+from typer.testing import CliRunner
+
+from curiosity_cli.cli import app
+from curiosity_cli.evaluate.labels import LabelError, label_experiment
+from curiosity_cli.explore.runs import run_folder
+from curiosity_cli.parallel import dask_client
+
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def scheduler():
+    """The address of a local cluster of 2 one-thread worker processes."""
+    with dask_client(None, 2) as (client, _):
+        yield client.scheduler.address
+
+
+def label_contents(folder) -> dict:
+    """Each label and batch file's arrays, byte for byte (the zip's timestamps and a batch reference's timing aside)."""
+    out = {}
+    for path in sorted([*(folder / "labels").rglob("*.npz"), *(folder / "batch").glob("*.npz")]):
+        with zipfile.ZipFile(path) as npz:
+            members = {name: npz.read(name) for name in npz.namelist()}
+        if path.parent.name == "batch":
+            with np.load(path) as npz:
+                meta = json.loads(str(npz["meta"]))
+            assert meta.pop("seconds") >= 0
+            members["meta.npy"] = meta
+        out[path.relative_to(folder).as_posix()] = members
+    return out
+
+
+def test_labels_on_a_cluster_equal_the_loky_labels_byte_for_byte(own_map, tmp_path, scheduler):
+    config, folder = small_experiment(own_map, tmp_path / "loky")
+    shutil.copytree(folder, tmp_path / "dask" / "grid")
+    cache = tmp_path / "loky" / "cache"
+    label_experiment(config, results_dir=tmp_path / "loky", cache_dir=cache, jobs=2)
+    loky = label_contents(folder)
+    assert len([key for key in loky if key.startswith("labels/own/") and "/examples/" not in key]) == 8
+
+    stages, done = [], []
+    summary = label_experiment(config, results_dir=tmp_path / "dask", cache_dir=cache, backend="dask",
+                               scheduler=scheduler, on_stage=lambda *stage: stages.append(stage), on_done=lambda: done.append(1))
+    assert (summary["labelled"], summary["skipped"], summary["batch_reused"]) == (8, 0, 0)
+    assert stages == [("batch references of own", 8), ("labelling runs", 8)] and len(done) == 16
+    assert label_contents(tmp_path / "dask" / "grid") == loky
+    again = label_experiment(config, results_dir=tmp_path / "dask", cache_dir=cache, backend="dask", scheduler=scheduler)
+    assert (again["labelled"], again["skipped"], again["batch_reused"]) == (0, 8, 1)
+
+
+@pytest.mark.parametrize("backend", ["loky", "dask"])
+def test_a_label_task_that_raises_is_named_and_the_others_are_written(own_map, tmp_path, scheduler, backend):
+    config, folder = small_experiment(own_map, tmp_path)
+    meta_path = run_folder(folder, "own", "random-walk", 1) / "run.json"
+    meta = json.loads(meta_path.read_text())
+    meta_path.write_text(json.dumps({**meta, "n_topics": 9}))  # its checkpoints do not fit the model: labelling raises
+    where = {"jobs": 2} if backend == "loky" else {"backend": "dask", "scheduler": scheduler}
+    with pytest.raises(LabelError, match=r"^1 of 8 runs could not be labelled \(the others are written\): "
+                                         r"own / random-walk / restart 1: ParameterError: phi: shape \(\d+, 9\)"):
+        label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", **where)
+    assert len(list((folder / "labels" / "own").glob("*/restart-*.npz"))) == 7
+    assert not (folder / "labels" / "own" / "random-walk" / "restart-001.npz").exists()
+
+    meta_path.write_text(json.dumps(meta))  # mended: running again labels only that run
+    again = label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", **where)
+    assert (again["labelled"], again["skipped"], again["batch_reused"]) == (1, 7, 1)
+
+
+def test_reproduce_on_dask_explores_and_labels_on_one_local_cluster_as_loky_would(own_map, tmp_path, monkeypatch):
+    started = []
+
+    class CountedCluster(distributed.LocalCluster):
+        def __init__(self, *args, **kwargs):
+            started.append(kwargs["n_workers"])
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(distributed, "LocalCluster", CountedCluster)
+    sets = ["--set", "label.sweeps=2", "--set", "label.batch_sweeps=5"]
+    result = runner.invoke(app, ["reproduce", str(grid_yaml(own_map, tmp_path)), *sets, "--backend", "dask", "--jobs", "2",
+                                 "--results-dir", str(tmp_path / "dask"), "--cache-dir", str(tmp_path / "cache")])
+    assert result.exit_code == 0, result.output
+    assert started == [2]
+
+    shutil.copytree(tmp_path / "dask" / "grid" / "runs", tmp_path / "loky" / "grid" / "runs")
+    shutil.copy(tmp_path / "dask" / "grid" / "config.yaml", tmp_path / "loky" / "grid")
+    result = runner.invoke(app, ["label", str(tmp_path / "loky" / "grid"), *sets, "--jobs", "2",
+                                 "--cache-dir", str(tmp_path / "cache")])
+    assert result.exit_code == 0 and "labelled 8 runs" in result.stdout, result.output
+    assert label_contents(tmp_path / "loky" / "grid") == label_contents(tmp_path / "dask" / "grid")
+
+
+def test_label_backend_mistakes_and_an_unreachable_scheduler(own_map, tmp_path):
+    config, folder = small_experiment(own_map, tmp_path)
+    result = runner.invoke(app, ["label", str(folder), "--scheduler", "tcp://127.0.0.1:8786"])
+    assert result.exit_code == 2 and "needs --backend dask" in result.stderr
+
+    with dask.config.set({"distributed.comm.timeouts.connect": "2s"}):
+        result = runner.invoke(app, ["label", str(folder), "--backend", "dask", "--scheduler", "tcp://127.0.0.1:1",
+                                     "--cache-dir", str(tmp_path / "cache")])
+    assert result.exit_code == 1, result.output
+    assert result.stderr.startswith("Error: cannot reach the Dask scheduler at tcp://127.0.0.1:1")
+    assert result.stderr.count("\n") == 1 and "Traceback" not in result.output
+    assert not (folder / "labels").exists()
