@@ -161,6 +161,27 @@ def weights_scratch(inv):
     return buffer[gap : gap + kp]
 
 
+@njit(inline="always")
+def settle_cell(cell, ncz, ng, table):
+    """After a pass over ``cell`` that kept only ``ng[cell]`` current: its own counts are
+    its neighbourhood sum less its neighbours' own counts (which no pass over this cell
+    changes), and the change goes to every neighbour's sum."""
+    width = table.shape[1]
+    for k in range(ng.shape[1]):
+        now = ng[cell, k]
+        for j in range(width):
+            d = table[cell, j]
+            if d >= 0:
+                now -= ncz[d, k]
+        change = now - ncz[cell, k]
+        ncz[cell, k] = now
+        if change != 0:
+            for j in range(width):
+                d = table[cell, j]
+                if d >= 0:
+                    ng[d, k] += change
+
+
 @njit
 def gibbs_cell(
     cell, first, count, words, topics, nwk, nk, inv, ncz, ng, table, p, alpha, beta, vbeta, state, update_phi
@@ -188,7 +209,6 @@ def gibbs_cell(
     slower.
     """
     kp = p.shape[0]
-    width = table.shape[1]
     last = first + count
     # the previous word: id (-1: none), old and new topic, and the normaliser of its old
     # topic without it; still counted at its old topic
@@ -229,21 +249,7 @@ def gibbs_cell(
         new = lane_draw(p, bits)
         topics[i] = new
         held_w, held_old, held_new, held_inv = w, old, new, own_inv
-    # the cell's own counts are its neighbourhood sum less its neighbours' own counts
-    # (which no pass over this cell changes); the change goes to every neighbour's sum
-    for k in range(kp):
-        now = ng[cell, k]
-        for j in range(width):
-            d = table[cell, j]
-            if d >= 0:
-                now -= ncz[d, k]
-        change = now - ncz[cell, k]
-        ncz[cell, k] = now
-        if change != 0:
-            for j in range(width):
-                d = table[cell, j]
-                if d >= 0:
-                    ng[d, k] += change
+    settle_cell(cell, ncz, ng, table)
     return state
 
 
@@ -258,7 +264,6 @@ def gibbs_cell_frozen(cell, first, count, words, topics, phiw, ncz, ng, table, p
     :func:`gibbs_cell`, for the same reason.
     """
     kp = p.shape[0]
-    width = table.shape[1]
     last = first + count
     held = False  # whether the previous word moved and ng[cell] does not show it yet
     held_old = held_new = 0
@@ -281,17 +286,5 @@ def gibbs_cell_frozen(cell, first, count, words, topics, phiw, ncz, ng, table, p
         new = lane_draw(p, bits)
         topics[i] = new
         held, held_old, held_new = new != old, old, new
-    for k in range(kp):
-        now = ng[cell, k]
-        for j in range(width):
-            d = table[cell, j]
-            if d >= 0:
-                now -= ncz[d, k]
-        change = now - ncz[cell, k]
-        ncz[cell, k] = now
-        if change != 0:
-            for j in range(width):
-                d = table[cell, j]
-                if d >= 0:
-                    ng[d, k] += change
+    settle_cell(cell, ncz, ng, table)
     return state
