@@ -145,8 +145,8 @@ def main() -> None:
     print(f"{args.map}: {runs} runs of {args.steps} steps (4 weight functions x {args.restarts} restarts), "
           f"{w} workers of 1 thread, median of {args.repeats}")
     print_table(times, runs)
-    print(f"\nlabelling the same {runs} runs ({config.label.sweeps} sweeps per checkpoint, "
-          f"warm_sweeps {config.label.warm_sweeps}; batch reference reused), median of {args.repeats}")
+    print(f"\nlabelling the same {runs} runs (label.sweeps {config.label.sweeps}, label.warm_sweeps "
+          f"{config.label.warm_sweeps}; batch reference reused), median of {args.repeats}")
     print_table(label_times, runs)
     per_run = statistics.median(times["loky, warm"]) * w / runs
     print(f"\noverhead per task ({args.noop} no-op tasks, worker time = wall x {w} / tasks), "

@@ -14,7 +14,7 @@ from curiosity_cli.config import CONFIG_DIR
 
 
 class Backend(str, enum.Enum):
-    """Where runs are computed (``curiosity_cli.explore.grid.BACKENDS``)."""
+    """Where runs are computed (``curiosity_cli.parallel.BACKENDS``)."""
 
     loky = "loky"
     dask = "dask"
