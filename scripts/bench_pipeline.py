@@ -25,7 +25,6 @@ Prints and never asserts: timings depend on the machine.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import statistics
 import subprocess
 import sys

@@ -7,7 +7,6 @@ import cv2
 import numpy as np
 import pytest
 import yaml
-from small_maps import edit_yaml
 
 from curiosity_cli.config import CONFIG_DIR, load_words_config
 from curiosity_cli.data import load_map
