@@ -110,14 +110,14 @@ def _check_words(words: WordsConfig, raw: _Raw) -> None:
 class ExploreConfig:
     """Exploration runs on the simulated 2-D grid (paper sections 4 and 5.1)."""
 
-    # names from curiosity_cli.explore.weights.WEIGHT_FUNCTIONS, checked when loading
+    # walkers named in curiosity_cli.explore.weights.WEIGHT_FUNCTIONS, checked when loading
     weight_functions: tuple[str, ...] = _spec()
     restarts: int = _spec(min=1)
     path_length: int = _spec(min=1)
     checkpoints: tuple[int, ...] = _spec(min=1)
     samples_per_step: int = _spec(min=1)
     step_seconds: float | None = _spec(min=0, min_exclusive=True)
-    min_d2: float = _spec(min=0, min_exclusive=True)
+    min_d2: float | None = _spec(min=0, min_exclusive=True)
 
 
 @dataclass(frozen=True)

@@ -34,10 +34,15 @@ def synthetic_store(region_of_cell: np.ndarray, words_per_cell: int = 64, seed: 
     return build_store(pixel_rows, pixel_cols, words, (rows * CELL, cols * CELL), CELL, types, {"dataset": "synthetic"})
 
 
+#: The paper's four weight functions, which most tests run (the baseline and ceilings are tested apart).
+PAPER_WALKERS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity")
+
+
 def small_config(**explore) -> ExperimentConfig:
-    """quick.yaml with 8 topics, a small budget and short paths (``explore`` keys override)."""
+    """quick.yaml with 8 topics, a small budget, short paths and the paper's 4 weight functions
+    (``explore`` keys override)."""
     config = load_config(CONFIG_DIR / "quick.yaml")
-    settings = dict(path_length=30, checkpoints=(10, 30), samples_per_step=5000, restarts=2)
+    settings = dict(path_length=30, checkpoints=(10, 30), samples_per_step=5000, restarts=2, weight_functions=PAPER_WALKERS)
     settings.update(explore)
     return dataclasses.replace(
         config,
@@ -68,7 +73,10 @@ def grid_yaml(own_map: Path, folder: Path) -> Path:
         "seed": 0,
         "datasets": [str(own_map)],
         "model": {"topics": 8},
-        "explore": {"restarts": 2, "path_length": 12, "checkpoints": [5, 12], "samples_per_step": 5000},
+        "explore": {
+            "weight_functions": list(PAPER_WALKERS), "restarts": 2, "path_length": 12, "checkpoints": [5, 12],
+            "samples_per_step": 5000,
+        },
     }
     path = folder / "grid.yaml"
     path.write_text(yaml.safe_dump(text, sort_keys=False))

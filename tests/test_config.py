@@ -33,12 +33,14 @@ def test_paper_yaml_holds_the_papers_parameters():
     assert (config.words.orb_vocabulary, config.words.texton_vocabulary) == (5000, 1000)
     assert config.explore.restarts == 20 and config.explore.path_length == 320
     assert config.explore.checkpoints == (10, 20, 40, 80, 160, 320)
-    assert config.explore.weight_functions == (
+    assert config.explore.weight_functions[:4] == (
         "random-walk",
         "stochastic-coverage",
         "word-perplexity",
         "topic-perplexity",
     )
+    assert config.explore.weight_functions[4:] == ("lawnmower", "scattered-cells", "compact-block")
+    assert config.explore.min_d2 is None, "eq. 8 as written: a visited neighbour has weight 0"
     assert config.drive.gamma == 0.7
     assert config.datasets == ("zurich-zh17", "aerial-mosaic", "sentinel-coast", "reef-mosaic")
 

@@ -3,9 +3,9 @@
 ``results/<experiment>/runs/<dataset>/<weight function>/restart-<NNN>/`` holds:
 
 - ``path.csv``: one row per step: ``step, row, col, cell, first_visit, words_sampled,
-  log_likelihood, fallback``;
-- ``candidates.csv``: one row per scored neighbour: ``step, row, col, cell, coverage,
-  word_perplexity, topic_perplexity, weight, chosen``;
+  log_likelihood, fallback, boxed_in``;
+- ``candidates.csv``: one row per scored neighbour (none for a planned walker): ``step,
+  row, col, cell, coverage, word_perplexity, topic_perplexity, weight, chosen``;
 - ``checkpoints.npz`` (compressed): the path's cells and, for every checkpoint length
   ``L``, the non-zero word-topic counts Φ_p as ``L/words``, ``L/topics``, ``L/counts``;
 - ``run.json``: what the run was (dataset, weight function, restart, start cell, seed,
@@ -79,7 +79,7 @@ def write_run(folder: Path, exploration: Exploration, meta: dict, grid_cols: int
             {
                 "step": np.arange(e.path.size), "row": rows, "col": cols, "cell": e.path,
                 "first_visit": e.first_visit, "words_sampled": e.words_sampled,
-                "log_likelihood": e.log_likelihood, "fallback": e.fallback,
+                "log_likelihood": e.log_likelihood, "fallback": e.fallback, "boxed_in": e.boxed_in,
             }
         ).to_csv(tmp / "path.csv", index=False)
         c_rows, c_cols = np.divmod(e.candidate_cell, grid_cols)

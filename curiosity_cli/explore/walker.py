@@ -9,10 +9,16 @@ Each step ``t`` (0-based) of a run of ``path_length`` steps, with the walker in 
    budget stands in for the paper's 200 ms per step, so results do not depend on how
    fast the machine is.
 3. **Score** the in-bounds 4-neighbours with the run's weight function
-   (:mod:`curiosity_cli.explore.weights`).
+   (:mod:`curiosity_cli.explore.weights`). When every neighbour is visited and the
+   paper's repulsion leaves them all weight 0, they are scored again by the boxed-in
+   rule of that module, and the step is counted as boxed in.
 4. **Move** to a neighbour drawn with probability proportional to its weight. Weights
    that are NaN or infinite count as 0; if no weight is left positive the draw is
    uniform, and the step is counted as a fallback.
+
+A planned walker (:class:`~curiosity_cli.explore.weights.Plan`: the lawnmower and the
+ceilings) skips steps 3 and 4: its cells are drawn when it starts, from the same move
+stream, and nothing is scored.
 
 After ``L`` steps the path has length ``L`` (``p_0 .. p_{L-1}`` observed); at each
 checkpoint length the model's word-topic counts Φ_p are kept. The last step only
@@ -21,6 +27,7 @@ observes and refines: nothing scores a move that would never be observed.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -28,7 +35,7 @@ import numpy as np
 
 from curiosity_cli.config import ExploreConfig, ModelConfig
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, coverage_potential
+from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, Plan, coverage_potential
 from curiosity_cli.words.store import WordStore
 
 # word samples per call when refining against the clock: small enough to stop on time
@@ -87,6 +94,9 @@ class Exploration:
     fallback : (L,) bool ndarray
         Steps whose move was drawn uniformly because no weight was positive (always
         False on the last step, which does not move).
+    boxed_in : (L,) bool ndarray
+        Steps whose neighbours were all visited, so the paper's repulsion gave each
+        weight 0 and the boxed-in rule scored them.
     candidate_step, candidate_cell : (M,) int64 ndarrays
         For every scored neighbour: the step and the neighbour's cell.
     coverage, word_perplexity, topic_perplexity, weight : (M,) float64 ndarrays
@@ -102,6 +112,7 @@ class Exploration:
     words_sampled: np.ndarray
     log_likelihood: np.ndarray
     fallback: np.ndarray
+    boxed_in: np.ndarray
     candidate_step: np.ndarray
     candidate_cell: np.ndarray
     coverage: np.ndarray
@@ -174,7 +185,8 @@ def explore(
     store : WordStore
         The map's words by cell.
     weight_function : str
-        A name in :data:`~curiosity_cli.explore.weights.WEIGHT_FUNCTIONS`.
+        A name in :data:`~curiosity_cli.explore.weights.WEIGHT_FUNCTIONS`: a weight
+        function or a plan.
     start_cell : int
         Row-major cell of the first step.
     model : ModelConfig
@@ -201,7 +213,7 @@ def explore(
         raise ParameterError(
             f"weight_function: got {weight_function!r}, expected one of {', '.join(WEIGHT_FUNCTIONS)}"
         )
-    score = WEIGHT_FUNCTIONS[weight_function]
+    walker = WEIGHT_FUNCTIONS[weight_function]
     n_cells = store.n_cells
     if n_cells < 2:
         raise ParameterError("store: the map has a single cell, so there is nowhere to move")
@@ -218,12 +230,14 @@ def explore(
     words_sampled = np.zeros(length, np.int64)
     log_likelihood = np.empty(length)
     fallback = np.zeros(length, bool)
+    boxed_in = np.zeros(length, bool)
     visits = np.zeros(n_cells, np.int64)
     scored: list[tuple] = []
     checkpoints: dict[int, SparseCounts] = {}
     keep = set(settings.checkpoints)
 
-    cell = int(start_cell)
+    planned = walker.cells(int(start_cell), store.grid_shape, length, rng) if isinstance(walker, Plan) else None
+    cell = int(start_cell) if planned is None else int(planned[0])
     for step in range(length):
         path[step] = cell
         if visits[cell] == 0:
@@ -236,6 +250,9 @@ def explore(
             checkpoints[step + 1] = SparseCounts.of(topic_model.topic_word_counts())
         if step + 1 == length:
             break
+        if planned is not None:
+            cell = int(planned[step + 1])
+            continue
 
         cells = in_bounds_neighbours(cell, store.grid_shape)
         visited = np.flatnonzero(visits)
@@ -245,16 +262,25 @@ def explore(
             word_perplexity=np.array([word_perplexity(topic_model, store.cell_words(g)) for g in cells]),
             topic_perplexity=np.array([topic_perplexity(topic_model, store.cell_words(g), g) for g in cells]),
         )
-        weights = np.asarray(score(candidates), np.float64)
-        if weights.shape != cells.shape or np.any(weights < 0):
-            raise ParameterError(
-                f"weight function {weight_function!r}: returned {weights!r}, expected {cells.size} weights >= 0"
-            )
+        weights = _weights(walker, weight_function, candidates)
+        if np.all(np.isinf(candidates.coverage)) and not np.any(weights > 0):
+            boxed_in[step] = True
+            candidates = dataclasses.replace(candidates, coverage=visits[cells].astype(np.float64))
+            weights = _weights(walker, weight_function, candidates)
         choice, fallback[step] = draw_move(weights, rng)
         scored.append((step, candidates, weights, choice))
         cell = int(cells[choice])
 
-    return _records(path, first_visit, words_sampled, log_likelihood, fallback, scored, checkpoints)
+    return _records(path, first_visit, words_sampled, log_likelihood, fallback, boxed_in, scored, checkpoints)
+
+
+def _weights(weight_function, name: str, candidates: Candidates) -> np.ndarray:
+    weights = np.asarray(weight_function(candidates), np.float64)
+    if weights.shape != candidates.cells.shape or np.any(weights < 0):
+        raise ParameterError(
+            f"weight function {name!r}: returned {weights!r}, expected {candidates.cells.size} weights >= 0"
+        )
+    return weights
 
 
 def _refine(topic_model, eta: float, settings: ExploreConfig) -> int:
@@ -267,7 +293,7 @@ def _refine(topic_model, eta: float, settings: ExploreConfig) -> int:
     return done
 
 
-def _records(path, first_visit, words_sampled, log_likelihood, fallback, scored, checkpoints) -> Exploration:
+def _records(path, first_visit, words_sampled, log_likelihood, fallback, boxed_in, scored, checkpoints) -> Exploration:
     def column(get, dtype) -> np.ndarray:
         parts = [np.asarray(get(*entry), dtype) for entry in scored]
         return np.concatenate(parts) if parts else np.zeros(0, dtype)
@@ -278,6 +304,7 @@ def _records(path, first_visit, words_sampled, log_likelihood, fallback, scored,
         words_sampled=words_sampled,
         log_likelihood=log_likelihood,
         fallback=fallback,
+        boxed_in=boxed_in,
         candidate_step=column(lambda step, c, w, i: np.full(c.cells.size, step), np.int64),
         candidate_cell=column(lambda step, c, w, i: c.cells, np.int64),
         coverage=column(lambda step, c, w, i: c.coverage, np.float64),

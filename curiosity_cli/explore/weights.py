@@ -1,21 +1,32 @@
-"""Weight functions: how much a walker wants to step into each neighbouring cell (paper section 4).
+"""Walkers: how a run chooses its next cell (paper section 4, and our baselines).
 
-A weight function is a pure function of a :class:`Candidates` record, the facts about the
-in-bounds 4-neighbours ``g_i`` of the walker's cell, and returns one weight per
-candidate; the walker steps to ``g_i`` with probability ``weight_i / Σ weight``. The
-facts are computed once per step for every weight function alike (so every run logs
+Most walkers are **weight functions**: a pure function of a :class:`Candidates` record,
+the facts about the in-bounds 4-neighbours ``g_i`` of the walker's cell, returning one
+weight per candidate; the walker steps to ``g_i`` with probability ``weight_i / Σ weight``.
+The facts are computed once per step for every weight function alike (so every run logs
 them), which keeps each function a one-liner that is easy to check against the paper:
 
 - ``random-walk``: 1 (eq. 7);
 - ``stochastic-coverage``: ``1 / U(g_i)`` (eq. 8), with the coverage potential
-  ``U(g) = Σ_j n_j / max(d²(g, c_j), min_d2)`` over the visited cells ``c_j`` with visit
-  counts ``n_j``. ``d`` is the Euclidean distance in cell units. The clamp is ours: an
-  already visited candidate has ``d = 0`` and, unclamped, weight 0 for ever; with the
-  default ``min_d2 = 0.25`` a visited cell repels as if it were half a cell away;
+  ``U(g) = Σ_j n_j / d²(g, c_j)`` over the visited cells ``c_j`` with visit counts
+  ``n_j``; ``d`` is the Euclidean distance in cell units. A visited candidate has
+  ``d = 0``, so ``U = ∞`` and weight 0: the walker never steps back while an unvisited
+  neighbour is open (the paper's rule). When every neighbour is visited the walker is
+  *boxed in* and the step is drawn by the limit of eq. 8 as a visited cell's own
+  ``d²`` shrinks to 0 alike for every candidate: ``U(g_i)`` becomes ``n(g_i)``, the
+  candidate's own visit count, so the least visited neighbours are preferred (the
+  walker counts these steps). ``explore.min_d2`` instead clamps ``d²`` from below, our
+  old deviation: with ``min_d2 = 0.25`` a visited cell repels as if half a cell away;
 - ``word-perplexity``: ``WordPerplexity(g_i) / U(g_i)`` (eqs. 9 and 11);
 - ``topic-perplexity``: ``TopicPerplexity(g_i) / U(g_i)`` (eqs. 10 and 12).
 
-To add a weight function, write ``def mine(candidates: Candidates) -> np.ndarray`` and
+The others are **plans** (:class:`Plan`, :mod:`curiosity_cli.explore.plans`), whose
+cells are fixed when the run starts: ``lawnmower``, the pre-programmed boustrophedon
+mission, a path compared with the weight functions; and the two **ceilings**
+``scattered-cells`` and ``compact-block``, models learned from cells chosen without
+walking, which say what any walker could hope for and are reported apart (:data:`CEILINGS`).
+
+To add a walker, write ``def mine(candidates: Candidates) -> np.ndarray`` (or a plan) and
 add it to :data:`WEIGHT_FUNCTIONS` under a name; configs can then name it in
 ``explore.weight_functions``.
 """
@@ -26,6 +37,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+
+from curiosity_cli.explore import plans
 
 
 @dataclass(frozen=True)
@@ -38,7 +51,8 @@ class Candidates:
         Row-major indices of the in-bounds 4-neighbours, in the order up, down, left,
         right (those that exist).
     coverage : (n,) float64 ndarray
-        The coverage potential ``U(g_i)`` (module docstring), > 0.
+        The coverage potential ``U(g_i)`` (module docstring), > 0: infinite for a visited
+        candidate under the paper's rule, and its visit count when the walker is boxed in.
     word_perplexity, topic_perplexity : (n,) float64 ndarrays
         Eqs. 11 and 12 of each candidate's words under the model learned so far (the
         words are seen, not added to the model); 1.0 for a cell without words.
@@ -73,17 +87,43 @@ def topic_perplexity(candidates: Candidates) -> np.ndarray:
     return candidates.topic_perplexity / candidates.coverage
 
 
-#: Every weight function by the name configs use; the paper's four first, in its order.
-WEIGHT_FUNCTIONS: dict[str, WeightFunction] = {
+@dataclass(frozen=True)
+class Plan:
+    """A walker whose cells are fixed when it starts (:mod:`curiosity_cli.explore.plans`).
+
+    Attributes
+    ----------
+    cells : callable
+        ``cells(start_cell, grid_shape, length, rng)`` -> (length,) int64 ndarray of
+        row-major cells.
+    ceiling : bool
+        True for a reference that is not a path (reported apart from the walkers).
+    """
+
+    cells: Callable[[int, tuple[int, int], int, np.random.Generator], np.ndarray]
+    ceiling: bool = False
+
+
+#: Every walker by the name configs use: the paper's four weight functions first, in its
+#: order, then the lawnmower baseline, then the ceilings.
+WEIGHT_FUNCTIONS: dict[str, WeightFunction | Plan] = {
     "random-walk": random_walk,
     "stochastic-coverage": stochastic_coverage,
     "word-perplexity": word_perplexity,
     "topic-perplexity": topic_perplexity,
+    "lawnmower": Plan(plans.lawnmower),
+    "scattered-cells": Plan(plans.scattered_cells, ceiling=True),
+    "compact-block": Plan(plans.compact_block, ceiling=True),
 }
 
+#: Names of the runs that are ceilings, not walkers: reported apart, never the "next best".
+CEILINGS: tuple[str, ...] = tuple(n for n, w in WEIGHT_FUNCTIONS.items() if isinstance(w, Plan) and w.ceiling)
 
-def coverage_potential(candidates: np.ndarray, visited: np.ndarray, visits: np.ndarray, grid_cols: int, min_d2: float) -> np.ndarray:
-    """``U(g) = Σ_j n_j / max(d²(g, c_j), min_d2)`` for each candidate cell ``g``.
+
+def coverage_potential(
+    candidates: np.ndarray, visited: np.ndarray, visits: np.ndarray, grid_cols: int, min_d2: float | None
+) -> np.ndarray:
+    """``U(g) = Σ_j n_j / d²(g, c_j)`` for each candidate cell ``g`` (eq. 8), ``d²`` clamped or not.
 
     Parameters
     ----------
@@ -95,8 +135,9 @@ def coverage_potential(candidates: np.ndarray, visited: np.ndarray, visits: np.n
         ``n_j``, how often each was visited.
     grid_cols : int
         Cells per row of the grid (to turn indices into rows and columns).
-    min_d2 : float
-        Lower clamp on the squared distance, > 0.
+    min_d2 : float or None
+        Lower clamp on the squared distance, > 0; None for the paper's rule, under which
+        a visited candidate (``d = 0``) has ``U = ∞``.
 
     Returns
     -------
@@ -105,4 +146,9 @@ def coverage_potential(candidates: np.ndarray, visited: np.ndarray, visits: np.n
     c_rows, c_cols = np.divmod(np.asarray(candidates, np.int64), grid_cols)
     v_rows, v_cols = np.divmod(np.asarray(visited, np.int64), grid_cols)
     d2 = (c_rows[:, None] - v_rows[None, :]) ** 2 + (c_cols[:, None] - v_cols[None, :]) ** 2
-    return (np.asarray(visits, np.float64)[None, :] / np.maximum(d2, min_d2)).sum(axis=1)
+    n = np.asarray(visits, np.float64)[None, :]
+    if min_d2 is not None:
+        return (n / np.maximum(d2, min_d2)).sum(axis=1)
+    on_visited = (d2 == 0).any(axis=1)
+    far = (n / np.where(d2 == 0, 1, d2)).sum(axis=1)
+    return np.where(on_visited, np.inf, far)

@@ -13,7 +13,9 @@
 
 Weight functions keep the paper's visual language: topic perplexity blue squares,
 stochastic coverage orange circles, random walk purple triangles, word perplexity green
-diamonds; any other weight function a grey marker of its own.
+diamonds; our lawnmower baseline brown crosses; any other weight function a grey marker of
+its own. The ceilings (scattered cells, a compact block) are grey dashed lines without
+markers or bands in the MI figures.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.plots import palette
 from curiosity_cli.plots.experiment_inputs import (
@@ -39,13 +42,18 @@ from curiosity_cli.plots.experiment_inputs import (
     read_table,
 )
 
-#: (colour, marker) of the paper's weight functions, in the order legends list them.
+#: (colour, marker) of the paper's weight functions and our lawnmower baseline, in the
+#: order legends list them.
 WEIGHT_STYLES = {
     "topic-perplexity": ("tab:blue", "s"),
     "stochastic-coverage": ("tab:orange", "o"),
     "word-perplexity": ("tab:green", "D"),
     "random-walk": ("tab:purple", "^"),
+    "lawnmower": ("tab:brown", "x"),
 }
+#: (colour, dash pattern) of the ceilings, in the order of ``CEILINGS``: lines without
+#: markers or bands, since they bound the walkers rather than compete with them.
+CEILING_STYLES = (("0.15", (0, (5, 2))), ("0.5", (0, (2, 2))))
 #: Styles for any other weight function, taken in turn (sorted by name).
 OTHER_STYLES = (("0.3", "v"), ("0.55", "P"), ("0.4", "X"), ("0.6", "h"), ("0.35", "*"), ("0.5", "p"), ("0.45", "<"))
 #: The example path shown in figs. 2 and 3: the paper's method, first restart.
@@ -176,8 +184,14 @@ def weight_style(name: str, others: list[str]) -> tuple[str, str]:
 
 
 def _weight_order(names) -> list[str]:
+    """Walkers in legend order: ours by WEIGHT_STYLES, then any other by name; ceilings last."""
     names = set(names)
-    return [n for n in WEIGHT_STYLES if n in names] + sorted(names - set(WEIGHT_STYLES))
+    ceilings = [n for n in CEILINGS if n in names]
+    return [n for n in WEIGHT_STYLES if n in names] + sorted(names - set(WEIGHT_STYLES) - set(ceilings)) + ceilings
+
+
+def _ceiling_style(name: str) -> tuple[str, tuple]:
+    return CEILING_STYLES[CEILINGS.index(name) % len(CEILING_STYLES)]
 
 
 def _label(weight_function: str) -> str:
@@ -185,7 +199,8 @@ def _label(weight_function: str) -> str:
 
 
 def mi_figure(summary, against: str, datasets: list[str]):
-    """MI against path length, one panel per map: mean line and 95% CI band per weight function.
+    """MI against path length, one panel per map: mean line and 95% CI band per weight function,
+    and a dashed line per ceiling.
 
     Parameters
     ----------
@@ -211,7 +226,7 @@ def mi_figure(summary, against: str, datasets: list[str]):
     if not panels:
         return None
     weights = _weight_order(rows["weight_function"].astype(str))
-    others = [w for w in weights if w not in WEIGHT_STYLES]
+    others = [w for w in weights if w not in WEIGHT_STYLES and w not in CEILINGS]
     n_cols = min(len(panels), 3)
     n_rows = math.ceil(len(panels) / n_cols)
     fig = Figure(figsize=(0.6 + 4.0 * n_cols, 0.9 + 3.2 * n_rows), layout="constrained")
@@ -222,8 +237,12 @@ def mi_figure(summary, against: str, datasets: list[str]):
             curve = table[table["weight_function"].astype(str) == weight].sort_values("path_length")
             if curve.empty:
                 continue
-            colour, marker = weight_style(weight, others)
             x = curve["path_length"].to_numpy(float)
+            if weight in CEILINGS:
+                colour, dashes = _ceiling_style(weight)
+                ax.plot(x, curve["mean"].to_numpy(float), color=colour, linestyle=dashes, linewidth=1.3)
+                continue
+            colour, marker = weight_style(weight, others)
             low, high = curve["ci_low"].to_numpy(float), curve["ci_high"].to_numpy(float)
             band = np.isfinite(low) & np.isfinite(high)
             ax.fill_between(x, low, high, where=band, color=colour, alpha=0.15, linewidth=0, interpolate=False)
@@ -253,6 +272,8 @@ def mi_figure(summary, against: str, datasets: list[str]):
         ax.set_visible(False)
     reference = "human labels $Z_h$" if against == "human" else "batch labels $Z_b$"
     handles = [
+        Line2D([], [], color=_ceiling_style(w)[0], linestyle=_ceiling_style(w)[1], label=f"ceiling: {_label(w)}")
+        if w in CEILINGS else
         Line2D([], [], color=weight_style(w, others)[0], marker=weight_style(w, others)[1], markersize=6,
                linestyle="-" if w in WEIGHT_STYLES else "--", label=_label(w))
         for w in weights

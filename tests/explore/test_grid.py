@@ -38,22 +38,26 @@ def folder_contents(root: Path) -> dict:
 
 
 def test_a_grid_writes_every_run_with_its_config_seeds_and_provenance(own_map, tmp_path):
-    config = grid_config(own_map)
+    config = grid_config(own_map, weight_functions=tuple(weights.WEIGHT_FUNCTIONS))  # every walker and ceiling
     summary = run_grid(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
     folder = tmp_path / "grid"
-    assert (summary.ran, summary.skipped, summary.failed) == (8, 0, [])
+    assert (summary.ran, summary.skipped, summary.failed) == (14, 0, [])
     assert load_config(folder / "config.yaml") == config
     provenance = yaml.safe_load((folder / "provenance.yaml").read_text())
     assert provenance["seed"] == 0 and len(provenance["git_commit"]) in (40, len("unknown"))
     plan = pd.read_csv(folder / "runs.csv")
-    assert len(plan) == 8 and set(plan.weight_function) == set(weights.WEIGHT_FUNCTIONS)
-    # paired design: every weight function starts restart r from the same cell
+    assert len(plan) == 14 and set(plan.weight_function) == set(weights.WEIGHT_FUNCTIONS)
+    # paired design: every walker starts restart r from the same cell
     assert plan.groupby("restart")[["start_row", "start_col"]].nunique().eq(1).all().all()
     run = read_run(run_folder(folder, "own", "topic-perplexity", 1))
     assert run.path.size == 12 and run.meta["checkpoints"] == [5, 12]
     assert (run.meta["start_row"], run.meta["start_col"]) == divmod(int(run.path[0]), 8)
     assert run.phi(5).sum() < run.phi(12).sum() or np.unique(run.path).size == np.unique(run.path[:5]).size
     assert summary.bytes_written == sum(p.stat().st_size for p in (folder / "runs").glob("*/*/*/*"))
+    mower = read_run(run_folder(folder, "own", "lawnmower", 1))
+    assert mower.path[0] == run.path[0] and (np.abs(np.diff(np.divmod(mower.path, 8))).sum(axis=0) == 1).all()
+    block = read_run(run_folder(folder, "own", "compact-block", 1))
+    assert block.path[0] == run.path[0]
 
 
 def test_start_cells_are_shared_and_do_not_depend_on_the_number_of_restarts():
@@ -63,7 +67,7 @@ def test_start_cells_are_shared_and_do_not_depend_on_the_number_of_restarts():
 
 
 def test_results_do_not_depend_on_the_number_of_jobs(own_map, tmp_path):
-    config = grid_config(own_map)
+    config = grid_config(own_map, weight_functions=("topic-perplexity", "lawnmower", "scattered-cells", "compact-block"))
     run_grid(config, results_dir=tmp_path / "one", cache_dir=tmp_path / "cache", jobs=1)
     run_grid(config, results_dir=tmp_path / "two", cache_dir=tmp_path / "cache", jobs=2)
     one, two = folder_contents(tmp_path / "one" / "grid"), folder_contents(tmp_path / "two" / "grid")

@@ -11,7 +11,7 @@ from test_weights import potential_naive
 
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.explore import weights
-from curiosity_cli.explore.walker import explore
+from curiosity_cli.explore.walker import explore, in_bounds_neighbours
 
 
 def run(store, weight_function="topic-perplexity", start=9, seed=(1,), **explore_settings):
@@ -19,7 +19,7 @@ def run(store, weight_function="topic-perplexity", start=9, seed=(1,), **explore
     return explore(store, weight_function, start, model=config.model, settings=config.explore, seed=seed)
 
 
-@pytest.mark.parametrize("name", list(weights.WEIGHT_FUNCTIONS))
+@pytest.mark.parametrize("name", [n for n in weights.WEIGHT_FUNCTIONS if n not in weights.CEILINGS])
 def test_paths_step_between_4_neighbours_and_never_leave_the_map(name):
     e = run(two_region_store(), name, path_length=40, checkpoints=(40,))
     rows, cols = np.divmod(e.path, 8)
@@ -60,11 +60,72 @@ def test_step_records_agree_with_the_path_and_the_formulas():
         chosen = e.candidate_cell[here & e.chosen]
         assert chosen.tolist() == [e.path[step + 1]]
         visits = {int(c): int(n) for c, n in zip(*np.unique(e.path[: step + 1], return_counts=True))}
-        expected = [potential_naive(int(g), visits, 8, 0.25) for g in e.candidate_cell[here]]
+        if e.boxed_in[step]:  # the limit of eq. 8: each neighbour's own visit count
+            expected = [visits[int(g)] for g in e.candidate_cell[here]]
+        else:
+            expected = [potential_naive(int(g), visits, 8, None) for g in e.candidate_cell[here]]
         np.testing.assert_allclose(e.coverage[here], expected, rtol=1e-12)
     np.testing.assert_allclose(e.weight, e.word_perplexity / e.coverage, rtol=1e-15)
     assert (e.word_perplexity >= 1).all() and (e.topic_perplexity >= 1).all()
     assert e.path.size - 1 == len(np.unique(e.candidate_step)), "the last step scores no move"
+
+
+@pytest.mark.parametrize("name", ["stochastic-coverage", "word-perplexity", "topic-perplexity"])
+def test_the_papers_repulsion_never_steps_back_while_an_unvisited_neighbour_is_open(name):
+    # eq. 8 evaluated naively on the path: a visited neighbour has d = 0, so weight 0
+    store = two_region_store()
+    e = run(store, name, path_length=80, checkpoints=(80,))
+    boxed = 0
+    for step in range(e.path.size - 1):
+        seen = set(e.path[: step + 1].tolist())
+        neighbours = in_bounds_neighbours(int(e.path[step]), store.grid_shape).tolist()
+        open_cells = [g for g in neighbours if g not in seen]
+        if open_cells:
+            assert e.path[step + 1] in open_cells, step
+            assert not e.boxed_in[step]
+        else:
+            assert e.boxed_in[step]
+            boxed += 1
+    assert e.boxed_in.sum() == boxed and not e.fallback.any()
+    assert boxed > 0, "80 steps on 48 cells must get boxed in at times"
+
+
+def test_boxed_in_steps_prefer_the_least_visited_neighbour():
+    # a 1 x 3 corridor: from the middle both ends are visited once more each time round,
+    # so the limit rule is 1 / visits; stochastic coverage from cell 1 after 0, 1, 2, 1
+    store = synthetic_store(np.zeros((1, 3), int))
+    e = run(store, "stochastic-coverage", start=0, path_length=40, checkpoints=(40,))
+    assert e.path[:3].tolist() == [0, 1, 2]
+    assert e.boxed_in[2:-1].all()
+    # from the middle the end visited less is preferred: the visit counts never differ by more than a few
+    counts = np.bincount(e.path, minlength=3)
+    assert abs(int(counts[0]) - int(counts[2])) <= 3
+
+
+def test_a_clamp_keeps_the_old_deviation_that_revisits():
+    # with min_d2 = 0.25 a visited neighbour keeps a weight, so the walker steps back
+    # while unvisited cells are open; the paper's rule never does (test above)
+    store = two_region_store()
+    revisits = []
+    for min_d2 in (None, 0.25):
+        e = run(store, "stochastic-coverage", path_length=40, checkpoints=(40,), min_d2=min_d2)
+        revisits.append(int((~e.first_visit).sum()))
+        assert not e.boxed_in.any() or min_d2 is None
+    assert revisits[1] > revisits[0], revisits
+
+
+@pytest.mark.parametrize("name", ["lawnmower", "scattered-cells", "compact-block"])
+def test_a_planned_walker_observes_its_plan_and_scores_nothing(name):
+    store = two_region_store()
+    e = run(store, name, start=9, path_length=100, checkpoints=(10, 100))
+    plan = weights.WEIGHT_FUNCTIONS[name]
+    if name != "scattered-cells":  # deterministic: the plan from the start cell alone
+        np.testing.assert_array_equal(e.path, plan.cells(9, store.grid_shape, 100, np.random.default_rng(0)))
+    assert e.candidate_cell.size == 0 and not e.fallback.any() and not e.boxed_in.any()
+    np.testing.assert_array_equal(e.first_visit, [c not in e.path[:i] for i, c in enumerate(e.path)])
+    assert len(np.unique(e.path)) == 48, "100 steps of a plan cover all 48 cells"
+    again = run(store, name, start=9, path_length=100, checkpoints=(10, 100))
+    np.testing.assert_array_equal(e.path, again.path)
 
 
 def test_a_wall_clock_budget_refines_until_the_time_is_up():
@@ -104,8 +165,10 @@ def test_a_weight_function_added_to_the_registry_drives_the_walker(monkeypatch):
 def test_topic_perplexity_walkers_linger_on_a_rare_stripe_more_than_coverage_walkers():
     # a uniform 24 x 24 map crossed by a one-cell-wide stripe of other words (column 12);
     # 32 paired restarts from start cells within 6 columns of the stripe, 100 steps each.
-    # Measured: 0.22 of topic-perplexity steps on or beside the stripe against 0.13 for
-    # stochastic coverage (48 restarts, paired difference 0.09, standard error 0.03).
+    # Measured with the paper's repulsion: 0.15 of topic-perplexity steps on or beside the
+    # stripe against 0.12 for stochastic coverage (paired difference 0.030, standard error
+    # 0.015; 48 restarts: 0.031 and 0.014). With the old clamp min_d2 = 0.25, which lets a
+    # walker step back onto the stripe, it was 0.22 against 0.13.
     regions = np.zeros((24, 24), int)
     regions[:, 12] = 1
     store = synthetic_store(regions)
@@ -118,4 +181,4 @@ def test_topic_perplexity_walkers_linger_on_a_rare_stripe_more_than_coverage_wal
             e = run(store, name, start, seed=(restart,), path_length=100, checkpoints=(100,), samples_per_step=20000)
             near[name].append(np.mean(np.abs(e.path % 24 - 12) <= 1))
     coverage, topic = np.mean(near["stochastic-coverage"]), np.mean(near["topic-perplexity"])
-    assert topic > coverage + 0.04, (topic, coverage)
+    assert topic > coverage + 0.01, (topic, coverage)

@@ -11,13 +11,16 @@ from curiosity_cli.explore.walker import draw_move, in_bounds_neighbours
 from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, coverage_potential
 
 
-def potential_naive(candidate, visits: dict, cols: int, min_d2: float) -> float:
-    """Σ_j n_j / max(d², min_d2), one visited cell at a time."""
+def potential_naive(candidate, visits: dict, cols: int, min_d2: float | None) -> float:
+    """Σ_j n_j / max(d², min_d2), one visited cell at a time; eq. 8 as written (n / 0 = ∞) without a clamp."""
     row, col = divmod(candidate, cols)
     total = 0.0
     for cell, n in visits.items():
         r, c = divmod(cell, cols)
-        total += n / max((row - r) ** 2 + (col - c) ** 2, min_d2)
+        d2 = (row - r) ** 2 + (col - c) ** 2
+        if min_d2 is None and d2 == 0:
+            return math.inf
+        total += n / (d2 if min_d2 is None else max(d2, min_d2))
     return total
 
 
@@ -31,6 +34,20 @@ def test_coverage_potential_matches_the_sum_with_the_clamp(min_d2):
     np.testing.assert_allclose(got, expected, rtol=1e-15)
     # the visited candidate (7) gets n / min_d2 from itself
     assert got[1] >= 2 / min_d2
+
+
+def test_without_a_clamp_a_visited_candidate_has_infinite_potential_and_weight_0():
+    cols = 5
+    visits = {0: 3, 6: 1, 7: 2, 24: 1}
+    candidates = np.array([1, 7, 12, 23])
+    got = coverage_potential(candidates, np.array(list(visits)), np.array(list(visits.values())), cols, None)
+    expected = [potential_naive(int(c), visits, cols, None) for c in candidates]
+    np.testing.assert_allclose(got, expected, rtol=1e-15)
+    assert got[1] == math.inf and np.isfinite(got[[0, 2, 3]]).all()
+    facts = Candidates(candidates, got, np.full(4, 5.0), np.full(4, 3.0))
+    for name in ("stochastic-coverage", "word-perplexity", "topic-perplexity"):
+        weights = WEIGHT_FUNCTIONS[name](facts)
+        assert weights[1] == 0 and (weights[[0, 2, 3]] > 0).all()
 
 
 def test_the_four_weight_functions_are_the_papers_formulas():

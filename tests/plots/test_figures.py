@@ -14,7 +14,7 @@ from synthetic_experiment import make_experiment
 
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.plots.experiment_inputs import PlotError
-from curiosity_cli.plots.figures import weight_style, write_figures
+from curiosity_cli.plots.figures import mi_figure, weight_style, write_figures
 
 LENGTHS = (10, 20, 40, 80)
 
@@ -119,6 +119,23 @@ def test_other_weight_functions_get_grey_styles(tmp_path, own_map):
     assert len(styles) == 3 and weight_style("greedy", others)[0].startswith("0.")
     # no topic-perplexity run: figs. 2 and 3 fall back to another weight function's example
     assert "path-own.png" in names(written)
+
+
+def test_the_lawnmower_has_its_own_marker_and_ceilings_are_dashed_lines_after_the_walkers(tmp_path, own_map):
+    weights = ("random-walk", "topic-perplexity", "lawnmower", "scattered-cells", "compact-block")
+    experiment = make_experiment(tmp_path, [str(own_map)], restarts=2, lengths=(10, 20), weights=weights, n_topics=6)
+    summary = pd.read_csv(experiment / "summary.csv")
+    figure = mi_figure(summary, "human", ["own"])
+    (ax,) = [a for a in figure.axes if a.get_visible()]
+    lines = ax.get_lines()
+    assert len(lines) == 5
+    walkers, ceilings = lines[:3], lines[3:]
+    assert [line.get_marker() for line in walkers] == ["s", "^", "x"]  # legend order: topic perplexity first
+    assert all(line.get_marker() in ("None", "", None) and line.get_linestyle() != "-" for line in ceilings)
+    assert len(ax.collections) == 3, "a CI band for each walker, none for the ceilings"
+    legend = [text.get_text() for text in figure.legends[0].get_texts()]
+    assert legend == ["topic perplexity", "random walk", "lawnmower", "ceiling: scattered cells", "ceiling: compact block"]
+    assert "mi-vs-length-human.png" in names(write_figures(experiment))
 
 
 def test_missing_folder_or_mi_table_is_a_plot_error(tmp_path, experiment):
