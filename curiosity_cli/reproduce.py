@@ -62,7 +62,7 @@ def reproduce(
         seconds["extract and explore"] = time.perf_counter() - started
         mark = time.perf_counter()
         label_experiment(
-            config, results_dir=results_dir, cache_dir=cache_dir, force=force, workers=workers, on_stage=stage, on_done=done
+            config, folder, cache_dir=cache_dir, force=force, workers=workers, on_stage=stage, on_done=done
         )
         seconds["label"] = time.perf_counter() - mark
     mark = time.perf_counter()

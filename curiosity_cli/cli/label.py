@@ -43,7 +43,7 @@ def label(
     config = experiment_config(folder, overrides)
     with StagedProgress() as progress:
         done = label_experiment(
-            config, results_dir=folder.parent, cache_dir=cache_dir, jobs=jobs, force=force,
+            config, folder, cache_dir=cache_dir, jobs=jobs, force=force,
             on_stage=progress.stage, on_done=progress.advance, backend=backend.value, scheduler=scheduler,
         )
     typer.echo(
@@ -55,15 +55,16 @@ def label(
 @app.command("evaluate")
 def evaluate(folder: Path = EXPERIMENT) -> None:
     """Mutual information of the path labelings against human and batch labels, with statistics."""
+    from curiosity_cli.evaluate.report import verdict
     from curiosity_cli.evaluate.tables import evaluate_experiment
     from curiosity_cli.files import display_path
 
     result = evaluate_experiment(folder)
     for problem in result.skipped:
         typer.echo(f"skipped: {problem}", err=True)
-    typer.echo(f"wrote {display_path(folder / 'mi.csv')} ({len(result.mi)} rows), summary.csv, tests.csv, headline.csv")
-    for row in result.headline.itertuples():
-        paper = f"; the paper's {row.paper_map}: {row.paper_ratio:.2f}" if row.paper_map else ""
-        typer.echo(
-            f"{row.dataset}: topic-perplexity MI at 80 steps is {row.ratio:.2f} x {row.next_best}'s{paper}"
-        )
+    typer.echo(
+        f"wrote {display_path(folder / 'mi.csv')} ({len(result.mi)} rows), summary.csv, tests.csv, effects.csv, "
+        "classes.csv, classes_summary.csv, headline.csv"
+    )
+    for row in result.headline.to_dict("records"):
+        typer.echo(verdict(row))

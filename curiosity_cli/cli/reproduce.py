@@ -17,6 +17,12 @@ def reproduce(
     config: Path = typer.Argument(None, help="Experiment YAML; default the paper's full grid, configs/paper-grid.yaml.", show_default=False),
     quick: bool = typer.Option(False, "--quick", help="Run configs/quick.yaml instead: the real Zurich map, 10 restarts, paths up to 160 steps; minutes, not the full grid."),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override any config key, e.g. --set seed=1."),
+    sweeps: list[str] = typer.Option(
+        [], "--sweep", metavar="KEY=V1,V2,...",
+        help="Run every combination of the --sweep options' values (their product), each as its own experiment "
+        "under results/<name>-sweep/, and compare their headlines in SWEEP.md; e.g. --sweep model.topics=16,32. "
+        "Values are split on commas outside brackets; one value just fixes the key.",
+    ),
     jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
     force: bool = typer.Option(False, "--force", help="Redo runs and labels that are already finished."),
     backend: Backend = typer.Option(Backend.loky, "--backend", help="Where exploration and labelling run: loky (this machine) or dask (a Dask cluster, needs the distributed extra)."),
@@ -26,7 +32,8 @@ def reproduce(
 ) -> None:
     """Extract, explore, label, evaluate and plot, then write results/<experiment>/REPORT.md.
 
-    Every stage keeps what it finished: run the same command again to resume.
+    Every stage keeps what it finished: run the same command again to resume. With
+    --sweep, once per combination of values, then results/<experiment>-sweep/SWEEP.md.
     """
     from curiosity_cli.config import load_config
     from curiosity_cli.files import display_path
@@ -38,10 +45,31 @@ def reproduce(
         raise typer.BadParameter(f"runs configs/quick.yaml; give it or a CONFIG ({config}), not both", param_hint="--quick")
     if config is None:
         config = CONFIG_DIR / ("quick.yaml" if quick else "paper-grid.yaml")
+    if sweeps:
+        _reproduce_sweep(config, overrides, sweeps, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs,
+                         force=force, backend=backend.value, scheduler=scheduler)
+        return
     resolved = load_config(config, overrides)
     with StagedProgress() as progress:
         report = run_pipeline(
             resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
             backend=backend.value, scheduler=scheduler, on_stage=progress.stage, on_done=progress.advance,
         )
+    typer.echo(f"wrote {display_path(report)}")
+
+
+def _reproduce_sweep(config: Path, overrides: list[str], sweeps: list[str], **options) -> None:
+    """``reproduce --sweep``: check every option and combination, then run them all."""
+    from curiosity_cli.files import display_path
+    from curiosity_cli.sweep import SweepSyntaxError, parse_sweeps, plan_sweep, run_sweep
+
+    try:
+        axes = parse_sweeps(sweeps, overrides)
+    except SweepSyntaxError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--sweep") from None
+    sweep = plan_sweep(config, axes, overrides)
+    count = len(sweep.combinations)
+    typer.echo(f"{count} combination{'' if count == 1 else 's'}, in {display_path(sweep.folder(options['results_dir']))}", err=True)
+    with StagedProgress() as progress:
+        report = run_sweep(sweep, on_stage=progress.stage, on_done=progress.advance, **options)
     typer.echo(f"wrote {display_path(report)}")

@@ -1,8 +1,13 @@
-"""Mutual information between two labelings of the same pixels, in bits.
+"""Mutual information between two labelings of the same pixels, in bits; per-class recall; classes found.
 
 Everything goes through the contingency table (joint counts) of the two labelings, which
 is also what ``curiosity label`` stores per checkpoint: a few kilobytes instead of a
-label map per run, and MI, entropies and NMI all follow from it exactly.
+label map per run, and MI, entropies, NMI and the per-class recall of a one-to-one
+topic-to-class matching all follow from it exactly.
+
+Classes found (:func:`cell_class_pixels`, :func:`classes_present`, :func:`first_steps`)
+say which human classes a path's cells touched, and when: evidence about the path itself,
+independent of what the model learned from it.
 """
 
 from __future__ import annotations
@@ -73,3 +78,140 @@ def normalised_mutual_information(table: np.ndarray) -> float:
     if h == 0:
         return 1.0
     return min(1.0, mutual_information(table) / h)
+
+
+def matched_recall(table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-class recall of a topic labelling under the best one-to-one topic-to-class matching.
+
+    A class's recall under a topic is the share of the class's pixels that carry the
+    topic. Each class is matched to at most one topic and each topic to at most one
+    class, so that the sum of the matched recalls is largest (the Hungarian algorithm,
+    :func:`scipy.optimize.linear_sum_assignment`). With fewer topics than classes the
+    classes left unmatched get recall 0. Classes without pixels take no part.
+
+    Parameters
+    ----------
+    table : (K, C) integer ndarray
+        ``table[k, h]`` = pixels with topic ``k`` and class ``h`` (a contingency table).
+
+    Returns
+    -------
+    recall : (C,) float64 ndarray
+        In [0, 1]; NaN for a class without pixels.
+    topic : (C,) int64 ndarray
+        The topic matched to each class; -1 for a class unmatched or without pixels.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    table = np.asarray(table)
+    if table.ndim != 2:
+        raise ParameterError(f"table: got shape {table.shape}, expected (K, C)")
+    pixels = table.sum(axis=0)
+    present = np.flatnonzero(pixels > 0)
+    recall = np.full(table.shape[1], np.nan)
+    topic = np.full(table.shape[1], -1, np.int64)
+    shares = table[:, present] / pixels[present]  # (K, C'): recall of each class under each topic
+    rows, cols = linear_sum_assignment(shares, maximize=True)
+    recall[present] = 0.0  # unmatched (K < C) until a topic is assigned below
+    recall[present[cols]] = shares[rows, cols]
+    topic[present[cols]] = rows
+    return recall, topic
+
+
+def mean_recall(table: np.ndarray) -> float:
+    """Mean over the classes with pixels of :func:`matched_recall`'s recall; NaN without any."""
+    recall, _ = matched_recall(table)
+    present = recall[np.isfinite(recall)]
+    return float(present.mean()) if present.size else float("nan")
+
+
+def cell_class_pixels(labels: np.ndarray, cell_width: int, n_classes: int) -> np.ndarray:
+    """Pixels of each class in each cell of a map's grid.
+
+    Cells as in the word store: ``(row // cell_width, col // cell_width)``, row-major; a
+    partial cell at the bottom or right border is a cell of its own with fewer pixels.
+
+    Parameters
+    ----------
+    labels : (H, W) integer ndarray
+        Class ids ``0 .. n_classes - 1``.
+    cell_width : int
+    n_classes : int
+
+    Returns
+    -------
+    (n_cells, n_classes) int64 ndarray
+        Each row sums to the cell's pixels.
+    """
+    labels = np.asarray(labels)
+    if labels.ndim != 2:
+        raise ParameterError(f"labels: got shape {labels.shape}, expected (H, W)")
+    if labels.size and (labels.min() < 0 or labels.max() >= n_classes):
+        raise ParameterError(f"labels: class ids {labels.min()} .. {labels.max()}, expected 0 .. {n_classes - 1}")
+    rows, cols = labels.shape
+    grid_cols = -(-cols // cell_width)
+    n_cells = -(-rows // cell_width) * grid_cols
+    out = np.zeros((n_cells, n_classes), np.int64)
+    col_cells = np.arange(cols) // cell_width
+    # one band of cell rows at a time: no (H, W) int64 index array for a large map
+    for top in range(0, rows, cell_width):
+        band = labels[top : top + cell_width].astype(np.int64)
+        cells = (top // cell_width) * grid_cols + col_cells  # (W,)
+        joint = (cells[None, :] * n_classes + band).ravel()
+        first = (top // cell_width) * grid_cols
+        out[first : first + grid_cols] = np.bincount(
+            joint - first * n_classes, minlength=grid_cols * n_classes
+        ).reshape(grid_cols, n_classes)
+    return out
+
+
+def classes_present(cell_pixels: np.ndarray, share_percent: int) -> np.ndarray:
+    """Which classes count as present in each cell: at least ``share_percent`` % of its pixels.
+
+    Compared in integers (``100 * class pixels >= share_percent * cell pixels``), so a
+    class at exactly the share counts, with no rounding at the edge.
+
+    Parameters
+    ----------
+    cell_pixels : (n_cells, C) integer ndarray
+        From :func:`cell_class_pixels`.
+    share_percent : int
+        1 .. 100.
+
+    Returns
+    -------
+    (n_cells, C) bool ndarray
+    """
+    if not 1 <= share_percent <= 100:
+        raise ParameterError(f"share_percent: got {share_percent}, expected 1 .. 100")
+    cell_pixels = np.asarray(cell_pixels, np.int64)
+    return 100 * cell_pixels >= share_percent * cell_pixels.sum(axis=1, keepdims=True)
+
+
+def first_steps(path: np.ndarray, present: np.ndarray) -> np.ndarray:
+    """The step at which a path first stood in a cell where each class is present.
+
+    Parameters
+    ----------
+    path : (L,) integer ndarray
+        Row-major cell of each step (step 0 is the start cell).
+    present : (n_cells, C) bool ndarray
+        From :func:`classes_present`.
+
+    Returns
+    -------
+    (C,) int64 ndarray
+        0 .. L - 1; -1 for a class never reached. The classes found within the first
+        ``n`` steps are those with ``0 <= step < n`` (:func:`classes_found`).
+    """
+    path = np.asarray(path, np.int64)
+    if path.size and (path.min() < 0 or path.max() >= present.shape[0]):
+        raise ParameterError(f"path: cells {path.min()} .. {path.max()}, expected 0 .. {present.shape[0] - 1}")
+    hits = np.asarray(present, bool)[path]  # (L, C)
+    return np.where(hits.any(axis=0), hits.argmax(axis=0), -1).astype(np.int64)
+
+
+def classes_found(first_step: np.ndarray, length: int) -> int:
+    """How many classes a path reached within its first ``length`` steps, from :func:`first_steps`."""
+    first_step = np.asarray(first_step)
+    return int(np.count_nonzero((first_step >= 0) & (first_step < length)))

@@ -10,7 +10,11 @@ Written under ``results/<experiment>/``:
   length (``lengths``), the contingency tables of Z_p against the human labels
   (``human``, (n, K, C) int64, absent for a map without labels) and against Z_b
   (``batch``, (n, K, K) int64), and ``meta`` (JSON). Tables rather than label maps: MI and
-  NMI follow from them exactly, in kilobytes instead of a megabyte per checkpoint.
+  NMI follow from them exactly, in kilobytes instead of a megabyte per checkpoint. For a
+  map with human labels also ``class_first_step`` ((C,) int32): the step at which the
+  path first stood in a cell where class ``h`` covers at least ``CLASS_SHARE_PERCENT`` %
+  of the pixels, -1 if never (the classes found within ``n`` steps are those below
+  ``n``); ``meta["class_share_percent"]`` records the share.
 - ``labels/<dataset>/examples/<weight function>-restart-<NNN>-<length>.npz``: the pixel
   label map Z_p (``labels``, (H, W) int16) of restart 0 at path length 80 and at its
   last checkpoint, for the figures.
@@ -53,6 +57,9 @@ if TYPE_CHECKING:
     from curiosity_cli.words.store import WordStore
 
 LABEL_FORMAT = 1
+#: A human class counts as found in a visited cell when it covers at least this share
+#: (percent) of the cell's pixels: enough to be seen, not a sliver at the cell's edge.
+CLASS_SHARE_PERCENT = 10
 #: Path lengths whose Z_p maps are kept for restart 0 (besides the last checkpoint).
 EXAMPLE_LENGTHS = (80,)
 # tags that keep the label streams apart from the runs' own
@@ -84,6 +91,7 @@ class MapArrays(NamedTuple):
     n_classes: int
     batch: np.ndarray  # (H, W) Z_b
     shape: tuple[int, int]
+    cell_classes: np.ndarray | None  # (n_cells, C) pixels of each class per cell, None without human labels
 
 
 @dataclass(frozen=True)
@@ -97,11 +105,14 @@ class RunInputs:
         Its ``run.json``.
     checkpoints : dict of int to SparseCounts
         The word-topic counts Φ_p at each checkpoint length, as stored.
+    path : (L,) int64 ndarray
+        Row-major cell of each step, for the classes found.
     """
 
     folder: Path
     meta: dict
     checkpoints: dict
+    path: np.ndarray
 
     @classmethod
     def of(cls, run: Run) -> RunInputs:
@@ -114,7 +125,7 @@ class RunInputs:
         """
         from curiosity_cli.explore.walker import SparseCounts
 
-        return cls(run.folder, run.meta, {n: SparseCounts.of(run.phi(n)) for n in run.meta["checkpoints"]})
+        return cls(run.folder, run.meta, {n: SparseCounts.of(run.phi(n)) for n in run.meta["checkpoints"]}, run.path)
 
     def phi(self, length: int) -> np.ndarray:
         """(V, K) int32 ndarray: the word-topic counts Φ_p after ``length`` steps."""
@@ -205,14 +216,18 @@ def _labeller(store_path: str, model, store: WordStore) -> PathLabeller:
 
 
 def _map_references(entry: str, batch_file: str) -> tuple:
-    """A map's (human labels or None, number of classes, batch pixel labels, image shape)."""
+    """A map's (human labels or None, number of classes, batch pixel labels, image shape, class pixels per cell or None)."""
     from curiosity_cli.data import load_map
+    from curiosity_cli.evaluate.information import cell_class_pixels
 
     map_data = load_map(entry)
     n_classes = max(c.id for c in map_data.legend) + 1 if map_data.labels is not None else 0
     with np.load(batch_file) as npz:
         batch = npz["labels"]
-    return map_data.labels, n_classes, batch, map_data.image.shape[:2]
+    cell_classes = None
+    if map_data.labels is not None:
+        cell_classes = cell_class_pixels(map_data.labels, map_data.config.cell_width, n_classes)
+    return map_data.labels, n_classes, batch, map_data.image.shape[:2], cell_classes
 
 
 @lru_cache(maxsize=4)
@@ -232,7 +247,7 @@ def label_run(run: RunInputs, inputs: MapInputs, arrays: MapArrays, config: Expe
     from curiosity_cli.evaluate.information import contingency
     from curiosity_cli.evaluate.labeling import pixel_labels
 
-    store, human, n_classes, batch, shape = arrays
+    store, human, n_classes, batch, shape, cell_classes = arrays
     k = config.model.topics
     lengths = run.meta["checkpoints"]
     tables = {"human": [], "batch": []}
@@ -258,7 +273,27 @@ def label_run(run: RunInputs, inputs: MapInputs, arrays: MapArrays, config: Expe
     arrays = {"lengths": np.array(lengths, np.int32), "batch": np.stack(tables["batch"])}
     if tables["human"]:
         arrays["human"] = np.stack(tables["human"])
+        arrays["class_first_step"] = class_first_steps(run.path, cell_classes, store, inputs.store_path)
+        meta["class_share_percent"] = CLASS_SHARE_PERCENT
     return arrays, examples, meta
+
+
+def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordStore, store_path: str) -> np.ndarray:
+    """(C,) int32: the step at which ``path`` first reached each human class (-1: never), at ``CLASS_SHARE_PERCENT``.
+
+    Raises
+    ------
+    LabelError
+        The map's grid (``cell_classes``, from its cell width) is not the word store's.
+    """
+    from curiosity_cli.evaluate.information import classes_present, first_steps
+
+    if cell_classes.shape[0] != store.n_cells:
+        raise LabelError(
+            f"{display_path(Path(store_path))}: {store.n_cells} cells, but the map's labels at its cell width "
+            f"make {cell_classes.shape[0]}; run `curiosity extract` again"
+        )
+    return first_steps(path, classes_present(cell_classes, CLASS_SHARE_PERCENT)).astype(np.int32)
 
 
 def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None:
@@ -277,23 +312,33 @@ def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None
 
 
 def is_labelled(folder: Path, run_meta: dict, config: ExperimentConfig) -> bool:
-    """Whether a run's label file exists and was made from this run with these settings."""
+    """Whether a run's label file exists and was made from this run with these settings.
+
+    A map's file with human contingency tables but no classes found at the current
+    ``CLASS_SHARE_PERCENT`` (made before they were recorded) is not current.
+    """
     path = label_path(folder, run_meta["dataset"], run_meta["weight_function"], run_meta["restart"])
     try:
         with np.load(path) as npz:
             meta = read_meta(npz)
+            members = set(npz.files)
     except (OSError, ValueError, KeyError):
         return False
+    # a file from before classes found were recorded, or with another share, is redone
+    classes_current = "human" not in members or (
+        "class_first_step" in members and meta.get("class_share_percent") == CLASS_SHARE_PERCENT
+    )
     return (
         meta["run_seed"] == run_meta["seed"] and meta["store"] == run_meta["store"]
         and meta["sweeps"] == config.label.sweeps and meta.get("warm_sweeps") == config.label.warm_sweeps
+        and classes_current
     )
 
 
 def label_experiment(
     config: ExperimentConfig,
+    folder: Path,
     *,
-    results_dir: Path = Path("results"),
     cache_dir: Path = Path("results/cache"),
     jobs: int | None = None,
     force: bool = False,
@@ -308,7 +353,10 @@ def label_experiment(
     Parameters
     ----------
     config : ExperimentConfig
-        The experiment (its folder is ``results_dir / config.name``).
+        The experiment's settings.
+    folder : Path
+        The experiment folder: its runs are read and its labels written there, whatever
+        its name (a copied or renamed experiment labels itself, not its original).
     jobs : int, optional
         Worker processes (of ``loky``, or of the local Dask cluster); default the number
         of cores. Ignored with a ``scheduler``.
@@ -351,7 +399,7 @@ def label_experiment(
     started = time.perf_counter()
     owned = Workers(backend, scheduler, jobs) if workers is None else None  # checks the backend before any work
     workers = workers or owned
-    folder = Path(results_dir) / config.name
+    folder = Path(folder)
     stores = prepare_stores(config, cache_dir)
     runs = sorted(p for p in (folder / "runs").glob("*/*/restart-*") if is_complete(p))
     names = {info.name for info in stores.values()}

@@ -1,19 +1,139 @@
-"""``REPORT.md``: one experiment's result, as a reader of the paper would want to check it."""
+"""``REPORT.md``: one experiment's result, as a reader of the paper would want to check it.
+
+It opens with the answer: per map, a verdict in words on whether topic perplexity beats
+every other walker at 80 steps, by how much, with what confidence, and beside the
+paper's figure (:func:`verdict`). Then the tables behind it: the headline, the maps, MI
+with the ceilings, paired effect sizes, classes found, mean recall and the tests.
+"""
 
 from __future__ import annotations
 
+import itertools
 import os
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, to_yaml
-from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation
+from curiosity_cli.evaluate.labels import CLASS_SHARE_PERCENT
+from curiosity_cli.evaluate.tables import ALPHA, CONFIDENCE, HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation
+from curiosity_cli.explore.weights import CEILINGS, WEIGHT_FUNCTIONS
 from curiosity_cli.files import atomic_path
 
 # the paper: "For short path lengths (40 steps or less), we do not see any statistical difference"
 _SHORT = 40
-_ALPHA = 0.05
+_MINUS = "\u2212"
+_CEILING_NOTE = (
+    "Ceilings ({names}) are not walkers: the MI of a model learned from L scattered cells / an L-cell block "
+    "around the start, the room a path of L steps leaves; they take no part in the tests, the effect sizes or "
+    "the verdict."
+)
+
+
+def _order(names) -> list[str]:
+    """Walkers in the registry's order (unknown ones after, by name), then ceilings."""
+    known = list(WEIGHT_FUNCTIONS)
+    return sorted(set(names), key=lambda n: (n in CEILINGS, known.index(n) if n in known else len(known), n))
+
+
+def _label(name: str) -> str:
+    return f"{name} (ceiling)" if name in CEILINGS else name
+
+
+def _signed(x: float) -> str:
+    """``+0.01`` / ``−0.05``: a difference with its sign, a true minus sign."""
+    return f"{'+' if x >= 0 else _MINUS}{abs(x):.{_digits(x)}f}"
+
+
+def _digits(x: float) -> int:
+    # two decimals, three for a difference too small to show in two
+    return 3 if abs(x) < 0.01 else 2
+
+
+def _p(p: float) -> str:
+    if not np.isfinite(p):
+        return "p n/a"
+    return "p < 0.001" if p < 0.001 else f"p = {p:.3f}" if p < 0.01 else f"p = {p:.2f}"
+
+
+def _text(value) -> str:
+    """A text cell of a table row: "" for a missing one (NaN once read back from CSV)."""
+    return value if isinstance(value, str) else ""
+
+
+def verdict(row: Mapping) -> str:
+    """One map's verdict in words, from its ``headline.csv`` row.
+
+    E.g. ``zurich-zh17: topic perplexity does not beat every walker at 80 steps: 0.02
+    bits below word-perplexity (95 % CI −0.05 to +0.01), p = 0.48; ratio 0.95 against
+    the paper's 1.51 on Montreal1.`` "Beats" is :func:`~curiosity_cli.evaluate.tables.headline`'s
+    ``beats_all``: a higher mean than every other walker and a paired Wilcoxon p below
+    0.05 against each; the numbers are against the next best walker.
+    """
+    dataset, against, next_best = row["dataset"], row["against"], row["next_best"]
+    where = f"{dataset}" if against == "human" else f"{dataset} (MI against Z_b: the map has no human labels)"
+    if row["beats_all"]:
+        claim = f"topic perplexity beats every other walker at {HEADLINE_LENGTH} steps"
+    elif row["topic_perplexity"] > row["next_best_mi"]:
+        claim = f"topic perplexity leads every other walker at {HEADLINE_LENGTH} steps, but not clearly"
+    else:
+        claim = f"topic perplexity does not beat every walker at {HEADLINE_LENGTH} steps"
+    diff = row["mean_difference"]
+    if np.isfinite(diff):
+        side = "above" if diff >= 0 else "below"
+        amount = f"{abs(diff):.{_digits(diff)}f} bits {side} {next_best}{', the next best' if diff >= 0 else ''}"
+        if np.isfinite(row["ci_low"]):
+            amount += f" ({100 * CONFIDENCE:.0f} % CI {_signed(row['ci_low'])} to {_signed(row['ci_high'])})"
+    else:
+        amount = f"{row['topic_perplexity']:.2f} bits against {next_best}'s {row['next_best_mi']:.2f}"
+    text = f"{where}: {claim}: {amount}, {_p(row['p_value'])}"
+    others = [o for o in _text(row["not_beaten"]).split(";") if o and o != next_best]
+    if others and not row["beats_all"]:
+        text += f"; not clearly ahead of {', '.join(others)} either"
+    text += f"; ratio {row['ratio']:.2f}"
+    if _text(row["paper_map"]) and np.isfinite(row["paper_ratio"]):
+        text += f" against the paper's {row['paper_ratio']:.2f} on {row['paper_map']}"
+        if against != "human":
+            text += " (against human labels there)"
+    else:
+        text += " (no paper map to compare with)"
+    text += "."
+    if _text(row["best_ceiling"]) and np.isfinite(row["ceiling_share"]):
+        text += (
+            f" It reaches {100 * row['ceiling_share']:.0f} % of the better ceiling's MI "
+            f"({row['best_ceiling']}, {row['ceiling_mi']:.2f} bits)."
+        )
+    return text
+
+
+def _no_verdict(summary, dataset: str) -> str:
+    """Why a map has no verdict."""
+    block = summary[summary["dataset"] == dataset]
+    if HEADLINE_LENGTH not in set(block["path_length"]):
+        return f"{dataset}: no verdict: no {HEADLINE_LENGTH}-step checkpoint."
+    walkers = set(block["weight_function"]) - set(CEILINGS)
+    if HEADLINE_WEIGHT not in walkers:
+        return f"{dataset}: no verdict: {HEADLINE_WEIGHT} was not run."
+    return f"{dataset}: no verdict: no other walker to compare with."
+
+
+def _verdicts(summary, top) -> list[str]:
+    """The answer first, a line per map; then how to read it."""
+    lines = ["## Verdict", ""]
+    rows = {r["dataset"]: r for r in top.to_dict("records")}
+    for dataset in dict.fromkeys(summary["dataset"]):
+        lines.append(f"- {verdict(rows[dataset]) if dataset in rows else _no_verdict(summary, dataset)}")
+    return lines + [
+        "",
+        f"Does {HEADLINE_WEIGHT} beat every other walker at {HEADLINE_LENGTH} steps? Mean MI against human labels "
+        "(against the batch labels Z_b where a map has none). The difference is the mean paired difference to the "
+        f"next best walker (paired by restart, which share start cells) with its {100 * CONFIDENCE:.0f} % Student-t "
+        "confidence interval, p its paired Wilcoxon signed-rank p; \"beats\" means a higher mean than every other "
+        f"walker with p < {ALPHA} against each. The ratio is of the two means, beside the paper's for the map the "
+        "dataset stands in for.",
+        "",
+    ]
 
 
 def _cell(row) -> str:
@@ -28,11 +148,96 @@ def _mi_table(summary, against: str, lengths: list[int]) -> list[str]:
         "| dataset | weight function | " + " | ".join(f"{n} steps" for n in lengths) + " |",
         "|---|---|" + "---|" * len(lengths),
     ]
-    for (dataset, weight), rows in block.groupby(["dataset", "weight_function"], sort=False):
-        by_length = rows.set_index("path_length")
-        values = [_cell(by_length.loc[n]) if n in by_length.index else "" for n in lengths]
-        lines.append(f"| {dataset} | {weight} | " + " | ".join(values) + " |")
+    for dataset, rows in block.groupby("dataset", sort=False):
+        for weight in _order(rows["weight_function"]):
+            by_length = rows[rows["weight_function"] == weight].set_index("path_length")
+            values = [_cell(by_length.loc[n]) if n in by_length.index else "" for n in lengths]
+            lines.append(f"| {dataset} | {_label(weight)} | " + " | ".join(values) + " |")
+    if block["weight_function"].isin(CEILINGS).any():
+        lines += ["", _CEILING_NOTE.format(names=", ".join(c for c in CEILINGS if c in set(block["weight_function"])))]
     return lines + [""]
+
+
+def _effects_table(effects, lengths: list[int]) -> list[str]:
+    """Topic perplexity minus each other walker: mean paired difference [95 % CI], Wilcoxon p."""
+    lines = ["## Paired effect sizes", ""]
+    block = None if effects is None else effects[effects["path_length"].isin(lengths)]
+    if block is None or block.empty:
+        return lines + [f"(no paired runs of {HEADLINE_WEIGHT} and another walker)", ""]
+    lines += [
+        f"MI of {HEADLINE_WEIGHT} minus each other walker's, in bits: the mean paired difference (paired by "
+        f"restart) [{100 * CONFIDENCE:.0f} % Student-t CI], and the paired Wilcoxon p. All lengths in `effects.csv`.",
+        "",
+        "| dataset | against | other walker | " + " | ".join(f"{n} steps" for n in lengths) + " |",
+        "|---|---|---|" + "---|" * len(lengths),
+    ]
+    for dataset, against in itertools.product(dict.fromkeys(block["dataset"]), ("human", "batch")):
+        rows = block[(block["dataset"] == dataset) & (block["against"] == against)]
+        for other in _order(rows["other"]):
+            by_length = rows[rows["other"] == other].set_index("path_length")
+            cells = []
+            for n in lengths:
+                if n not in by_length.index:
+                    cells.append("")
+                    continue
+                r = by_length.loc[n]
+                ci = f" [{_signed(r['ci_low'])}, {_signed(r['ci_high'])}]" if np.isfinite(r["ci_low"]) else ""
+                cells.append(f"{_signed(r['mean_difference'])}{ci}, {_p(r['p_value'])}")
+            lines.append(f"| {dataset} | {against} | {other} | " + " | ".join(cells) + " |")
+    return lines + [""]
+
+
+def _classes_cell(row) -> str:
+    return f"{row['mean']:.1f} ± {(row['ci_high'] - row['ci_low']) / 2:.1f} of {int(row['classes'])}"
+
+
+def _class_length(classes_summary) -> int | None:
+    """The length the class tables show: 80 steps if there, else the longest."""
+    if classes_summary is None or classes_summary.empty:
+        return None
+    present = set(classes_summary["path_length"])
+    return HEADLINE_LENGTH if HEADLINE_LENGTH in present else int(max(present))
+
+
+def _class_matrix(classes_summary, measure: str, length: int, cell) -> list[str]:
+    """Walkers (then ceilings) by maps: ``cell(row)`` of ``measure`` at ``length``."""
+    block = classes_summary[(classes_summary["measure"] == measure) & (classes_summary["path_length"] == length)]
+    datasets = list(dict.fromkeys(block["dataset"]))
+    lines = ["| weight function | " + " | ".join(datasets) + " |", "|---|" + "---|" * len(datasets)]
+    for weight in _order(block["weight_function"]):
+        rows = block[block["weight_function"] == weight].set_index("dataset")
+        lines.append(f"| {_label(weight)} | " + " | ".join(cell(rows.loc[d]) if d in rows.index else "" for d in datasets) + " |")
+    return lines + [""]
+
+
+def _classes_sections(classes_summary) -> list[str]:
+    length = _class_length(classes_summary)
+    if length is None:
+        return ["## Classes found", "", "(no map with human labels, or label files without classes found)", ""]
+    found = classes_summary[classes_summary["measure"] == "classes_found"]
+    lines = [f"## Classes found at {length} steps", ""]
+    if found.empty:
+        lines += ["(label files without classes found: run `curiosity label` to redo them)", ""]
+    else:
+        lines += [
+            f"Human classes the path's cells reached within {length} steps, mean over restarts ± "
+            f"{100 * CONFIDENCE:.0f} % CI half-width, of the map's classes. A class counts in a visited cell when it "
+            f"covers at least {CLASS_SHARE_PERCENT} % of the cell's pixels (a partial cell at the map's border by its "
+            "own pixels). The step each class was first reached is in `classes.csv`.",
+            "",
+        ]
+        lines += _class_matrix(found, "classes_found", length, _classes_cell)
+    lines += [
+        f"## Mean recall at {length} steps",
+        "",
+        "Per human class, the share of its pixels whose Z_p topic is the topic matched to the class, averaged over "
+        "the map's classes, then mean over restarts ± 95 % CI half-width. Topics are matched to classes one to one "
+        "(a topic serves at most one class) to maximise the sum of the classes' recalls (Hungarian algorithm on the "
+        "human contingency table); with fewer topics than classes the unmatched classes get recall 0. Per class "
+        "and run in `classes.csv`.",
+        "",
+    ]
+    return lines + _class_matrix(classes_summary, "mean_recall", length, _cell)
 
 
 def _significance(tests) -> list[str]:
@@ -40,7 +245,7 @@ def _significance(tests) -> list[str]:
     if block.empty:
         return ["(no paired tests against human labels)", ""]
     lines = [
-        f"Wilcoxon signed-rank tests of {HEADLINE_WEIGHT} against each other weight function, "
+        f"Wilcoxon signed-rank tests of {HEADLINE_WEIGHT} against each other walker, "
         "paired by restart (shared start cells), MI against human labels; p < 0.05 in bold.",
         "",
         "| dataset | other | " + " | ".join(f"{n}" for n in sorted(block["path_length"].unique())) + " |",
@@ -50,13 +255,13 @@ def _significance(tests) -> list[str]:
         other = b if a == HEADLINE_WEIGHT else a
         cells = []
         for _, r in rows.sort_values("path_length").iterrows():
-            sign = "+" if (r["median_difference"] > 0) == (a == HEADLINE_WEIGHT) else "−"
+            sign = "+" if (r["median_difference"] > 0) == (a == HEADLINE_WEIGHT) else _MINUS
             p = r["p_value"]
             text = "n/a" if not np.isfinite(p) else f"{sign} p<0.001" if p < 0.001 else f"{sign} p={p:.3f}"
-            cells.append(f"**{text}**" if p < _ALPHA else text)
+            cells.append(f"**{text}**" if p < ALPHA else text)
         lines.append(f"| {dataset} | {other} | " + " | ".join(cells) + " |")
     short = block[block["path_length"] <= _SHORT]
-    significant = short[short["p_value"] < _ALPHA]
+    significant = short[short["p_value"] < ALPHA]
     lines += [
         "",
         f"(+: {HEADLINE_WEIGHT} higher by the median paired difference.) At {_SHORT} steps or fewer, "
@@ -68,6 +273,38 @@ def _significance(tests) -> list[str]:
         "",
     ]
     return lines
+
+
+def _headline_table(top) -> list[str]:
+    lines = [
+        "## Headline",
+        "",
+        f"Mean MI of {HEADLINE_WEIGHT} exploration at {HEADLINE_LENGTH} steps (against human labels, or Z_b on a map "
+        "without them), divided by the next best walker's; the mean paired difference to it with its 95 % CI; "
+        "its share of the better ceiling's MI:",
+        "",
+    ]
+    if top.empty:
+        return lines + [f"(no {HEADLINE_LENGTH}-step checkpoint of {HEADLINE_WEIGHT} and another walker: no headline ratio)", ""]
+    lines += [
+        "| dataset | against | ratio | next best | difference (95 % CI) | paired Wilcoxon p (pairs) | beats every walker "
+        "| share of ceiling | paper's map | paper's ratio |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in top.to_dict("records"):
+        paper = f"{r['paper_ratio']:.2f}" if np.isfinite(r["paper_ratio"]) else ""
+        p = "" if not np.isfinite(r["p_value"]) else ("< 0.001" if r["p_value"] < 0.001 else f"{r['p_value']:.3f}")
+        diff = ""
+        if np.isfinite(r["mean_difference"]):
+            diff = _signed(r["mean_difference"])
+            if np.isfinite(r["ci_low"]):
+                diff += f" ({_signed(r['ci_low'])} to {_signed(r['ci_high'])})"
+        share = f"{100 * r['ceiling_share']:.0f} % of {r['best_ceiling']}" if np.isfinite(r["ceiling_share"]) else ""
+        lines.append(
+            f"| {r['dataset']} | {r['against']} | {r['ratio']:.2f} | {r['next_best']} | {diff} | {p} ({r['pairs']}) | "
+            f"{'yes' if r['beats_all'] else 'no'} | {share} | {_text(r['paper_map'])} | {paper} |"
+        )
+    return lines + [""]
 
 
 def _maps_table(maps) -> list[str]:
@@ -105,38 +342,26 @@ def write_report(
     # the lengths the paper discusses: 80 (about a map's width) and the longest
     present = set(summary["path_length"])
     lengths = sorted({n for n in (HEADLINE_LENGTH,) if n in present} | {int(max(present))})
+    names = config.explore.weight_functions
+    walkers = [n for n in names if n not in CEILINGS]
+    ceilings = [n for n in names if n in CEILINGS]
     lines = [
         f"# Curiosity-driven exploration: experiment `{config.name}`",
         "",
-        f"Reproduction of Girdhar & Dudek's 2-D map experiments (section 5.1): {len(config.datasets)} map(s), "
-        f"{len(config.explore.weight_functions)} weight functions, {config.explore.restarts} restarts, "
-        f"paths of up to {config.explore.path_length} steps, {config.explore.samples_per_step:,} word samples of "
-        f"refinement per step, seed {config.seed}. Commit `{provenance.get('git_commit', 'unknown')}`"
-        f"{' (with uncommitted changes)' if provenance.get('git_dirty') else ''}, curiosity {provenance.get('curiosity')}.",
-        "",
-        "## Headline",
-        "",
-        f"Mean MI of {HEADLINE_WEIGHT} exploration against human labels at {HEADLINE_LENGTH} steps, "
-        "divided by the next best weight function's:",
+        f"Reproduction of Girdhar & Dudek's 2-D map experiments (section 5.1) on {len(config.datasets)} map(s): "
+        f"{len(walkers)} walkers{f' and {len(ceilings)} ceilings' if ceilings else ''}, {config.explore.restarts} "
+        f"restarts, paths of up to {config.explore.path_length} steps, seed {config.seed}.",
         "",
     ]
-    if top.empty:
-        lines += [f"(no human labels or no {HEADLINE_LENGTH}-step checkpoint: no headline ratio)", ""]
-    else:
-        lines += [
-            "| dataset | ratio | next best | paired Wilcoxon p (pairs) | paper's map | paper's ratio |",
-            "|---|---|---|---|---|---|",
-        ]
-        for r in top.itertuples():
-            paper = f"{r.paper_ratio:.2f}" if np.isfinite(r.paper_ratio) else ""
-            p = "" if not np.isfinite(r.p_value) else ("< 0.001" if r.p_value < 0.001 else f"{r.p_value:.3f}")
-            lines.append(f"| {r.dataset} | {r.ratio:.2f} | {r.next_best} | {p} ({r.pairs}) | {r.paper_map} | {paper} |")
-        lines.append("")
+    lines += _verdicts(summary, top)
+    lines += _headline_table(top)
     lines += _maps_table(evaluation.maps)
     lines += ["## Mutual information (bits, mean ± 95 % CI half-width)", "", "Against human labels (paper Fig. 5):", ""]
     lines += _mi_table(summary, "human", lengths)
     lines += ["Against the batch labeling Z_b (paper Fig. 4):", ""]
     lines += _mi_table(summary, "batch", lengths)
+    lines += _effects_table(evaluation.effects, lengths)
+    lines += _classes_sections(evaluation.classes_summary)
     lines += ["## Significance", ""] + _significance(tests)
     left_out = [*evaluation.skipped, *figure_notes]
     if left_out:
@@ -148,7 +373,14 @@ def write_report(
             lines += [f"![{Path(path).stem}]({relative})", ""]
     lines += ["## Time", "", "| stage | seconds |", "|---|---|"]
     lines += [f"| {stage} | {value:.0f} |" for stage, value in seconds.items()] + [""]
-    lines += ["## Config", "", "```yaml", to_yaml(config).rstrip(), "```", ""]
+    lines += [
+        "## Config",
+        "",
+        f"Commit `{provenance.get('git_commit', 'unknown')}`{' (with uncommitted changes)' if provenance.get('git_dirty') else ''}, "
+        f"curiosity {provenance.get('curiosity')}; {config.explore.samples_per_step:,} word samples of refinement per step.",
+        "",
+        "```yaml", to_yaml(config).rstrip(), "```", "",
+    ]
     path = Path(folder) / "REPORT.md"
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(lines))

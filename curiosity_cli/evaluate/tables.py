@@ -1,24 +1,42 @@
-"""``curiosity evaluate``: mutual information per run and checkpoint, its summary and tests.
+"""``curiosity evaluate``: mutual information per run and checkpoint, its summary and tests, and evidence beyond MI.
 
 Written under ``results/<experiment>/``:
 
 - ``mi.csv`` and ``mi.parquet``: one row per (dataset, weight function, restart, path
-  length): ``mi_human``, ``mi_batch`` (bits), ``nmi_human``, ``nmi_batch`` and the run's
-  ``seed``; the human columns are NaN for a map without labels.
+  length): ``mi_human``, ``mi_batch`` (bits), ``nmi_human``, ``nmi_batch``;
+  ``classes_found`` (human classes the path's cells reached within the length, see
+  :data:`~curiosity_cli.evaluate.labels.CLASS_SHARE_PERCENT`) of ``classes`` (the map's
+  classes with pixels); ``mean_recall`` (mean per-class recall of Z_p under the best
+  one-to-one topic-to-class matching, :func:`~curiosity_cli.evaluate.information.matched_recall`);
+  and the run's ``seed``. The human columns are NaN for a map without labels.
+- ``classes.csv``: one row per run, length and human class with pixels: the class's
+  ``pixels``, whether the path ``found`` it, the ``first_step`` it did (NaN if never),
+  its matched ``topic`` (-1 if none) and ``recall``; ``class_name`` from the map's legend
+  when it can be read.
 - ``summary.csv``: per (dataset, weight function, path length, against): ``n``, ``mean``,
-  ``std``, and the 95 % confidence interval of the mean (Student's t).
-- ``tests.csv``: per (dataset, path length, against) and pair of weight functions, the
-  Wilcoxon signed-rank test over the restarts both have (paired by restart, which
-  share start cells).
-- ``headline.csv``: per dataset, topic-perplexity MI against human labels at 80 steps
-  divided by the next best weight function's, with the paired Wilcoxon p of the two
-  and the paper's ratio for the map the dataset stands in for (1.51, 1.20 and 1.05).
+  ``std``, and the 95 % confidence interval of the mean MI (Student's t).
+- ``classes_summary.csv``: the same for ``classes_found`` and ``mean_recall``
+  (``measure``), with the map's ``classes``.
+- ``tests.csv``: per (dataset, path length, against) and pair of walkers, the Wilcoxon
+  signed-rank test over the restarts both have (paired by restart, which share start
+  cells). Ceilings (:data:`~curiosity_cli.explore.weights.CEILINGS`) are not walkers
+  and take no part.
+- ``effects.csv``: per (dataset, path length, against), topic perplexity's MI minus each
+  other walker's, paired by restart: the mean difference with its 95 % Student-t
+  confidence interval, beside the Wilcoxon p of ``tests.csv``.
+- ``headline.csv``: per dataset, topic-perplexity MI at 80 steps (against human labels,
+  or against Z_b on a map without them: ``against``) divided by the next best walker's,
+  the paired difference to it with its CI and Wilcoxon p, whether topic perplexity beats
+  every other walker (higher mean and p < 0.05 against each), its share of the better
+  ceiling's MI, and the paper's ratio for the map the dataset stands in for (1.51, 1.20
+  and 1.05).
 """
 
 from __future__ import annotations
 
 import itertools
 import json
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -26,6 +44,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from curiosity_cli.errors import CuriosityError
+from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import atomic_path, display_path
 
 if TYPE_CHECKING:
@@ -33,6 +52,10 @@ if TYPE_CHECKING:
 
 HEADLINE_LENGTH = 80
 HEADLINE_WEIGHT = "topic-perplexity"
+#: Significance level of "beats": a higher mean and a paired Wilcoxon p below it.
+ALPHA = 0.05
+CONFIDENCE = 0.95
+_KEYS = ["dataset", "weight_function", "restart", "path_length"]
 
 
 class EvaluationError(CuriosityError):
@@ -41,7 +64,7 @@ class EvaluationError(CuriosityError):
 
 @dataclass(frozen=True)
 class Evaluation:
-    """The tables of an experiment, and the runs that had to be left out (each with why)."""
+    """The tables of an experiment, and the notes on what had to be left out (each with why)."""
 
     mi: pd.DataFrame
     summary: pd.DataFrame
@@ -49,10 +72,111 @@ class Evaluation:
     headline: pd.DataFrame
     skipped: list[str]
     maps: pd.DataFrame | None  # maps.csv, None for folders from before it existed
+    effects: pd.DataFrame | None = None
+    classes: pd.DataFrame | None = None
+    classes_summary: pd.DataFrame | None = None
 
 
-def mi_rows(folder: Path) -> tuple[list[dict], list[str]]:
-    """One row per run and checkpoint from the label files; and the files left out, with why.
+@dataclass(frozen=True)
+class LabelRows:
+    """What the label files hold, as table rows (:func:`label_rows`)."""
+
+    mi: list[dict]  # one per run and checkpoint
+    classes: list[dict]  # one per run, checkpoint and class with pixels
+    skipped: list[str]  # files left out, and label files without classes found, each with why
+
+
+def _read_label_file(path: Path) -> tuple[dict, dict]:
+    """``(meta, arrays)`` of a run's label file; raises what numpy raises on a corrupt one."""
+    from curiosity_cli.evaluate.labels import read_meta
+
+    with np.load(path) as npz:
+        meta = read_meta(npz)
+        arrays = {"lengths": npz["lengths"], "batch": npz["batch"]}  # a file without them is corrupt (KeyError)
+        arrays.update({name: npz[name] for name in ("human", "class_first_step") if name in npz.files})
+    return meta, arrays
+
+
+def _first_steps(meta: dict, arrays: dict) -> np.ndarray | None:
+    """The label file's ``class_first_step`` if it was made at the current share, else None."""
+    from curiosity_cli.evaluate.labels import CLASS_SHARE_PERCENT
+
+    if "class_first_step" not in arrays or meta.get("class_share_percent") != CLASS_SHARE_PERCENT:
+        return None
+    return arrays["class_first_step"]
+
+
+def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None) -> tuple[list[dict], list[dict]]:
+    """The mi.csv rows (one per checkpoint) and classes.csv rows of one run's label file.
+
+    Parameters
+    ----------
+    meta : dict
+        The label file's ``meta``.
+    arrays : dict of str to ndarray
+        ``lengths`` (n,), ``batch`` (n, K, K), optionally ``human`` (n, K, C) and
+        ``class_first_step`` (C,), as :func:`~curiosity_cli.evaluate.labels.label_run` writes them.
+    class_names : dict of int to str, optional
+        The map's legend.
+
+    Returns
+    -------
+    (list of dict, list of dict)
+    """
+    from curiosity_cli.evaluate.information import (
+        classes_found,
+        matched_recall,
+        mutual_information,
+        normalised_mutual_information,
+    )
+
+    human, batch = arrays.get("human"), arrays["batch"]
+    first = _first_steps(meta, arrays) if human is not None else None
+    run = {"dataset": meta["dataset"], "weight_function": meta["weight_function"], "restart": meta["restart"]}
+    rows, class_rows = [], []
+    for i, length in enumerate(arrays["lengths"].tolist()):
+        row = {
+            **run, "path_length": length,
+            "mi_human": np.nan, "mi_batch": mutual_information(batch[i]),
+            "nmi_human": np.nan, "nmi_batch": normalised_mutual_information(batch[i]),
+            "classes_found": np.nan, "classes": np.nan, "mean_recall": np.nan,
+            "seed": " ".join(map(str, meta["run_seed"])),
+        }
+        if human is not None:
+            pixels = human[i].sum(axis=0)
+            present = np.flatnonzero(pixels > 0)
+            recall, topic = matched_recall(human[i])
+            row.update({
+                "mi_human": mutual_information(human[i]), "nmi_human": normalised_mutual_information(human[i]),
+                "classes": present.size, "mean_recall": float(recall[present].mean()) if present.size else np.nan,
+            })
+            if first is not None:
+                row["classes_found"] = classes_found(first[present], length)
+            for h in present.tolist():
+                reached = first is not None and 0 <= first[h] < length
+                class_rows.append({
+                    **run, "path_length": length, "class_id": h, "class_name": (class_names or {}).get(h, ""),
+                    "pixels": int(pixels[h]), "found": bool(reached) if first is not None else np.nan,
+                    "first_step": float(first[h]) if reached else np.nan,
+                    "topic": int(topic[h]), "recall": float(recall[h]),
+                })
+        rows.append(row)
+    return rows, class_rows
+
+
+def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = None) -> LabelRows:
+    """The table rows of every label file of an experiment, and the files left out, with why.
+
+    A label file of a map with human labels but without classes found at the current
+    share (made before they were recorded) keeps its MI and recall rows; its
+    ``classes_found`` is NaN, and a note per map says so and how to redo the files.
+
+    Parameters
+    ----------
+    folder : Path
+        The experiment folder.
+    class_names : dict, optional
+        Per dataset, the legend's class names by id.
 
     Raises
     ------
@@ -60,23 +184,19 @@ def mi_rows(folder: Path) -> tuple[list[dict], list[str]]:
         No label files at all, or a label file whose run or batch reference was made
         from another word store (naming both stores).
     """
-    from curiosity_cli.evaluate.information import mutual_information, normalised_mutual_information
-    from curiosity_cli.evaluate.labels import batch_path, read_meta
+    from curiosity_cli.evaluate.labels import CLASS_SHARE_PERCENT, batch_path, read_meta
     from curiosity_cli.explore.runs import RunError, read_run, run_folder
 
     folder = Path(folder)
     files = sorted((folder / "labels").glob("*/*/restart-*.npz"))
     if not files:
         raise EvaluationError(f"{display_path(folder / 'labels')}: no label files; run `curiosity label` first")
-    rows, skipped = [], []
+    rows, class_rows, skipped = [], [], []
     batch_stores = {}
+    without_classes = Counter()
     for path in files:
         try:
-            with np.load(path) as npz:
-                meta = read_meta(npz)
-                lengths = npz["lengths"].tolist()
-                human = npz["human"] if "human" in npz.files else None
-                batch = npz["batch"]
+            meta, arrays = _read_label_file(path)
         except (OSError, ValueError, KeyError, EOFError) as exc:
             skipped.append(f"{display_path(path)}: corrupt ({type(exc).__name__}); run `curiosity label --force`")
             continue
@@ -100,45 +220,68 @@ def mi_rows(folder: Path) -> tuple[list[dict], list[str]]:
                 f"{display_path(batch_path(folder, meta['dataset']))} from {batch_stores[meta['dataset']]}; "
                 "run `curiosity label --force`"
             )
-        for i, length in enumerate(lengths):
-            rows.append({
-                "dataset": meta["dataset"],
-                "weight_function": meta["weight_function"],
-                "restart": meta["restart"],
-                "path_length": length,
-                "mi_human": mutual_information(human[i]) if human is not None else np.nan,
-                "mi_batch": mutual_information(batch[i]),
-                "nmi_human": normalised_mutual_information(human[i]) if human is not None else np.nan,
-                "nmi_batch": normalised_mutual_information(batch[i]),
-                "seed": " ".join(map(str, meta["run_seed"])),
-            })
-    return rows, skipped
+        if "human" in arrays and _first_steps(meta, arrays) is None:
+            without_classes[meta["dataset"]] += 1
+        mi, classes = run_rows(meta, arrays, (class_names or {}).get(meta["dataset"]))
+        rows += mi
+        class_rows += classes
+    for dataset, count in without_classes.items():
+        skipped.append(
+            f"{display_path(folder / 'labels' / dataset)}: classes found left out of {count} label files made before "
+            f"they were recorded (or at another share than {CLASS_SHARE_PERCENT} %); run `curiosity label` to redo them"
+        )
+    return LabelRows(rows, class_rows, skipped)
+
+
+def _mean_ci(grouped) -> pd.DataFrame:
+    """``n``, ``mean``, ``std`` and the 95 % Student-t CI of the mean, per group of a grouped Series."""
+    from scipy import stats
+
+    summary = grouped.agg(n="count", mean="mean", std="std").reset_index()
+    half = stats.t.ppf(0.5 + CONFIDENCE / 2, np.maximum(summary["n"] - 1, 1)) * summary["std"].fillna(0) / np.sqrt(summary["n"])
+    summary["ci_low"] = summary["mean"] - half
+    summary["ci_high"] = summary["mean"] + half
+    return summary
 
 
 def summarise(mi):
     """Mean, standard deviation and 95 % CI of MI per (dataset, weight function, length, against)."""
     import pandas as pd
-    from scipy import stats
 
     long = mi.melt(
-        id_vars=["dataset", "weight_function", "restart", "path_length"],
-        value_vars=["mi_human", "mi_batch"], var_name="against", value_name="mi",
+        id_vars=_KEYS, value_vars=["mi_human", "mi_batch"], var_name="against", value_name="mi",
     ).dropna(subset=["mi"])
     long["against"] = long["against"].str.removeprefix("mi_")
-    grouped = long.groupby(["dataset", "weight_function", "path_length", "against"], sort=False)["mi"]
-    summary = grouped.agg(n="count", mean="mean", std="std").reset_index()
-    half = stats.t.ppf(0.975, np.maximum(summary["n"] - 1, 1)) * summary["std"].fillna(0) / np.sqrt(summary["n"])
-    summary["ci_low"] = summary["mean"] - half
-    summary["ci_high"] = summary["mean"] + half
-    return pd.DataFrame(summary)
+    return pd.DataFrame(_mean_ci(long.groupby(["dataset", "weight_function", "path_length", "against"], sort=False)["mi"]))
+
+
+def summarise_classes(mi):
+    """Mean, standard deviation and 95 % CI of ``classes_found`` and ``mean_recall``
+    (``measure``) per (dataset, weight function, length), with the map's ``classes``."""
+    import pandas as pd
+
+    columns = ["dataset", "weight_function", "path_length", "measure", "classes", "n", "mean", "std", "ci_low", "ci_high"]
+    if "classes_found" not in mi:
+        return pd.DataFrame(columns=columns)
+    long = mi.melt(
+        id_vars=[*_KEYS, "classes"], value_vars=["classes_found", "mean_recall"], var_name="measure", value_name="value",
+    ).dropna(subset=["value"])
+    grouped = long.groupby(["dataset", "weight_function", "path_length", "measure", "classes"], sort=False)["value"]
+    return pd.DataFrame(_mean_ci(grouped), columns=columns)
+
+
+def walkers_only(mi):
+    """The rows of walkers: ceilings (:data:`~curiosity_cli.explore.weights.CEILINGS`) left out."""
+    return mi[~mi["weight_function"].isin(CEILINGS)]
 
 
 def paired_tests(mi):
-    """Wilcoxon signed-rank test between every pair of weight functions, paired by restart."""
+    """Wilcoxon signed-rank test between every pair of walkers, paired by restart (ceilings left out)."""
     import pandas as pd
     from scipy import stats
 
     rows = []
+    mi = walkers_only(mi)
     for against in ("human", "batch"):
         column = f"mi_{against}"
         table = mi.dropna(subset=[column]).pivot_table(
@@ -159,39 +302,165 @@ def paired_tests(mi):
     return pd.DataFrame(rows, columns=["dataset", "path_length", "against", "a", "b", "n", "median_difference", "p_value"])
 
 
-def headline(summary, tests, stands_in_for: dict[str, str]):
-    """Per dataset: topic-perplexity mean MI vs human labels at 80 steps over the next best's.
+def paired_difference(a: np.ndarray, b: np.ndarray, confidence: float = CONFIDENCE) -> tuple[float, float, float]:
+    """Mean of ``a - b`` and its Student-t confidence interval, as ``scipy.stats.ttest_rel(a, b)``.
 
-    With the paired Wilcoxon p of topic perplexity against that next best, and the
-    paper's ratio for the map the dataset stands in for (``stands_in_for``: dataset name
-    to paper map name; datasets without one get no paper ratio).
+    Parameters
+    ----------
+    a, b : (n,) float ndarrays
+        Paired values (the same restart of two walkers).
+    confidence : float
+        Of the interval, in (0, 1).
+
+    Returns
+    -------
+    (float, float, float)
+        Mean difference, lower and upper bound. The bounds are NaN for fewer than two
+        pairs, and both the mean when every difference is the same.
+    """
+    from scipy import stats
+
+    diff = np.asarray(a, np.float64) - np.asarray(b, np.float64)
+    if diff.size == 0:
+        return np.nan, np.nan, np.nan
+    mean = float(diff.mean())
+    if diff.size < 2:
+        return mean, np.nan, np.nan
+    half = float(stats.t.ppf(0.5 + confidence / 2, diff.size - 1) * diff.std(ddof=1) / np.sqrt(diff.size))
+    return mean, mean - half, mean + half
+
+
+def _wilcoxon_p(tests, dataset: str, length: int, against: str, a: str, b: str) -> tuple[float, int]:
+    """The Wilcoxon p and pairs of ``a`` against ``b`` in ``tests`` (either order); ``(NaN, 0)`` if absent."""
+    pair = tests[
+        (tests["dataset"] == dataset) & (tests["path_length"] == length) & (tests["against"] == against)
+        & (((tests["a"] == a) & (tests["b"] == b)) | ((tests["a"] == b) & (tests["b"] == a)))
+    ]
+    return (float(pair["p_value"].iloc[0]), int(pair["n"].iloc[0])) if len(pair) else (np.nan, 0)
+
+
+def paired_effects(mi, tests=None):
+    """Topic perplexity's MI minus each other walker's, paired by restart (ceilings left out).
+
+    Per (dataset, path length, against, other walker): ``n`` pairs, the two means over
+    those pairs, the mean paired difference with its 95 % Student-t CI
+    (:func:`paired_difference`) and the Wilcoxon p of the same pairs from ``tests``
+    (computed with :func:`paired_tests` when not given).
+    """
+    import pandas as pd
+
+    columns = ["dataset", "path_length", "against", "other", "n", "topic_perplexity", "other_mean",
+               "mean_difference", "ci_low", "ci_high", "p_value"]
+    mi = walkers_only(mi)
+    tests = paired_tests(mi) if tests is None else tests
+    rows = []
+    for against in ("human", "batch"):
+        column = f"mi_{against}"
+        table = mi.dropna(subset=[column]).pivot_table(
+            index=["dataset", "path_length", "restart"], columns="weight_function", values=column
+        )
+        if HEADLINE_WEIGHT not in table.columns:
+            continue
+        for (dataset, length), block in table.groupby(level=["dataset", "path_length"]):
+            for other in block.columns.drop(HEADLINE_WEIGHT):
+                pair = block[[HEADLINE_WEIGHT, other]].dropna()
+                if pair.empty:
+                    continue
+                mean, low, high = paired_difference(pair[HEADLINE_WEIGHT].to_numpy(), pair[other].to_numpy())
+                rows.append({
+                    "dataset": dataset, "path_length": length, "against": against, "other": other, "n": len(pair),
+                    "topic_perplexity": float(pair[HEADLINE_WEIGHT].mean()), "other_mean": float(pair[other].mean()),
+                    "mean_difference": mean, "ci_low": low, "ci_high": high,
+                    "p_value": _wilcoxon_p(tests, dataset, length, against, HEADLINE_WEIGHT, other)[0],
+                })
+    return pd.DataFrame(rows, columns=columns)
+
+
+HEADLINE_COLUMNS = [
+    "dataset", "against", "topic_perplexity", "next_best", "next_best_mi", "ratio", "mean_difference", "ci_low",
+    "ci_high", "p_value", "pairs", "beats_all", "not_beaten", "best_ceiling", "ceiling_mi", "ceiling_share",
+    "paper_map", "paper_ratio",
+]
+
+
+def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
+    """Per dataset: topic perplexity's mean MI at 80 steps over the next best walker's.
+
+    Against human labels, or against Z_b on a map without them (``against``). With the
+    paired Wilcoxon p of topic perplexity against that next best; the mean paired
+    difference to it and its 95 % CI (from ``effects``, NaN without); ``beats_all``:
+    topic perplexity's mean is above every other walker's with a paired Wilcoxon p below
+    :data:`ALPHA` against each, and ``not_beaten``: the walkers (``;``-separated) for
+    which that fails; the better ceiling, its MI and topic perplexity's share of it (no
+    ceiling runs: empty and NaN); and the paper's ratio for the map the dataset stands
+    in for (``stands_in_for``: dataset name to paper map name; datasets without one get
+    no paper ratio). Ceilings are never the next best.
     """
     import pandas as pd
 
     from curiosity_cli.paper import PAPER_MAPS
 
     rows = []
-    at = summary[(summary["against"] == "human") & (summary["path_length"] == HEADLINE_LENGTH)]
+    at = summary[summary["path_length"] == HEADLINE_LENGTH]
     for dataset, block in at.groupby("dataset", sort=False):
-        means = block.set_index("weight_function")["mean"]
-        if HEADLINE_WEIGHT not in means or len(means) < 2:
+        against = "human" if (block["against"] == "human").any() else "batch"
+        means = block[block["against"] == against].set_index("weight_function")["mean"]
+        ceilings = means[means.index.isin(CEILINGS)]
+        walkers = means[~means.index.isin(CEILINGS)]
+        if HEADLINE_WEIGHT not in walkers or len(walkers) < 2:
             continue
-        others = means.drop(HEADLINE_WEIGHT)
-        next_best = others.idxmax()
-        pair = tests[
-            (tests["dataset"] == dataset) & (tests["path_length"] == HEADLINE_LENGTH) & (tests["against"] == "human")
-            & (((tests["a"] == HEADLINE_WEIGHT) & (tests["b"] == next_best)) | ((tests["a"] == next_best) & (tests["b"] == HEADLINE_WEIGHT)))
-        ]
+        ours = walkers[HEADLINE_WEIGHT]
+        others = walkers.drop(HEADLINE_WEIGHT).sort_values(ascending=False, kind="stable")
+        next_best = others.index[0]
+        p_values = {o: _wilcoxon_p(tests, dataset, HEADLINE_LENGTH, against, HEADLINE_WEIGHT, o) for o in others.index}
+        not_beaten = [o for o in others.index if not (ours > others[o] and p_values[o][0] < ALPHA)]
+        effect = None
+        if effects is not None:
+            match = effects[
+                (effects["dataset"] == dataset) & (effects["path_length"] == HEADLINE_LENGTH)
+                & (effects["against"] == against) & (effects["other"] == next_best)
+            ]
+            effect = match.iloc[0] if len(match) else None
+        best_ceiling = ceilings.idxmax() if len(ceilings) and ceilings.notna().any() else ""
+        ceiling_mi = ceilings[best_ceiling] if best_ceiling else np.nan
         paper = PAPER_MAPS.get(stands_in_for.get(dataset, ""))
         rows.append({
-            "dataset": dataset, "topic_perplexity": means[HEADLINE_WEIGHT], "next_best": next_best,
-            "next_best_mi": others.max(), "ratio": means[HEADLINE_WEIGHT] / others.max(),
-            "p_value": float(pair["p_value"].iloc[0]) if len(pair) else np.nan,
-            "pairs": int(pair["n"].iloc[0]) if len(pair) else 0,
+            "dataset": dataset, "against": against, "topic_perplexity": ours, "next_best": next_best,
+            "next_best_mi": others.iloc[0], "ratio": ours / others.iloc[0],
+            "mean_difference": effect["mean_difference"] if effect is not None else np.nan,
+            "ci_low": effect["ci_low"] if effect is not None else np.nan,
+            "ci_high": effect["ci_high"] if effect is not None else np.nan,
+            "p_value": p_values[next_best][0], "pairs": p_values[next_best][1],
+            "beats_all": not not_beaten, "not_beaten": ";".join(not_beaten),
+            "best_ceiling": best_ceiling, "ceiling_mi": ceiling_mi,
+            "ceiling_share": ours / ceiling_mi if best_ceiling and ceiling_mi > 0 else np.nan,
             "paper_map": paper.name if paper else "", "paper_ratio": paper.headline_ratio if paper else np.nan,
         })
-    columns = ["dataset", "topic_perplexity", "next_best", "next_best_mi", "ratio", "p_value", "pairs", "paper_map", "paper_ratio"]
-    return pd.DataFrame(rows, columns=columns)
+    return pd.DataFrame(rows, columns=HEADLINE_COLUMNS)
+
+
+def read_class_names(folder: Path) -> dict[str, dict[int, str]]:
+    """Per dataset of an experiment, its legend's class names by id; {} for what cannot be read.
+
+    Best effort from ``config.yaml`` and the datasets' YAML and legend files (no images):
+    the names only label ``classes.csv`` rows.
+    """
+    from curiosity_cli.config import dataset_path, load_config, load_dataset_config
+    from curiosity_cli.data import load_legend
+
+    names = {}
+    try:
+        entries = load_config(Path(folder) / "config.yaml").datasets
+    except (CuriosityError, OSError):
+        return names
+    for entry in entries:
+        try:
+            dataset = load_dataset_config(dataset_path(entry))
+            if dataset.legend is not None:
+                names[dataset.name] = {c.id: c.name for c in load_legend(dataset.legend)}
+        except (CuriosityError, OSError):
+            continue
+    return names
 
 
 def read_maps(folder: Path):
@@ -219,20 +488,29 @@ def evaluate_experiment(folder: Path) -> Evaluation:
     import pandas as pd
 
     folder = Path(folder)
-    rows, skipped = mi_rows(folder)
-    if not rows:
+    found = label_rows(folder, read_class_names(folder))
+    skipped = found.skipped
+    if not found.mi:
         raise EvaluationError(f"{display_path(folder / 'labels')}: every label file was left out: " + "; ".join(skipped))
-    mi = pd.DataFrame(rows).sort_values(["dataset", "weight_function", "restart", "path_length"], ignore_index=True)
+    mi = pd.DataFrame(found.mi).sort_values(_KEYS, ignore_index=True)
+    class_columns = [*_KEYS, "class_id", "class_name", "pixels", "found", "first_step", "topic", "recall"]
+    classes = pd.DataFrame(found.classes, columns=class_columns).sort_values([*_KEYS, "class_id"], ignore_index=True)
     summary = summarise(mi)
+    classes_summary = summarise_classes(mi)
     tests = paired_tests(mi)
+    effects = paired_effects(mi, tests)
     maps = read_maps(folder)
     stands_in_for = {} if maps is None else {r.dataset: r.stands_in_for for r in maps.itertuples() if isinstance(r.stands_in_for, str)}
-    top = headline(summary, tests, stands_in_for)
-    for name, table in (("mi", mi), ("summary", summary), ("tests", tests), ("headline", top)):
+    top = headline(summary, tests, stands_in_for, effects)
+    tables = {
+        "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
+        "effects": effects, "headline": top,
+    }
+    for name, table in tables.items():
         with atomic_path(folder / f"{name}.csv") as tmp:
             table.to_csv(tmp, index=False)
     with atomic_path(folder / "mi.parquet") as tmp:
         mi.to_parquet(tmp, index=False)
     with atomic_path(folder / "skipped.json") as tmp:
         tmp.write_text(json.dumps(skipped, indent=2) + "\n")
-    return Evaluation(mi, summary, tests, top, skipped, maps)
+    return Evaluation(mi, summary, tests, top, skipped, maps, effects, classes, classes_summary)

@@ -48,17 +48,17 @@ def test_labels_on_a_cluster_equal_the_loky_labels_byte_for_byte(own_map, tmp_pa
     config, folder = small_experiment(own_map, tmp_path / "loky")
     shutil.copytree(folder, tmp_path / "dask" / "grid")
     cache = tmp_path / "loky" / "cache"
-    label_experiment(config, results_dir=tmp_path / "loky", cache_dir=cache, jobs=2)
+    label_experiment(config, tmp_path / "loky" / config.name, cache_dir=cache, jobs=2)
     loky = label_contents(folder)
     assert len([key for key in loky if key.startswith("labels/own/") and "/examples/" not in key]) == 8
 
     stages, done = [], []
-    summary = label_experiment(config, results_dir=tmp_path / "dask", cache_dir=cache, backend="dask",
+    summary = label_experiment(config, tmp_path / "dask" / config.name, cache_dir=cache, backend="dask",
                                scheduler=scheduler, on_stage=lambda *stage: stages.append(stage), on_done=lambda: done.append(1))
     assert (summary["labelled"], summary["skipped"], summary["batch_reused"]) == (8, 0, 0)
     assert stages == [("batch references of own", 8), ("labelling runs", 8)] and len(done) == 16
     assert label_contents(tmp_path / "dask" / "grid") == loky
-    again = label_experiment(config, results_dir=tmp_path / "dask", cache_dir=cache, backend="dask", scheduler=scheduler)
+    again = label_experiment(config, tmp_path / "dask" / config.name, cache_dir=cache, backend="dask", scheduler=scheduler)
     assert (again["labelled"], again["skipped"], again["batch_reused"]) == (0, 8, 1)
 
 
@@ -71,12 +71,12 @@ def test_a_label_task_that_raises_is_named_and_the_others_are_written(own_map, t
     where = {"jobs": 2} if backend == "loky" else {"backend": "dask", "scheduler": scheduler}
     with pytest.raises(LabelError, match=r"^1 of 8 runs could not be labelled \(the others are written\): "
                                          r"own / random-walk / restart 1: ParameterError: phi: shape \(\d+, 9\)"):
-        label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", **where)
+        label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", **where)
     assert len(list((folder / "labels" / "own").glob("*/restart-*.npz"))) == 7
     assert not (folder / "labels" / "own" / "random-walk" / "restart-001.npz").exists()
 
     meta_path.write_text(json.dumps(meta))  # mended: running again labels only that run
-    again = label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", **where)
+    again = label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", **where)
     assert (again["labelled"], again["skipped"], again["batch_reused"]) == (1, 7, 1)
 
 

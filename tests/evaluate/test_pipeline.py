@@ -15,7 +15,7 @@ from curiosity_cli.cli import app
 from curiosity_cli.evaluate.labels import LabelError, batch_path, example_path, label_experiment, label_path
 from curiosity_cli.evaluate.tables import EvaluationError, evaluate_experiment
 from curiosity_cli.explore.grid import run_grid
-from curiosity_cli.explore.runs import run_folder
+from curiosity_cli.explore.runs import read_run, run_folder
 from curiosity_cli.words.store import load_store
 
 runner = CliRunner()
@@ -31,7 +31,7 @@ def small_experiment(own_map, tmp_path, **explore):
 
 def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
-    done = label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    done = label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     assert (done["labelled"], done["skipped"], done["batch_reused"]) == (8, 0, 0)
     with np.load(batch_path(folder, "own")) as npz:
         assert npz["labels"].shape == (96, 128) and npz["log_likelihood"].shape == (8,)
@@ -43,13 +43,14 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     with np.load(example_path(folder, "own", "topic-perplexity", 0, 12)) as npz:
         assert npz["labels"].shape == (96, 128)
 
-    again = label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    again = label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     assert (again["labelled"], again["skipped"], again["batch_reused"]) == (0, 8, 1)
 
     evaluation = evaluate_experiment(folder)
     mi = pd.read_csv(folder / "mi.csv")
     assert list(mi.columns) == [
-        "dataset", "weight_function", "restart", "path_length", "mi_human", "mi_batch", "nmi_human", "nmi_batch", "seed"
+        "dataset", "weight_function", "restart", "path_length", "mi_human", "mi_batch", "nmi_human", "nmi_batch",
+        "classes_found", "classes", "mean_recall", "seed",
     ]
     assert len(mi) == 16 and (mi[["mi_human", "mi_batch"]] >= 0).all().all()
     assert (mi[["nmi_human", "nmi_batch"]] <= 1).all().all()
@@ -64,11 +65,38 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     tests = pd.read_csv(folder / "tests.csv")
     assert len(tests) == 2 * 2 * 6 and tests["p_value"].between(0, 1).all()
     assert evaluation.headline.empty, "no 80-step checkpoint, so no headline ratio"
+    effects = pd.read_csv(folder / "effects.csv")
+    assert len(effects) == 2 * 2 * 3 and (effects["ci_low"] <= effects["mean_difference"]).all()
+
+
+def test_labels_record_the_classes_each_path_found(own_map, tmp_path):
+    # own_map: class 0 ("sand") in the left 4 of the 8 cell columns, class 1 ("rock") in the right 4
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
+    evaluate_experiment(folder)
+    mi = pd.read_csv(folder / "mi.csv")
+    classes = pd.read_csv(folder / "classes.csv", keep_default_na=False, na_values=[""])
+    for weight in config.explore.weight_functions:
+        for restart in range(2):
+            path = read_run(run_folder(folder, "own", weight, restart)).path
+            right = path % 8 >= 4
+            expected = [int(np.argmax(~right)) if (~right).any() else -1, int(np.argmax(right)) if right.any() else -1]
+            with np.load(label_path(folder, "own", weight, restart)) as npz:
+                assert npz["class_first_step"].tolist() == expected
+            for length in (5, 12):
+                found = sum(0 <= step < length for step in expected)
+                row = mi[(mi.weight_function == weight) & (mi.restart == restart) & (mi.path_length == length)]
+                assert (row["classes_found"].item(), row["classes"].item()) == (found, 2)
+                rows = classes[(classes.weight_function == weight) & (classes.restart == restart) & (classes.path_length == length)]
+                assert rows["class_name"].tolist() == ["sand", "rock"] and rows["found"].sum() == found
+                assert row["mean_recall"].item() == pytest.approx(rows["recall"].mean())
+    summary = pd.read_csv(folder / "classes_summary.csv")
+    assert set(summary["measure"]) == {"classes_found", "mean_recall"} and (summary["classes"] == 2).all()
 
 
 def test_a_corrupt_label_file_is_reported_and_left_out(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
-    label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     label_path(folder, "own", "word-perplexity", 0).write_bytes(b"garbage")
     evaluation = evaluate_experiment(folder)
     assert len(evaluation.skipped) == 1 and "word-perplexity/restart-000.npz: corrupt" in evaluation.skipped[0]
@@ -78,7 +106,7 @@ def test_a_corrupt_label_file_is_reported_and_left_out(own_map, tmp_path):
 
 def test_labels_from_another_word_store_are_refused_naming_both(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
-    label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     meta_path = run_folder(folder, "own", "random-walk", 0) / "run.json"
     meta = json.loads(meta_path.read_text())
     real = meta["store"]
@@ -87,14 +115,14 @@ def test_labels_from_another_word_store_are_refused_naming_both(own_map, tmp_pat
     with pytest.raises(EvaluationError, match=f"labels made from word store {real}, but the run .* from own-0000000000000000.npz"):
         evaluate_experiment(folder)
     with pytest.raises(LabelError, match=f"made from word store own-0000000000000000.npz, but own's words are now {real}"):
-        label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1, force=True)
+        label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1, force=True)
 
 
 def test_a_corrupt_checkpoint_is_named_and_the_other_runs_are_labelled(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     (run_folder(folder, "own", "random-walk", 1) / "checkpoints.npz").write_bytes(b"garbage")
     with pytest.raises(LabelError, match=r"1 of 8 runs could not be labelled .*random-walk/restart-001/checkpoints.npz: corrupt"):
-        label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+        label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     assert len(list((folder / "labels" / "own").glob("*/restart-*.npz"))) == 7
 
 
@@ -123,7 +151,7 @@ def test_the_headline_is_the_ratio_to_the_next_best_with_its_paired_p():
 def test_nothing_to_label_or_evaluate_says_which_command_comes_first(own_map, tmp_path):
     config = grid_config(own_map)
     with pytest.raises(LabelError, match="grid/runs: no finished runs; run `curiosity explore` first"):
-        label_experiment(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+        label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     with pytest.raises(EvaluationError, match="grid/labels: no label files; run `curiosity label` first"):
         evaluate_experiment(tmp_path / "grid")
 
@@ -141,6 +169,10 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
     assert "wrote" in result.stdout and "REPORT.md" in result.stdout
     report = (folder / "REPORT.md").read_text()
     assert "## Mutual information" in report and "| own | topic-perplexity |" in report and "](figures/" in report
+    assert report.splitlines()[4] == "## Verdict"  # right after the title and one line of context
+    assert "- own: no verdict: no 80-step checkpoint." in report
+    for section in ("## Paired effect sizes", "## Classes found at 12 steps", "## Mean recall at 12 steps"):
+        assert section in report
     maps = pd.read_csv(folder / "maps.csv")
     store = load_store(tmp_path / "cache" / maps["store"].item())
     counts = store.count_by_type()

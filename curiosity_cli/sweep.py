@@ -1,0 +1,617 @@
+"""Parameter sweeps: ``curiosity reproduce CONFIG --sweep KEY=V1,V2 --sweep KEY2=W1,...``.
+
+A sweep runs the whole pipeline (:func:`curiosity_cli.reproduce.reproduce`) once per
+combination of values, the Cartesian product of the ``--sweep`` options, in the spirit
+of Hydra's ``--multirun key=a,b``, and compares the combinations' headlines in one report.
+
+Syntax
+------
+``--sweep KEY=V1,V2,...`` takes a dotted config key, as ``--set`` does, and one or more
+values, each read as YAML like a ``--set`` value. Values are split on commas outside
+brackets, so a list is one value: ``--sweep 'datasets=[zurich-zh17],[aerial-mosaic]'``
+is two values. A single value just fixes the key for every combination. Combinations
+run in product order: the first ``--sweep`` option varies slowest, the last fastest
+(``itertools.product``, as Hydra's basic sweeper). ``name`` cannot be swept (the sweep
+names each combination), and a key may be given once, in ``--sweep`` or ``--set``.
+
+Every combination is loaded and validated with :func:`curiosity_cli.config.load_config`
+(the ``--set`` machinery: ``--set`` options first, then the combination's values)
+before the first one runs, so a bad key or value stops the sweep before anything is
+written.
+
+Layout
+------
+For an experiment config named ``quick``, everything goes under
+``<results>/quick-sweep/``::
+
+    quick-sweep/
+      sweep.yaml                               the config, --set options, and per combination
+                                               its folder and overrides (written first)
+      SWEEP.md                                 every combination's overrides and headline table,
+                                               linked to its REPORT.md (written last)
+      sweep.csv                                a row per combination and dataset: override
+                                               columns, then headline.csv's columns
+      model.topics-16_explore.restarts-20/     an ordinary experiment folder (config.yaml,
+      model.topics-32_explore.restarts-20/       runs/, labels/, REPORT.md, ...) per combination
+
+A combination's folder, which is also its experiment ``name``, is made of its overrides
+only: ``KEY-VALUE`` parts joined by ``_``, in ``--sweep`` order. Characters other than
+letters, digits, ``_``, ``.`` and ``-`` in a value become ``-``, and such a part gets
+``-`` and 6 hex digits of a hash of the key and the parsed value, so different values
+never share a folder (``datasets=[zurich-zh17]`` gives ``datasets-zurich-zh17-17f3a3``).
+Unlike numbered folders (Hydra's ``0/``, ``1/``, ...), a name depends only on the
+combination: adding a value to a sweep, or reordering values, finds every finished
+combination under the same folder, and no folder is reused for other values. The names
+are valid experiment names, so ``curiosity label`` or ``evaluate`` work on a
+combination's folder as on any other. The config file and ``--set`` options are not in
+the name: after a change to them that alters runs, a resumed combination refuses its
+folder as any experiment does (:func:`curiosity_cli.explore.grid.check_saved_config`);
+``--set name=...`` starts another sweep folder.
+
+Resuming
+--------
+Each combination resumes like any experiment (finished runs, batch references and labels
+are kept; evaluation and figures are redone), so running the same command again after
+it was stopped does only the work that is missing, then rewrites ``SWEEP.md`` and
+``sweep.csv``. A combination that fails does not stop the others; the sweep reports it
+at the end (:class:`SweepError`) after writing the report of the ones that finished.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import re
+import shlex
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from curiosity_cli.config import ExperimentConfig, load_config
+from curiosity_cli.errors import ConfigError, CuriosityError
+from curiosity_cli.files import atomic_path, display_path
+
+#: The headline columns, as ``headline.csv`` has them (:func:`curiosity_cli.evaluate.tables.headline`).
+HEADLINE_COLUMNS = (
+    "dataset", "topic_perplexity", "next_best", "next_best_mi", "ratio", "p_value", "pairs", "paper_map", "paper_ratio",
+)
+
+_SAFE = re.compile(r"[^A-Za-z0-9_.-]+")
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+_MAX_NAME = 120
+_OPENING, _CLOSING = "[{", "]}"
+
+
+class SweepSyntaxError(ValueError):
+    """A malformed ``--sweep`` option; the command line reports it as a usage error."""
+
+
+class SweepError(CuriosityError):
+    """Combinations of a sweep that failed; the others are done and reported."""
+
+
+@dataclass(frozen=True)
+class SweepAxis:
+    """One ``--sweep KEY=V1,V2,...`` option: a dotted key and its values as given."""
+
+    key: str
+    values: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Combination:
+    """One experiment of a sweep.
+
+    Attributes
+    ----------
+    index : int
+        1-based position in product order.
+    overrides : tuple of str
+        ``KEY=VALUE`` for every swept key, in ``--sweep`` order (``--set`` syntax).
+    name : str
+        Its experiment name and folder (module docstring).
+    config : ExperimentConfig
+        The validated config: the file, the ``--set`` options, then ``overrides``.
+    """
+
+    index: int
+    overrides: tuple[str, ...]
+    name: str
+    config: ExperimentConfig
+
+    @property
+    def label(self) -> str:
+        """The overrides as a reader sees them, e.g. ``model.topics=16, seed=1``."""
+        return ", ".join(self.overrides)
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A validated sweep: every combination loaded, nothing written yet.
+
+    Attributes
+    ----------
+    name : str
+        The experiment config's name; the sweep goes to ``<results>/<name>-sweep/``.
+    config_path : Path
+        The experiment YAML.
+    sets : tuple of str
+        The ``--set`` options shared by every combination.
+    axes : tuple of SweepAxis
+    combinations : tuple of Combination
+        In product order.
+    """
+
+    name: str
+    config_path: Path
+    sets: tuple[str, ...]
+    axes: tuple[SweepAxis, ...]
+    combinations: tuple[Combination, ...] = field(repr=False)
+
+    def folder(self, results_dir: Path) -> Path:
+        """The sweep's folder under ``results_dir``."""
+        return Path(results_dir) / f"{self.name}-sweep"
+
+    def command(self, results_dir: Path = Path("results")) -> str:
+        """The ``curiosity reproduce`` command that runs (or resumes) this sweep in ``results_dir``."""
+        words = ["curiosity", "reproduce", display_path(self.config_path)]
+        if Path(results_dir) != Path("results"):
+            words += ["--results-dir", display_path(results_dir)]
+        for text in self.sets:
+            words += ["--set", text]
+        for axis in self.axes:
+            words += ["--sweep", f"{axis.key}={','.join(axis.values)}"]
+        return shlex.join(words)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What running one combination gave: its report, or why it failed, and its time."""
+
+    combination: Combination
+    report: Path | None
+    error: str | None
+    seconds: float
+
+
+# --------------------------------------------------------------------------- parsing
+
+
+def split_values(text: str) -> list[str]:
+    """Split a ``--sweep`` value list on commas outside brackets.
+
+    Parameters
+    ----------
+    text : str
+        What follows ``KEY=``, e.g. ``16,32`` or ``[a,b],[c]``.
+
+    Returns
+    -------
+    list of str
+        The values, stripped of surrounding blanks.
+
+    Raises
+    ------
+    SweepSyntaxError
+        Unbalanced brackets.
+    """
+    values, depth, start = [], 0, 0
+    for i, char in enumerate(text):
+        if char in _OPENING:
+            depth += 1
+        elif char in _CLOSING:
+            depth -= 1
+            if depth < 0:
+                raise SweepSyntaxError(f"{text!r}: a closing {char!r} without its opening bracket")
+        elif char == "," and depth == 0:
+            values.append(text[start:i].strip())
+            start = i + 1
+    if depth:
+        raise SweepSyntaxError(f"{text!r}: a bracket is not closed")
+    values.append(text[start:].strip())
+    return values
+
+
+def parse_sweeps(options: Sequence[str], sets: Sequence[str] = ()) -> tuple[SweepAxis, ...]:
+    """Parse ``--sweep KEY=V1,V2,...`` options (module docstring).
+
+    Parameters
+    ----------
+    options : sequence of str
+        The ``--sweep`` options, in the order given.
+    sets : sequence of str
+        The ``--set KEY=VALUE`` options of the same command: a key may not be in both.
+
+    Returns
+    -------
+    tuple of SweepAxis
+
+    Raises
+    ------
+    SweepSyntaxError
+        No ``=``, no key, an empty value (write ``null`` for null), unbalanced brackets,
+        a value given twice, a key given twice or also with ``--set``, or ``name``.
+    """
+    set_keys = [text.partition("=")[0].strip() for text in sets]
+    axes: list[SweepAxis] = []
+    for text in options:
+        key, sep, rest = text.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise SweepSyntaxError(f"{text!r}: expected KEY=V1,V2,..., e.g. model.topics=16,32")
+        if key == "name":
+            raise SweepSyntaxError(f"{text!r}: name cannot be swept; each combination is named by its values")
+        values = split_values(rest)
+        if not any(values):
+            raise SweepSyntaxError(f"{text!r}: no values; expected KEY=V1,V2,..., e.g. model.topics=16,32")
+        if not all(values):
+            raise SweepSyntaxError(f"{text!r}: an empty value; write null for null")
+        for other in [a.key for a in axes]:
+            if _overlap(key, other):
+                raise SweepSyntaxError(f"{text!r}: {other} is already swept; give each key once")
+        for other in set_keys:
+            if _overlap(key, other):
+                raise SweepSyntaxError(f"{text!r}: {other} is also given with --set; give it in one of them")
+        parts = {}
+        for value in values:
+            part = _part(key, value)
+            if part in parts:
+                raise SweepSyntaxError(f"{text!r}: {value!r} is the same value as {parts[part]!r}; give each value once")
+            parts[part] = value
+        axes.append(SweepAxis(key, tuple(values)))
+    return tuple(axes)
+
+
+def _overlap(key: str, other: str) -> bool:
+    """Whether two dotted keys set the same leaf (equal, or one a section of the other)."""
+    return key == other or key.startswith(other + ".") or other.startswith(key + ".")
+
+
+def combinations(axes: Sequence[SweepAxis]) -> list[tuple[str, ...]]:
+    """The overrides of every combination, in product order (the first axis varies slowest).
+
+    Parameters
+    ----------
+    axes : sequence of SweepAxis
+
+    Returns
+    -------
+    list of tuple of str
+        ``KEY=VALUE`` strings, one tuple per combination.
+    """
+    return [
+        tuple(f"{axis.key}={value}" for axis, value in zip(axes, values))
+        for values in itertools.product(*(axis.values for axis in axes))
+    ]
+
+
+def combination_name(overrides: Iterable[str]) -> str:
+    """The experiment name and folder of a combination: ``KEY-VALUE`` parts joined by ``_``.
+
+    Parameters
+    ----------
+    overrides : iterable of str
+        ``KEY=VALUE`` strings.
+
+    Returns
+    -------
+    str
+        A valid experiment name (letters, digits, ``_``, ``.``, ``-``); a value with
+        other characters is replaced and its part gets a hash (module docstring), and a
+        name longer than 120 characters is cut and gets a hash of all of it.
+    """
+    overrides = list(overrides)
+    name = "_".join(_part(*text.split("=", 1)) for text in overrides)
+    if len(name) > _MAX_NAME:
+        name = f"{name[:_MAX_NAME - 9].rstrip('-_.')}-{_digest(json.dumps(overrides), 8)}"
+    return name
+
+
+def _part(key: str, value: str) -> str:
+    key, value = key.strip(), value.strip()
+    safe = _SAFE.sub("-", value).strip("-")
+    if safe == value:
+        return f"{key}-{value}"
+    digest = _digest(json.dumps([key, _parsed(value)], sort_keys=True, default=str), 6)
+    return f"{key}-{safe}-{digest}" if safe else f"{key}-{digest}"
+
+
+def _parsed(value: str):
+    """A value as ``--set`` reads it (YAML, or the text itself if it is not YAML)."""
+    import yaml
+
+    try:
+        return yaml.safe_load(value)
+    except yaml.YAMLError:
+        return value
+
+
+def _digest(text: str, digits: int) -> str:
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:digits]
+
+
+# --------------------------------------------------------------------------- planning
+
+
+def plan_sweep(config_path: str | Path, axes: Sequence[SweepAxis], sets: Sequence[str] = ()) -> Sweep:
+    """Load and validate every combination of a sweep; nothing is written.
+
+    Parameters
+    ----------
+    config_path : str or Path
+        The experiment YAML.
+    axes : sequence of SweepAxis
+        From :func:`parse_sweeps`; at least one.
+    sets : sequence of str
+        ``--set KEY=VALUE`` options applied to every combination, before its own values.
+
+    Returns
+    -------
+    Sweep
+
+    Raises
+    ------
+    ConfigError
+        The first combination that does not validate, in one line: the error
+        ``--set`` would give, naming ``--sweep`` when a swept key is at fault, else
+        followed by the combination.
+    """
+    if not axes:
+        raise ValueError("a sweep needs at least one axis")
+    config_path = Path(config_path)
+    sets = tuple(sets)
+    keys = [axis.key for axis in axes]
+    loaded, base_name = [], None
+    for index, overrides in enumerate(combinations(axes), start=1):
+        try:
+            config = load_config(config_path, [*sets, *overrides])
+        except ConfigError as exc:
+            raise ConfigError(_sweep_message(str(exc), keys, overrides)) from None
+        base_name = config.name  # the same for every combination: name cannot be swept
+        name = combination_name(overrides)
+        assert _NAME.match(name), name  # by construction: keys are config fields, values made safe
+        loaded.append(Combination(index, overrides, name, replace(config, name=name)))
+    return Sweep(base_name, config_path, sets, tuple(axes), tuple(loaded))
+
+
+def _sweep_message(text: str, keys: Sequence[str], overrides: Sequence[str]) -> str:
+    """``--set``'s message for a value that came from ``--sweep``, naming ``--sweep``."""
+    prefix = "--set: "
+    if text.startswith("--set '"):  # a malformed --set option: not the sweep's doing
+        return text
+    if text.startswith(prefix):
+        rest = text[len(prefix):]
+        for key in keys:
+            if rest.startswith(key) and rest[len(key):len(key) + 1] in (":", ".", "["):
+                return f"--sweep: {rest}"
+    return f"{text} (with --sweep {', '.join(overrides)})"
+
+
+# --------------------------------------------------------------------------- running
+
+
+def run_sweep(
+    sweep: Sweep,
+    *,
+    results_dir: Path = Path("results"),
+    cache_dir: Path = Path("results/cache"),
+    jobs: int | None = None,
+    force: bool = False,
+    backend: str = "loky",
+    scheduler: str | None = None,
+    on_stage: Callable[[str, int], None] | None = None,
+    on_done: Callable[[], None] | None = None,
+) -> Path:
+    """Run every combination of ``sweep`` with the whole pipeline and write ``SWEEP.md``.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        From :func:`plan_sweep`.
+    results_dir, cache_dir : Path
+        The sweep's folder goes under ``results_dir``; word stores are cached in ``cache_dir``.
+    jobs, force, backend, scheduler
+        As :func:`curiosity_cli.reproduce.reproduce`, for every combination.
+    on_stage, on_done : callable, optional
+        Progress callbacks, as :func:`~curiosity_cli.reproduce.reproduce`'s; each
+        combination is announced as a stage without units,
+        ``"combination 2/3: model.topics=32"``.
+
+    Returns
+    -------
+    Path
+        ``SWEEP.md``.
+
+    Raises
+    ------
+    SweepError
+        After every combination, if some failed: each named with its error (``SWEEP.md``
+        and ``sweep.csv`` hold the others).
+    """
+    from curiosity_cli.reproduce import reproduce
+
+    folder = sweep.folder(results_dir)
+    write_plan(sweep, folder)
+    total = len(sweep.combinations)
+    outcomes = []
+    for combination in sweep.combinations:
+        if on_stage is not None:
+            on_stage(f"combination {combination.index}/{total}: {combination.label}", 0)
+        started = time.perf_counter()
+        try:
+            report = reproduce(
+                combination.config, results_dir=folder, cache_dir=cache_dir, jobs=jobs, force=force,
+                backend=backend, scheduler=scheduler, on_stage=on_stage, on_done=on_done,
+            )
+            outcomes.append(Outcome(combination, report, None, time.perf_counter() - started))
+        except CuriosityError as exc:
+            outcomes.append(Outcome(combination, None, str(exc), time.perf_counter() - started))
+    path = write_sweep_report(sweep, folder, outcomes)
+    failed = [o for o in outcomes if o.error is not None]
+    if failed:
+        raise SweepError(
+            f"{len(failed)} of {_count(total, 'combination')} failed ({display_path(path)} has the others; "
+            "run the command again to retry): "
+            + "; ".join(f"combination {o.combination.index} ({o.combination.label}): {o.error}" for o in failed)
+        )
+    return path
+
+
+def write_plan(sweep: Sweep, folder: Path) -> Path:
+    """Write ``sweep.yaml``: the config, the ``--set`` options and every combination's folder.
+
+    Parameters
+    ----------
+    sweep : Sweep
+    folder : Path
+        The sweep's folder.
+
+    Returns
+    -------
+    Path
+    """
+    import yaml
+
+    plan = {
+        "command": sweep.command(Path(folder).parent),
+        "config": str(sweep.config_path.resolve()),
+        "set": list(sweep.sets),
+        "sweep": {axis.key: list(axis.values) for axis in sweep.axes},
+        "combinations": [
+            {"index": c.index, "folder": c.name, "overrides": list(c.overrides)} for c in sweep.combinations
+        ],
+    }
+    path = Path(folder) / "sweep.yaml"
+    with atomic_path(path) as tmp:
+        tmp.write_text(yaml.safe_dump(plan, sort_keys=False))
+    return path
+
+
+def read_headline(folder: Path):
+    """An experiment's ``headline.csv`` as a DataFrame (empty, with its columns, if absent).
+
+    Parameters
+    ----------
+    folder : Path
+        An experiment folder.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The columns of :data:`HEADLINE_COLUMNS`.
+    """
+    import pandas as pd
+
+    path = Path(folder) / "headline.csv"
+    if not path.is_file():
+        return pd.DataFrame(columns=list(HEADLINE_COLUMNS))
+    text = {"dataset": str, "next_best": str, "paper_map": str}  # an empty paper_map stays ""
+    numbers = {column: [""] for column in HEADLINE_COLUMNS if column not in text}
+    return pd.read_csv(path, dtype=text, keep_default_na=False, na_values=numbers)
+
+
+def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) -> Path:
+    """Write ``SWEEP.md`` and ``sweep.csv`` from the combinations' ``headline.csv``.
+
+    Parameters
+    ----------
+    sweep : Sweep
+    folder : Path
+        The sweep's folder; each combination's experiment folder is in it.
+    outcomes : sequence of Outcome
+        One per combination run, in product order.
+
+    Returns
+    -------
+    Path
+        ``SWEEP.md``.
+    """
+    import pandas as pd
+
+    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT
+
+    folder = Path(folder)
+    keys = [axis.key for axis in sweep.axes]
+    rows, sections = [], []
+    overview = [
+        "| # | " + " | ".join(keys) + " | dataset | ratio | next best | paired Wilcoxon p (pairs) | paper's ratio |",
+        "|---|" + "---|" * len(keys) + "---|---|---|---|---|",
+    ]
+    for outcome in outcomes:
+        c = outcome.combination
+        values = [text.split("=", 1)[1] for text in c.overrides]
+        cells = " | ".join(f"`{v}`" for v in values)
+        link = f"[{c.index}]({c.name}/REPORT.md)"
+        sections += [f"## {c.index}. {c.label}", ""]
+        if outcome.error is not None:
+            overview.append(f"| {c.index} | {cells} | failed | | | | |")
+            sections += [f"Failed: {outcome.error}", ""]
+            continue
+        top = read_headline(folder / c.name)
+        sections += [f"Folder `{c.name}/`, report [{c.name}/REPORT.md]({c.name}/REPORT.md), {outcome.seconds:.0f} s.", ""]
+        for row in top.to_dict("records") or [dict.fromkeys(HEADLINE_COLUMNS)]:
+            rows.append({"combination": c.index, "folder": c.name, **dict(zip(keys, values)), **row})
+        if top.empty:
+            overview.append(f"| {link} | {cells} | (no headline) | | | | |")
+            sections += [f"(no human labels or no {HEADLINE_LENGTH}-step checkpoint: no headline ratio)", ""]
+            continue
+        sections += [
+            "| dataset | topic perplexity MI | next best | its MI | ratio | paired Wilcoxon p | pairs | paper's map | paper's ratio |",
+            "|---|---|---|---|---|---|---|---|---|",
+        ]
+        for r in top.itertuples():
+            overview.append(
+                f"| {link} | {cells} | {r.dataset} | {_number(r.ratio)} | {r.next_best} | "
+                f"{_p(r.p_value)} ({r.pairs}) | {_number(r.paper_ratio)} |"
+            )
+            sections.append(
+                f"| {r.dataset} | {_number(r.topic_perplexity, 3)} | {r.next_best} | {_number(r.next_best_mi, 3)} | "
+                f"{_number(r.ratio)} | {_p(r.p_value)} | {r.pairs} | {r.paper_map} | {_number(r.paper_ratio)} |"
+            )
+        sections.append("")
+    sets = ", ".join(f"`--set {s}`" for s in sweep.sets) or "none"
+    lines = [
+        f"# Parameter sweep of `{sweep.name}`: {_count(len(outcomes), 'combination')}",
+        "",
+        f"Config `{display_path(sweep.config_path)}`; --set: {sets}. Each combination is an experiment folder "
+        f"here, named by its values (`sweep.yaml` lists them). The headline is the mean MI of {HEADLINE_WEIGHT} "
+        f"exploration against human labels at {HEADLINE_LENGTH} steps over the next best weight function's.",
+        "",
+        "Run again (finished runs and labels are kept):",
+        "",
+        "```console",
+        f"$ {sweep.command(folder.parent)}",
+        "```",
+        "",
+        "## Headlines",
+        "",
+        *overview,
+        "",
+        *sections,
+    ]
+    columns = ["combination", "folder", *keys, *HEADLINE_COLUMNS]
+    with atomic_path(folder / "sweep.csv") as tmp:
+        pd.DataFrame(rows, columns=columns).to_csv(tmp, index=False)
+    path = folder / "SWEEP.md"
+    with atomic_path(path) as tmp:
+        tmp.write_text("\n".join(lines))
+    return path
+
+
+def _number(value, digits: int = 2) -> str:
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return ""
+    return f"{value:.{digits}f}" if value == value else ""
+
+
+def _p(value) -> str:
+    text = _number(value, 3)
+    return "< 0.001" if text and float(value) < 0.001 else text
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}{'' if n == 1 else 's'}"

@@ -1,0 +1,212 @@
+"""Paired effect sizes, the headline against walkers only, the verdict in words and the report's sections."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.evaluate.report import verdict, write_report
+from curiosity_cli.evaluate.tables import (
+    Evaluation,
+    headline,
+    paired_difference,
+    paired_effects,
+    paired_tests,
+    summarise,
+    summarise_classes,
+)
+from curiosity_cli.explore.weights import CEILINGS
+
+WALKERS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity", "lawnmower")
+# topic perplexity's lead over stochastic coverage, the next best, per restart: all positive, no ties (a tie makes
+# scipy's Wilcoxon a slow permutation test)
+LEAD = np.array([0.10, 0.12, 0.08, 0.11, 0.09, 0.105, 0.13, 0.07, 0.115, 0.095])
+
+
+@pytest.mark.parametrize("seed, n", [(0, 2), (1, 5), (2, 20)])
+def test_the_paired_ci_is_scipys(seed, n):
+    rng = np.random.default_rng(seed)
+    a = rng.normal(0.5, 0.1, n)
+    b = a - rng.normal(0.03, 0.05, n)
+    mean, low, high = paired_difference(a, b)
+    reference = stats.ttest_rel(a, b).confidence_interval(0.95)
+    assert mean == pytest.approx(np.mean(a - b), rel=1e-12)
+    assert (low, high) == pytest.approx((reference.low, reference.high), rel=1e-12)
+    reference = stats.ttest_rel(a, b).confidence_interval(0.9)
+    assert paired_difference(a, b, 0.9)[1:] == pytest.approx((reference.low, reference.high), rel=1e-12)
+
+
+def test_the_paired_ci_on_known_data():
+    # differences 1, 2, 3: mean 2, sd 1, t(0.975, 2) = 4.302653: 2 ± 4.302653 / sqrt(3)
+    mean, low, high = paired_difference(np.array([2.0, 4.0, 6.0]), np.array([1.0, 2.0, 3.0]))
+    assert (mean, low, high) == pytest.approx((2.0, 2 - 4.302653 / np.sqrt(3), 2 + 4.302653 / np.sqrt(3)), rel=1e-6)
+    # one pair: no interval; every difference the same: an interval of width 0, as scipy's
+    assert np.isnan(paired_difference(np.array([1.0]), np.array([0.0]))[1])
+    assert paired_difference(np.array([1.0, 2.0, 3.0]), np.array([0.0, 1.0, 2.0])) == (1.0, 1.0, 1.0)
+
+
+def synthetic_mi() -> pd.DataFrame:
+    """Three maps, five walkers and two ceilings, 10 restarts at 40 and 80 steps.
+
+    ``win``: human labels, topic perplexity ahead of everyone by LEAD or more;
+    ``loss``: human labels, topic perplexity below stochastic coverage and word perplexity in every restart;
+    ``unlabelled``: no human labels, topic perplexity ahead on MI against Z_b.
+    """
+    rng = np.random.default_rng(7)
+    centres = {"random-walk": 0.2, "stochastic-coverage": 0.4, "word-perplexity": 0.3, "lawnmower": 0.35}
+    ceilings = {CEILINGS[0]: 0.9, CEILINGS[-1]: 0.8} if len(CEILINGS) > 1 else {CEILINGS[0]: 0.9}
+    rows = []
+    for dataset in ("win", "loss", "unlabelled"):
+        for length in (40, 80):
+            base = 0.4 + 0.01 * rng.standard_normal(10)
+            for weight in (*WALKERS, *ceilings):
+                for restart in range(10):
+                    if weight == "topic-perplexity":
+                        mi = base[restart] + LEAD[restart] if dataset != "loss" else 0.25 + 0.01 * np.sin(restart)
+                    elif weight == "stochastic-coverage":
+                        mi = base[restart]
+                    elif weight == "word-perplexity" and dataset == "loss":
+                        mi = 0.30 + 0.01 * rng.standard_normal()
+                    else:
+                        mi = centres.get(weight, ceilings.get(weight)) - 0.1 + 0.01 * rng.standard_normal()
+                    if weight in ceilings:
+                        mi = ceilings[weight] + 0.001 * restart
+                    human = dataset != "unlabelled"
+                    rows.append({
+                        "dataset": dataset, "weight_function": weight, "restart": restart, "path_length": length,
+                        "mi_human": mi if human else np.nan, "mi_batch": mi, "nmi_human": np.nan, "nmi_batch": np.nan,
+                        "classes_found": (restart % 3 + 2) if human else np.nan, "classes": 6 if human else np.nan,
+                        "mean_recall": (0.5 + 0.01 * restart) if human else np.nan, "seed": str(restart),
+                    })
+    return pd.DataFrame(rows)
+
+
+def tables():
+    mi = synthetic_mi()
+    summary, tests = summarise(mi), paired_tests(mi)
+    effects = paired_effects(mi, tests)
+    top = headline(summary, tests, {"win": "Montreal1", "loss": "SouthBellairs", "unlabelled": "Montreal2"}, effects)
+    return mi, summary, tests, effects, top
+
+
+def test_effects_are_topic_perplexity_minus_each_walker_paired_by_restart_and_leave_ceilings_out():
+    mi, _, tests, effects, _ = tables()
+    assert not effects["other"].isin(CEILINGS).any() and not tests[["a", "b"]].isin(CEILINGS).any().any()
+    assert set(effects["other"]) == set(WALKERS) - {"topic-perplexity"}
+    assert len(effects) == 3 * 2 * 4 + 2 * 2 * 4  # human: 2 maps, batch: 3 maps; 2 lengths; 4 others
+    row = effects[(effects.dataset == "win") & (effects.path_length == 80) & (effects.against == "human")
+                  & (effects.other == "stochastic-coverage")].iloc[0]
+    block = mi[(mi.dataset == "win") & (mi.path_length == 80)].pivot(index="restart", columns="weight_function", values="mi_human")
+    reference = stats.ttest_rel(block["topic-perplexity"], block["stochastic-coverage"]).confidence_interval(0.95)
+    assert row["mean_difference"] == pytest.approx(LEAD.mean(), rel=1e-9) and row["n"] == 10
+    assert (row["ci_low"], row["ci_high"]) == pytest.approx((reference.low, reference.high), rel=1e-9)
+    # every one of 10 pairs favours topic perplexity: the exact two-sided Wilcoxon p is 2 / 2**10
+    assert row["p_value"] == pytest.approx(2 / 2**10)
+
+
+def test_the_headline_compares_walkers_only_and_falls_back_to_batch_labels():
+    *_, top = tables()
+    top = top.set_index("dataset")
+    # the ceilings have the highest MI but are never the next best
+    assert top.loc["win", "next_best"] == "stochastic-coverage" and bool(top.loc["win", "beats_all"])
+    assert top.loc["win", "not_beaten"] == ""
+    assert top.loc["win", "best_ceiling"] == CEILINGS[0]
+    assert top.loc["win", "ceiling_share"] == pytest.approx(top.loc["win", "topic_perplexity"] / top.loc["win", "ceiling_mi"])
+    assert top.loc["loss", "next_best"] == "stochastic-coverage" and not top.loc["loss", "beats_all"]
+    assert top.loc["unlabelled", "against"] == "batch" and top.loc["win", "against"] == "human"
+
+
+def test_the_verdict_of_a_clear_win():
+    *_, top = tables()
+    row = top.set_index("dataset").loc["win"].to_dict() | {"dataset": "win"}
+    low, high = row["ci_low"], row["ci_high"]
+    assert 0 < low < high
+    assert verdict(row) == (
+        f"win: topic perplexity beats every other walker at 80 steps: 0.10 bits above stochastic-coverage, the next "
+        f"best (95 % CI +{low:.2f} to +{high:.2f}), p = 0.002; ratio {row['ratio']:.2f} against the paper's 1.51 on "
+        f"Montreal1. It reaches {100 * row['ceiling_share']:.0f} % of the better ceiling's MI ({CEILINGS[0]}, "
+        f"{row['ceiling_mi']:.2f} bits)."
+    )
+
+
+def test_the_verdict_of_a_clear_loss():
+    row = {
+        "dataset": "zurich-zh17", "against": "human", "topic_perplexity": 0.38, "next_best": "word-perplexity",
+        "next_best_mi": 0.40, "ratio": 0.95, "mean_difference": -0.02, "ci_low": -0.05, "ci_high": 0.01,
+        "p_value": 0.48, "pairs": 20, "beats_all": False, "not_beaten": "word-perplexity;lawnmower",
+        "best_ceiling": "", "ceiling_mi": np.nan, "ceiling_share": np.nan, "paper_map": "Montreal1", "paper_ratio": 1.51,
+    }
+    assert verdict(row) == (
+        "zurich-zh17: topic perplexity does not beat every walker at 80 steps: 0.02 bits below word-perplexity "
+        "(95 % CI \u22120.05 to +0.01), p = 0.48; not clearly ahead of lawnmower either; ratio 0.95 against the "
+        "paper's 1.51 on Montreal1."
+    )
+    *_, top = tables()
+    loss = top.set_index("dataset").loc["loss"].to_dict() | {"dataset": "loss"}
+    assert verdict(loss).startswith("loss: topic perplexity does not beat every walker at 80 steps: ")
+    assert "bits below stochastic-coverage (95 % CI \u2212" in verdict(loss) and "p = 0.002" in verdict(loss)
+
+
+def test_the_verdict_of_a_map_without_human_labels():
+    *_, top = tables()
+    row = top.set_index("dataset").loc["unlabelled"].to_dict() | {"dataset": "unlabelled"}
+    text = verdict(row)
+    assert text.startswith(
+        "unlabelled (MI against Z_b: the map has no human labels): topic perplexity beats every other walker at 80 "
+        "steps: 0.10 bits above stochastic-coverage, the next best (95 % CI +"
+    )
+    assert f"ratio {row['ratio']:.2f} against the paper's 1.20 on Montreal2 (against human labels there)." in text
+
+
+def test_a_lead_that_is_not_significant_is_not_a_win():
+    row = {
+        "dataset": "m", "against": "human", "topic_perplexity": 0.42, "next_best": "lawnmower", "next_best_mi": 0.40,
+        "ratio": 1.05, "mean_difference": 0.02, "ci_low": -0.01, "ci_high": 0.05, "p_value": 0.31, "pairs": 10,
+        "beats_all": False, "not_beaten": "lawnmower", "best_ceiling": "", "ceiling_mi": np.nan,
+        "ceiling_share": np.nan, "paper_map": np.nan, "paper_ratio": np.nan,
+    }
+    assert verdict(row) == (
+        "m: topic perplexity leads every other walker at 80 steps, but not clearly: 0.02 bits above lawnmower, the "
+        "next best (95 % CI \u22120.01 to +0.05), p = 0.31; ratio 1.05 (no paper map to compare with)."
+    )
+
+
+def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
+    mi, summary, tests, effects, top = tables()
+    mi = mi[mi.dataset != "loss"]  # so that one map has no verdict below: no 80-step checkpoint
+    mi = pd.concat([mi, synthetic_mi().query("dataset == 'loss' and path_length == 40")])
+    summary, tests = summarise(mi), paired_tests(mi)
+    effects = paired_effects(mi, tests)
+    top = headline(summary, tests, {"win": "Montreal1"}, effects)
+    evaluation = Evaluation(mi, summary, tests, top, ["a note"], None, effects, None, summarise_classes(mi))
+    config = load_config(CONFIG_DIR / "quick.yaml")
+    config = dataclasses.replace(
+        config, explore=dataclasses.replace(config.explore, weight_functions=(*WALKERS, *CEILINGS))
+    )
+    path = write_report(tmp_path, config, evaluation, [], [], {"total": 3.0}, {"git_commit": "abc", "curiosity": "1"})
+    report = path.read_text()
+    lines = report.splitlines()
+    assert lines[0].startswith("# Curiosity-driven exploration") and lines[2].startswith("Reproduction of")
+    assert f"5 walkers and {len(CEILINGS)} ceilings" in lines[2]
+    assert lines[4:6] == ["## Verdict", ""] and lines[6].startswith("- win: ")  # the answer first
+    bullets = [line for line in lines if line.startswith("- ")]
+    assert bullets[0].startswith("- win: topic perplexity beats every other walker at 80 steps")
+    assert bullets[1] == "- loss: no verdict: no 80-step checkpoint."
+    assert bullets[2].startswith("- unlabelled (MI against Z_b")
+    sections = [line for line in lines if line.startswith("## ")]
+    assert sections == [
+        "## Verdict", "## Headline", "## Mutual information (bits, mean ± 95 % CI half-width)", "## Paired effect sizes",
+        "## Classes found at 80 steps", "## Mean recall at 80 steps", "## Significance", "## Left out", "## Figures",
+        "## Time", "## Config",
+    ]
+    assert f"| win | {CEILINGS[0]} (ceiling) |" in report and "Ceilings (" in report
+    assert "| win | human | lawnmower | " in report
+    assert "at least 10 % of the cell's pixels" in report and "one to one" in report
+    # classes found 2, 3, 4, 2, 3, 4, ... over 10 restarts: mean 2.9, CI half-width t(0.975, 9) * 0.876 / sqrt(10)
+    assert "| topic-perplexity | 2.9 ± 0.6 of 6 |" in report
+    assert "| lawnmower | 0.545 ± " in report
