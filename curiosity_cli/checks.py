@@ -5,14 +5,15 @@ from __future__ import annotations
 import numpy as np
 
 from curiosity_cli.errors import ParameterError
+from curiosity_cli.yamlfile import shown
 
 
 def check_int(name: str, value, minimum: int, maximum: int | None = None) -> int:
     """``value`` as an int in ``[minimum, maximum]``, else :class:`ParameterError` naming ``name``."""
+    expected = f"between {minimum} and {maximum}" if maximum is not None else f">= {minimum}"
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise ParameterError(f"{name}: got {value!r}, expected an integer >= {minimum}")
+        raise ParameterError(f"{name}: got {shown(value)}, expected an integer {expected}")
     if value < minimum or (maximum is not None and value > maximum):
-        expected = f"between {minimum} and {maximum}" if maximum is not None else f">= {minimum}"
         raise ParameterError(f"{name}: got {value}, expected an integer {expected}")
     return int(value)
 

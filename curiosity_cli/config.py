@@ -22,7 +22,8 @@ from pathlib import Path
 from typing import Any
 
 from curiosity_cli.errors import ConfigError
-from curiosity_cli.files import display_path, read_yaml
+from curiosity_cli.files import display_path
+from curiosity_cli.yamlfile import SHOWN_CHARS, dump_yaml, parse_yaml, read_yaml, shown
 
 #: The source checkout this package runs from; configs and data live beside the package.
 PROJECT_ROOT = Path(__file__).resolve().parent.parent
@@ -32,7 +33,14 @@ DATASET_CONFIG_DIR = CONFIG_DIR / "datasets"
 #: Where a value given on the command line with ``--set KEY=VALUE`` "comes from".
 _OVERRIDE = "--set"
 
-_NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+#: The longest experiment or dataset name; a sweep names its experiments in up to this many.
+MAX_NAME = 120
+# Names become file and folder names: no separators, no leading dot, no path of '..'.
+_NAME_PATTERN = re.compile(rf"^[A-Za-z0-9][A-Za-z0-9_.-]{{0,{MAX_NAME - 1}}}$")
+_NAME_RULE = f"1 to {MAX_NAME} letters, digits, '-', '_' or '.', starting with a letter or digit"
+
+#: The largest ORB or texton vocabulary a config may name and ``vocab build`` may learn.
+MAX_VOCABULARY = 30000
 
 
 def _spec(
@@ -43,9 +51,12 @@ def _spec(
     max_exclusive: bool = False,
     choices: tuple | None = None,
     must_exist: bool = False,
+    file_name: bool = False,
     default: Any = dataclasses.MISSING,
 ):
     """A dataclass field with the checks the validator applies to it.
+
+    ``file_name`` marks a string that becomes a file or folder name (:data:`MAX_NAME`).
 
     Only dataset YAMLs, which a user writes per map, have optional keys (``default``);
     experiment configs name every key, their values coming from ``configs/paper.yaml``.
@@ -59,6 +70,7 @@ def _spec(
             max_exclusive=max_exclusive,
             choices=choices,
             must_exist=must_exist,
+            file_name=file_name,
         )
     )
 
@@ -79,8 +91,8 @@ class WordsConfig:
     """Visual words (paper section 5.1)."""
 
     vocabulary_dir: Path = _spec(must_exist=True)
-    orb_vocabulary: int = _spec(min=2, max=30000)
-    texton_vocabulary: int = _spec(min=2, max=30000)
+    orb_vocabulary: int = _spec(min=2, max=MAX_VOCABULARY)
+    texton_vocabulary: int = _spec(min=2, max=MAX_VOCABULARY)
     orb_tile: int = _spec(min=1)
     orb_per_tile: int | None = _spec(min=1)
     orb_max_features: int | None = _spec(min=1)
@@ -173,7 +185,7 @@ class DriveConfig:
 class ExperimentConfig:
     """One experiment: which maps, which seed, and every parameter of the pipeline."""
 
-    name: str = _spec()
+    name: str = _spec(file_name=True)
     seed: int = _spec(min=0, max=2**32 - 1)
     datasets: tuple[str, ...] = _spec()
     model: ModelConfig = _spec()
@@ -192,7 +204,7 @@ class DatasetConfig:
     files it makes. Every key with a default may be left out of the YAML.
     """
 
-    name: str = _spec()
+    name: str = _spec(file_name=True)
     cell_width: int = _spec(min=1)
     word_stride: int = _spec(min=1)
     image: Path | None = _spec(must_exist=True, default=None)
@@ -249,7 +261,7 @@ def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
     if base is not None:
         if not isinstance(base, str):
             raise ConfigError(
-                f"{display_path(path)}: base: got {base!r}, expected a path to a YAML config"
+                f"{display_path(path)}: base: got {shown(base)}, expected a path to a YAML config"
             )
         base_path = path.parent / base
         if not base_path.is_file():
@@ -259,16 +271,11 @@ def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
 
 
 def _parse_override(text: str) -> tuple[tuple[str, ...], Any]:
-    import yaml
-
     key, sep, value = text.partition("=")
     if not sep or not key.strip():
-        raise ConfigError(f"--set {text!r}: expected KEY=VALUE, e.g. explore.restarts=5")
-    try:
-        parsed = yaml.safe_load(value)
-    except yaml.YAMLError:
-        parsed = value
-    return tuple(key.strip().split(".")), parsed
+        raise ConfigError(f"--set {shown(text)}: expected KEY=VALUE, e.g. explore.restarts=5")
+    key = key.strip()
+    return tuple(key.split(".")), parse_yaml(value, f"--set {shown(key)}")
 
 
 def _apply_overrides(raw: _Raw, overrides: typing.Iterable[str]) -> None:
@@ -319,7 +326,7 @@ def load_words_config(path: str | Path, overrides: typing.Iterable[str] = ()) ->
     _load_chain(path, raw)
     for text in overrides:
         if not _parse_override(text)[0][0] == "words":
-            raise ConfigError(f"--set {text!r}: expected a words.* key; this command reads only words")
+            raise ConfigError(f"--set {shown(text)}: expected a words.* key; this command reads only words")
     _apply_overrides(raw, overrides)
     words = _build(WordsConfig, raw.data.get("words"), ("words",), raw)
     _check_words(words, raw)
@@ -348,7 +355,7 @@ def load_dataset_config(path: str | Path) -> DatasetConfig:
     if config.fetch is not None:
         if config.fetch not in FETCHED_MAPS:
             raise ConfigError(
-                f"{where}: fetch: got {config.fetch!r}, expected one of {', '.join(sorted(FETCHED_MAPS))}"
+                f"{where}: fetch: got {shown(config.fetch)}, expected one of {', '.join(sorted(FETCHED_MAPS))}"
             )
         given = [key for key in ("image", "labels", "legend") if key in raw.data]
         if given:
@@ -359,18 +366,18 @@ def load_dataset_config(path: str | Path) -> DatasetConfig:
     if config.labels is not None and config.legend is None:
         raise ConfigError(f"{where}: legend: missing; a dataset with labels needs a legend YAML")
     if config.size is not None and len(config.size) != 2:
-        raise ConfigError(f"{where}: size: got {list(config.size)}, expected [rows, cols]")
+        raise ConfigError(f"{where}: size: got {shown(list(config.size))}, expected [rows, cols]")
     if config.bands is not None and len(config.bands) not in (1, 3):
         raise ConfigError(
-            f"{where}: bands: got {list(config.bands)}, expected [r, g, b] (0-based band indices) or [k] for grey"
+            f"{where}: bands: got {shown(list(config.bands))}, expected [r, g, b] (0-based band indices) or [k] for grey"
         )
     if len(config.stretch) != 2 or config.stretch[0] >= config.stretch[1]:
         raise ConfigError(
-            f"{where}: stretch: got {list(config.stretch)}, expected [low, high] percentiles with 0 <= low < high <= 100"
+            f"{where}: stretch: got {shown(list(config.stretch))}, expected [low, high] percentiles with 0 <= low < high <= 100"
         )
     if config.stands_in_for is not None and config.stands_in_for not in PAPER_MAPS:
         raise ConfigError(
-            f"{where}: stands_in_for: got {config.stands_in_for!r}, expected one of {', '.join(PAPER_MAPS)} or null"
+            f"{where}: stands_in_for: got {shown(config.stands_in_for)}, expected one of {', '.join(PAPER_MAPS)} or null"
         )
     return config
 
@@ -396,7 +403,7 @@ def dataset_path(name_or_path: str | Path, relative_to: Path | None = None) -> P
     if candidate.is_file():
         return candidate.resolve()
     raise ConfigError(
-        f"no dataset {text!r}: expected one of {', '.join(dataset_names())} "
+        f"no dataset {shown(text)}: expected one of {', '.join(dataset_names())} "
         "or a path to a dataset YAML"
     )
 
@@ -418,9 +425,7 @@ def to_dict(config) -> dict:
 
 def to_yaml(config) -> str:
     """The resolved config as YAML, as a run saves it next to its results."""
-    import yaml
-
-    return yaml.safe_dump(to_dict(config), sort_keys=False)
+    return dump_yaml(to_dict(config))
 
 
 # --------------------------------------------------------------------------- validation
@@ -429,8 +434,29 @@ def to_yaml(config) -> str:
 def _where(raw: _Raw, keys: tuple) -> str:
     source = raw.origin(keys)
     label = source if source == _OVERRIDE else display_path(Path(source))
-    key = "".join(f"[{k}]" if isinstance(k, int) else f".{k}" for k in keys).lstrip(".")
+    key = "".join(_key_text(k) for k in keys).lstrip(".")
+    # a key is user input too: an unknown one may be of any length
+    key = key if len(key) <= SHOWN_CHARS else key[: SHOWN_CHARS - 3] + "..."
     return f"{label}: {key}" if key else label
+
+
+def _key_text(key) -> str:
+    """One step of a key path: ``[0]`` for a list index, ``.name`` for a plain key."""
+    if isinstance(key, int):
+        return f"[{key}]"
+    # an unknown key may be empty, hold a newline or not be a string at all: show its repr
+    plain = isinstance(key, str) and key.isprintable() and key
+    return f".{key}" if plain else f".{shown(key)}"
+
+
+#: What a value of each leaf type is called in a message: one, and a list of them.
+_NOUNS = {
+    int: ("an integer", "integers"),
+    float: ("a number", "numbers"),
+    bool: ("true or false", "true or false values"),
+    str: ("a string", "strings"),
+    Path: ("a file path", "file paths"),
+}
 
 
 def _expected(tp) -> str:
@@ -439,28 +465,27 @@ def _expected(tp) -> str:
         inner = [a for a in typing.get_args(tp) if a is not type(None)]
         return f"{_expected(inner[0])} or null"
     if origin is tuple:
-        return f"a list of {_expected(typing.get_args(tp)[0])}s"
-    return {
-        int: "an integer",
-        float: "a number",
-        bool: "true or false",
-        str: "a string",
-        Path: "a file path",
-    }.get(tp, "a mapping")
+        return f"a list of {_NOUNS[typing.get_args(tp)[0]][1]}"
+    return _NOUNS.get(tp, ("a mapping",))[0]
+
+
+def _bound_text(bound: float) -> str:
+    """A bound as a person writes it: whole numbers in full (4294967295, not 4.29497e+09)."""
+    return str(int(bound)) if float(bound).is_integer() else f"{bound:g}"
 
 
 def _range_text(meta: dict) -> str:
     parts = []
     if meta["min"] is not None:
-        parts.append(f"{'>' if meta['min_exclusive'] else '>='} {meta['min']:g}")
+        parts.append(f"{'>' if meta['min_exclusive'] else '>='} {_bound_text(meta['min'])}")
     if meta["max"] is not None:
-        parts.append(f"{'<' if meta['max_exclusive'] else '<='} {meta['max']:g}")
+        parts.append(f"{'<' if meta['max_exclusive'] else '<='} {_bound_text(meta['max'])}")
     return " and ".join(parts)
 
 
 def _build(cls, data: Any, keys: tuple, raw: _Raw):
     if not isinstance(data, dict):
-        raise ConfigError(f"{_where(raw, keys)}: got {data!r} ({type(data).__name__}), expected a mapping of keys")
+        raise ConfigError(f"{_where(raw, keys)}: got {shown(data)} ({type(data).__name__}), expected a mapping of keys")
     hints = typing.get_type_hints(cls)
     names = [f.name for f in dataclasses.fields(cls)]
     for key in data:
@@ -488,8 +513,8 @@ def _convert(tp, meta: dict, value: Any, keys: tuple, raw: _Raw):
         tp, origin = inner, typing.get_origin(inner)
 
     def refuse(expected: str):
-        shown = f"{value!r} ({type(value).__name__})" if not isinstance(value, dict) else "a mapping"
-        raise ConfigError(f"{_where(raw, keys)}: got {shown}, expected {expected}")
+        given = f"{shown(value)} ({type(value).__name__})" if not isinstance(value, dict) else "a mapping"
+        raise ConfigError(f"{_where(raw, keys)}: got {given}, expected {expected}")
 
     if dataclasses.is_dataclass(tp):
         return _build(tp, value, keys, raw)
@@ -515,9 +540,11 @@ def _convert(tp, meta: dict, value: Any, keys: tuple, raw: _Raw):
     elif tp is str:
         if not isinstance(value, str):
             refuse("a string")
+        if meta["file_name"] and not _NAME_PATTERN.match(value):
+            refuse(f"{_NAME_RULE} (it names files and folders)")
         result = value
     elif tp is Path:
-        if not isinstance(value, str) or not value:
+        if not isinstance(value, str) or not value or "\0" in value:
             refuse("a file path")
         result = _resolve_path(value, keys, raw)
         if meta["must_exist"] and not result.exists():
@@ -539,7 +566,10 @@ def _convert(tp, meta: dict, value: Any, keys: tuple, raw: _Raw):
 
 def _resolve_path(value: str, keys: tuple, raw: _Raw) -> Path:
     """Relative paths count from the YAML file that wrote them (from the cwd for --set)."""
-    path = Path(value).expanduser()
+    try:
+        path = Path(value).expanduser()
+    except RuntimeError:  # ~user of a user this machine does not know
+        raise ConfigError(f"{_where(raw, keys)}: got {shown(value)}, expected a file path; no such home folder") from None
     if path.is_absolute():
         return path
     source = raw.origin(keys)
@@ -550,10 +580,6 @@ def _resolve_path(value: str, keys: tuple, raw: _Raw) -> Path:
 def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:
     """Rules that tie keys together; dataset paths become absolute so a saved config travels."""
     _check_words(config.words, raw)
-    if not _NAME_PATTERN.match(config.name):
-        raise ConfigError(
-            f"{_where(raw, ('name',))}: got {config.name!r}, expected letters, digits, '-', '_' or '.'"
-        )
     datasets = []
     for i, entry in enumerate(config.datasets):
         source = raw.origin(("datasets", i))
@@ -569,7 +595,7 @@ def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:
     for i, name in enumerate(explore.weight_functions):
         if name not in WEIGHT_FUNCTIONS:
             raise ConfigError(
-                f"{_where(raw, ('explore', 'weight_functions', i))}: got {name!r}, "
+                f"{_where(raw, ('explore', 'weight_functions', i))}: got {shown(name)}, "
                 f"expected one of {', '.join(WEIGHT_FUNCTIONS)}"
             )
     if len(set(explore.weight_functions)) != len(explore.weight_functions):

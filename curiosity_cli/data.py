@@ -17,8 +17,9 @@ import numpy as np
 
 from curiosity_cli.config import DatasetConfig, dataset_names, dataset_path, load_dataset_config
 from curiosity_cli.errors import ConfigError, DatasetError
-from curiosity_cli.files import display_path, read_yaml
+from curiosity_cli.files import display_path
 from curiosity_cli.images import Rendering
+from curiosity_cli.yamlfile import read_yaml
 
 _COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
 

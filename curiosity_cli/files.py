@@ -3,11 +3,21 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import sys
 import tempfile
 from pathlib import Path
 
-from curiosity_cli.errors import ConfigError
+from curiosity_cli.errors import ConfigError, CuriosityError
+
+
+#: The first bytes of a zip archive, and so of every ``.npz`` file.
+_ZIP_MAGIC = b"PK\x03\x04"
+
+
+class CorruptFileError(CuriosityError):
+    """A file that exists but cannot be read as what it should be: truncated, empty, or another format."""
 
 
 def display_path(path: Path) -> str:
@@ -16,6 +26,85 @@ def display_path(path: Path) -> str:
         return str(Path(path).resolve().relative_to(Path.cwd()))
     except ValueError:
         return str(path)
+
+
+def os_error_message(exc: OSError) -> str:
+    """One line for an operating-system error: the path it concerns and what went wrong.
+
+    A folder that cannot be made because a file is in its way (``ENOTDIR``, ``EEXIST``)
+    names that file, not the deeper path being made, and says a folder was expected.
+
+    Parameters
+    ----------
+    exc : OSError
+        As raised by any file operation, here or in a worker.
+    """
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    if exc.filename is None:
+        return reason
+    path = Path(os.fsdecode(exc.filename))
+    if exc.errno in (errno.ENOTDIR, errno.EEXIST):
+        blocking = _file_in_the_way(path)
+        if blocking is not None:
+            return f"{display_path(blocking)}: is a file; expected a folder"
+    return f"{display_path(path)}: {reason}"
+
+
+def _file_in_the_way(path: Path) -> Path | None:
+    """The nearest of ``path`` and its parents that exists and is not a folder, if any."""
+    for candidate in (path, *path.parents):
+        if candidate.exists() and not candidate.is_dir():
+            return candidate
+    return None
+
+
+def note(line: str) -> None:
+    """Tell the user, in one line on stderr, something the command did that they did not ask for."""
+    print(line, file=sys.stderr, flush=True)
+
+
+@contextlib.contextmanager
+def open_npz(path: Path):
+    """``np.load(path)`` of a ``.npz`` file whose reading, inside the block too, fails as one error.
+
+    A truncated, empty or foreign file fails in many ways (a bad zip, a short stream, a
+    missing member, zlib's own error) and some only when a member is read, so the block
+    is covered as well. An operating-system error (no such file, no permission) is not
+    corruption and passes through as it is.
+
+    Raises
+    ------
+    FileNotFoundError, OSError
+        No such file (the caller decides whether that is a mistake or work still to do),
+        or one that cannot be opened.
+    CorruptFileError
+        The file exists but is not the ``.npz`` expected; the message names it.
+    """
+    import zipfile
+    import zlib
+
+    import numpy as np
+
+    def corrupt(reason: str) -> CorruptFileError:
+        return CorruptFileError(f"{display_path(Path(path))}: corrupt or truncated ({reason})")
+
+    # opened here: np.load leaves the file it opened open when the zip in it is bad
+    with open(path, "rb") as handle:
+        start = handle.read(len(_ZIP_MAGIC))
+        if start != _ZIP_MAGIC:  # else numpy tries it as a pickle, and says so
+            raise corrupt("not a .npz archive" if start else "empty")
+        handle.seek(0)
+        try:
+            with np.load(handle, allow_pickle=False) as npz:
+                yield npz
+        except (ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+            raise corrupt(_reason(exc)) from None
+
+
+def _reason(exc: Exception) -> str:
+    """An exception's message without the quotes a KeyError adds, or its type if it has none."""
+    text = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
+    return str(text) or type(exc).__name__
 
 
 def read_yaml(path: Path, what: str) -> dict:
@@ -66,11 +155,27 @@ def atomic_path(path: Path):
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)
     try:
-        yield Path(tmp)
-        os.replace(tmp, path)
+        with naming_os_errors(path):
+            yield Path(tmp)
+            os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def naming_os_errors(path: Path):
+    """Give an OS error raised in the block without a file name the name ``path``.
+
+    A write to a file already open (a full disk: ``ENOSPC``) fails without saying which
+    file; the user is told the result it was writing instead.
+    """
+    try:
+        yield
+    except OSError as exc:
+        if exc.filename is not None or exc.errno is None:
+            raise
+        raise OSError(exc.errno, exc.strerror, os.fspath(path)) from None
 
 
 def user_cache_dir() -> Path:

@@ -24,6 +24,11 @@ from curiosity_cli.files import display_path
 DEFAULT_STRETCH = (2.0, 98.0)
 
 _TIFF_MAGIC = (b"II*\x00", b"MM\x00*", b"II+\x00", b"MM\x00+")
+#: OpenCV's default limit on the pixels of a decoded image (``CV_IO_MAX_IMAGE_PIXELS``).
+_MAX_PIXELS = 1 << 30
+_PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+#: Every PNG ends with this chunk (length 0, type IEND, its CRC).
+_PNG_END = b"\x00\x00\x00\x00IEND\xaeB`\x82"
 
 
 @dataclass(frozen=True)
@@ -107,10 +112,19 @@ def read_raster(path: Path, where: str) -> Raster:
         raise DatasetError(f"{where}: {shown} is empty; expected a PNG, JPEG or TIFF image")
     if bytes(data[:4]) in _TIFF_MAGIC:
         return _read_tiff(path, shown, where)
+    if bytes(data[:8]) == _PNG_MAGIC and bytes(data[-12:]) != _PNG_END:
+        # checked here because libpng reports a truncated file on stderr itself, beside our error
+        raise DatasetError(f"{where}: {shown} is truncated (no IEND chunk at its end); expected a whole PNG image")
     import cv2
 
     # imdecode over bytes rather than imread: a path with any characters works
-    pixels = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+    try:
+        pixels = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+    except cv2.error as exc:  # e.g. a header declaring more pixels than OpenCV will allocate
+        raise DatasetError(
+            f"{where}: cannot decode {shown} (OpenCV: {exc.err}); expected a PNG, JPEG or TIFF image "
+            f"of at most {_MAX_PIXELS:,} pixels"
+        ) from None
     if pixels is None or pixels.size == 0:
         raise DatasetError(f"{where}: cannot read {shown}; expected a PNG, JPEG or TIFF image")
     if pixels.ndim == 2:

@@ -21,13 +21,35 @@ Exploration runs, batch references and label tasks all go through :class:`Worker
   ``distributed.scheduler.allowed-failures`` times); a task whose workers keep dying comes
   back as ``KilledWorker`` text, like a task that raised. Workers must have this process's
   versions of the package, numpy and numba.
+
+Either way:
+
+- ``jobs`` is at most this machine's cores: the tasks are CPU-bound, so more processes
+  only add memory (and each one semaphores), and a mistyped ``--jobs 100000`` would try
+  to start them all.
+- Ctrl-C reaches every process of the terminal's process group, but only this process
+  acts on it: loky workers ignore SIGINT (:func:`_settle_worker`) and are killed by
+  joblib as the interruption unwinds; a local cluster's workers ignore SIGINT
+  (:func:`dask_setup`) and are shut down with the cluster. (A Ctrl-C in the second a
+  worker takes to start can still reach it.) A Ctrl-C or SIGTERM while the local
+  cluster starts takes effect once it has started, as a cluster interrupted half-made
+  cannot be closed quietly.
+- A loky worker whose command was killed outright (``kill -9``) exits within
+  :data:`ORPHAN_POLL_SECONDS`, instead of lingering until loky's idle timeout (300 s).
+- The warnings the libraries raise while tasks run (e.g. loky replacing a worker) are
+  shown as one ``note:`` line each, not as their raw text.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import signal
+import sys
+import threading
+import time
 import uuid
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
@@ -39,14 +61,41 @@ BACKENDS = ("loky", "dask")
 #: Seconds a command waits for a first worker to join a Dask scheduler that has none.
 WORKER_WAIT_SECONDS = 60
 
+#: How often (s) a loky worker checks that the command that started it is still alive.
+ORPHAN_POLL_SECONDS = 1.0
+
+#: What the known library warnings mean, by the start of their text.
+_WARNING_MEANINGS = {
+    "A worker stopped while some jobs were given to the executor": (
+        "a worker process was replaced (loky restarts a worker whose memory grew by more than 300 MB "
+        "since its first task); the command goes on"
+    ),
+}
+
 
 class BackendError(CuriosityError):
     """The Dask backend cannot run: its optional dependency is missing, or its cluster is unusable."""
 
 
+def cores() -> int:
+    """This machine's cores: the most worker processes a command starts here."""
+    return os.cpu_count() or 1
+
+
 def threads_per_job(jobs: int) -> int:
     """Threads each of ``jobs`` parallel jobs may use so that together they use the cores once."""
-    return max(1, (os.cpu_count() or 1) // max(1, jobs))
+    return max(1, cores() // max(1, jobs))
+
+
+def _check_jobs(jobs: int) -> None:
+    """Refuse a number of worker processes this machine cannot usefully run (module docstring).
+
+    Raises
+    ------
+    ParameterError
+    """
+    if not 1 <= jobs <= cores():
+        raise ParameterError(f"jobs: got {jobs}, expected 1 to {cores()} (the cores of this machine)")
 
 
 def import_distributed():
@@ -77,13 +126,15 @@ class Workers:
         With ``backend="dask"``: a running scheduler's address, e.g.
         ``tcp://10.0.0.5:8786``; without one, a local cluster is started on first use.
     jobs : int, optional
-        Worker processes (of ``loky``, or of the local Dask cluster); default the number
-        of cores. Ignored with a ``scheduler``: the cluster's worker threads decide.
+        Worker processes (of ``loky``, or of the local Dask cluster), 1 to the number of
+        cores; default the number of cores. Ignored with a ``scheduler``: the cluster's
+        worker threads decide.
 
     Raises
     ------
     ParameterError
-        An unknown backend, or a scheduler without ``backend="dask"``.
+        An unknown backend, a scheduler without ``backend="dask"``, or ``jobs`` outside
+        1 to the number of cores.
     BackendError
         ``backend="dask"`` without Dask distributed installed (reported before any work).
     """
@@ -93,11 +144,13 @@ class Workers:
             raise ParameterError(f"backend: got {backend!r}, expected one of {', '.join(BACKENDS)}")
         if scheduler is not None and backend != "dask":
             raise ParameterError(f"scheduler: got {scheduler!r} with backend {backend!r}; a scheduler needs backend 'dask'")
+        if jobs is not None and scheduler is None:
+            _check_jobs(jobs)
         if backend == "dask":
             import_distributed()
         self.backend = backend
         self.scheduler = scheduler
-        self.jobs = (os.cpu_count() or 1) if jobs is None else jobs
+        self.jobs = cores() if jobs is None else jobs
         self._stack = contextlib.ExitStack()
         self._dask = None  # (client, threads per task) once reached
         self._files = {}  # shipped files' futures, by (path, loader)
@@ -175,23 +228,32 @@ class Workers:
             ``outcome`` is what ``function`` returned, or a ``str``: the exception it
             raised (``"RuntimeError: …"``), or why the cluster could not compute it.
             Leaving the context early stops the tasks still in flight.
-        """
-        if self.backend == "loky":
-            from joblib import Parallel, delayed
 
-            threads = threads_per_job(self.jobs) if threads is None else threads
-            results = Parallel(n_jobs=self.jobs, backend="loky", return_as="generator_unordered")(
-                delayed(_outcome)(i, function, task, threads, *args(task)) for i, task in enumerate(tasks)
-            )
-            with contextlib.closing(results):
-                yield ((tasks[i], outcome) for i, outcome in results)
-        elif not tasks:  # nothing to compute: start no cluster
-            yield iter(())
-        else:
-            client, default = self._client()
-            threads = default if threads is None else threads
-            with contextlib.closing(_dask_outcomes(client, function, tasks, args, key, threads, _token())) as outcomes:
-                yield outcomes
+        Raises
+        ------
+        BackendError
+            While iterating, with loky: a worker process died (e.g. killed by the
+            operating system for lack of memory).
+        """
+        with _warnings_as_notes():
+            if self.backend == "loky":
+                from joblib import Parallel, delayed, parallel_config
+
+                threads = threads_per_job(self.jobs) if threads is None else threads
+                # (joblib computes n_jobs=1 in this process: no worker, no initializer)
+                with parallel_config(backend="loky", initializer=_settle_worker, initargs=(os.getpid(),)):
+                    results = Parallel(n_jobs=self.jobs, return_as="generator_unordered")(
+                        delayed(_outcome)(i, function, task, threads, *args(task)) for i, task in enumerate(tasks)
+                    )
+                with contextlib.closing(results):
+                    yield _loky_outcomes(results, tasks)
+            elif not tasks:  # nothing to compute: start no cluster
+                yield iter(())
+            else:
+                client, default = self._client()
+                threads = default if threads is None else threads
+                with contextlib.closing(_dask_outcomes(client, function, tasks, args, key, threads, _token())) as outcomes:
+                    yield outcomes
 
     def _client(self):
         if self._dask is None:
@@ -202,6 +264,53 @@ class Workers:
 def _token() -> str:
     """A suffix that keeps task keys apart from those of other submissions, and other commands, on one cluster."""
     return uuid.uuid4().hex[:8]
+
+
+@contextlib.contextmanager
+def _warnings_as_notes():
+    """Show the warnings raised meanwhile (in any thread of this process) as one ``note:`` line each."""
+    with warnings.catch_warnings():
+        # leaving the iteration early is how a caller stops the tasks in flight: nothing to advise
+        warnings.filterwarnings("ignore", message=r"\d+ tasks which were still being processed", category=UserWarning)
+        warnings.showwarning = _show_note
+        yield
+
+
+def _show_note(message, category, filename, lineno, file=None, line=None) -> None:
+    """A :func:`warnings.showwarning` that writes what a warning means in one line on stderr."""
+    text = " ".join(str(message).split())
+    meaning = next((m for start, m in _WARNING_MEANINGS.items() if text.startswith(start)), None)
+    print(f"note: {meaning or f'{category.__name__} from {filename}: {text}'}", file=sys.stderr, flush=True)
+
+
+def _loky_outcomes(results, tasks: Sequence):
+    """Yield ``(task, outcome)`` from joblib's ``(index, outcome)`` results; a dead worker becomes a BackendError."""
+    from joblib.externals.loky.process_executor import TerminatedWorkerError
+
+    try:
+        for i, outcome in results:
+            yield tasks[i], outcome
+    except TerminatedWorkerError as exc:
+        codes = str(exc).partition("exit codes of the workers are ")[2].partition("}")[0].lstrip("{") or "unknown"
+        raise BackendError(
+            f"a worker process died (exit codes {codes}; the operating system kills a process when memory runs "
+            "out: try fewer jobs); finished work is kept, run the same command again to resume"
+        ) from None
+
+
+def _settle_worker(parent: int) -> None:
+    """Run by each loky worker as it starts: leave Ctrl-C to ``parent``, the command, and exit once it is gone.
+
+    loky itself would keep the workers of a killed command until their idle timeout (300 s).
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_watch_parent, args=(parent,), name="orphan-watch", daemon=True).start()
+
+
+def _watch_parent(parent: int) -> None:
+    while os.getppid() == parent:
+        time.sleep(ORPHAN_POLL_SECONDS)
+    os._exit(1)  # the parent is gone: nobody will read this worker's results
 
 
 def _outcome(index: int, function: Callable, task, threads: int, *args) -> tuple:
@@ -254,12 +363,13 @@ def dask_client(scheduler: str | None, jobs: int):
     distributed = import_distributed()
     with contextlib.ExitStack() as stack:
         if scheduler is None:
-            cluster = stack.enter_context(distributed.LocalCluster(
-                n_workers=jobs, threads_per_worker=1, processes=True, host="127.0.0.1",
-                dashboard_address=None, silence_logs=logging.ERROR,
-                # no dashboard, and the scheduler's HTTP routes on a free port, not on 8787
-                scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
-            ))
+            with _signals_deferred():
+                cluster = stack.enter_context(distributed.LocalCluster(
+                    n_workers=jobs, threads_per_worker=1, processes=True, host="127.0.0.1",
+                    dashboard_address=None, silence_logs=logging.ERROR, preload=[__name__],
+                    # no dashboard, and the scheduler's HTTP routes on a free port, not on 8787
+                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                ))
             client = stack.enter_context(distributed.Client(cluster, set_as_default=False))
             threads = threads_per_job(jobs)
         else:
@@ -280,6 +390,31 @@ def dask_client(scheduler: str | None, jobs: int):
             ) from None
         _check_worker_versions(client)
         yield client, threads
+
+
+@contextlib.contextmanager
+def _signals_deferred():
+    """Hold SIGINT and SIGTERM received in the block, and raise them again once it has ended."""
+    received = []
+    previous = {s: signal.signal(s, lambda signum, frame: received.append(signum)) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    for signum in dict.fromkeys(received):
+        signal.raise_signal(signum)
+
+
+def dask_setup(worker) -> None:
+    """Run by each worker of a local cluster as it starts (this module is its preload): ignore Ctrl-C.
+
+    The command that started the cluster handles Ctrl-C and shuts the cluster down; a
+    worker interrupted by it on its own would log its tracebacks. (Ignoring SIGINT in the
+    command while it starts the cluster, for the workers to inherit, would lose a Ctrl-C
+    pressed meanwhile.)
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _versions() -> tuple[str, str, str]:

@@ -33,14 +33,13 @@ def reproduce(
     ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
     of it done, for a progress display.
     """
-    import yaml
-
     from curiosity_cli.evaluate.labels import label_experiment
     from curiosity_cli.evaluate.report import write_report
     from curiosity_cli.evaluate.tables import evaluate_experiment
     from curiosity_cli.explore.grid import run_grid
     from curiosity_cli.parallel import Workers
     from curiosity_cli.plots.figures import write_figures
+    from curiosity_cli.yamlfile import read_yaml
 
     def stage(description: str, units: int) -> None:
         if on_stage is not None:
@@ -74,5 +73,5 @@ def reproduce(
     figures = write_figures(folder)
     seconds["plot"] = time.perf_counter() - mark
     seconds["total"] = time.perf_counter() - started
-    provenance = yaml.safe_load((folder / "provenance.yaml").read_text())
+    provenance = read_yaml(folder / "provenance.yaml", "provenance file")
     return write_report(folder, config, evaluation, list(figures), figures.skipped, seconds, provenance)

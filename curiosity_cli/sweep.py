@@ -319,13 +319,10 @@ def _part(key: str, value: str) -> str:
 
 
 def _parsed(value: str):
-    """A value as ``--set`` reads it (YAML, or the text itself if it is not YAML)."""
-    import yaml
+    """A value as ``--set`` reads it (YAML, with the numbers a person types)."""
+    from curiosity_cli.yamlfile import parse_yaml
 
-    try:
-        return yaml.safe_load(value)
-    except yaml.YAMLError:
-        return value
+    return parse_yaml(value, "--sweep")
 
 
 def _digest(text: str, digits: int) -> str:

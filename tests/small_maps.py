@@ -1,10 +1,11 @@
-"""Small synthetic maps and the real configs, shrunk, for the exploration tests."""
+"""Small synthetic maps, a small map as a user would lay it out, and the real configs, shrunk, for the tests."""
 
 from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
 
+import cv2
 import numpy as np
 import yaml
 
@@ -92,4 +93,38 @@ def edit_yaml(path: Path, **changes) -> Path:
         else:
             data[key] = value
     path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+LEGEND = {
+    "classes": [
+        {"id": 0, "name": "sand", "colour": "#e0c080", "description": "left half"},
+        {"id": 1, "name": "rock", "colour": "#606060", "description": "right half"},
+    ]
+}
+
+
+def write_own_map(folder: Path) -> Path:
+    """A 96 x 128 px map with two classes in ``folder``, as a user would lay it out; returns its YAML."""
+    rng = np.random.default_rng(0)
+    image = rng.integers(0, 256, size=(96, 128, 3), dtype=np.uint8)
+    labels = np.zeros((96, 128), dtype=np.uint8)
+    labels[:, 64:] = 1
+    cv2.imwrite(str(folder / "map.png"), image)
+    cv2.imwrite(str(folder / "labels.png"), labels)
+    (folder / "legend.yaml").write_text(yaml.safe_dump(LEGEND))
+    config = {
+        "name": "own",
+        "description": "a test map",
+        "image": "map.png",
+        "labels": "labels.png",
+        "legend": "legend.yaml",
+        "cell_width": 16,
+        "word_stride": 1,
+        "size": [96, 128],
+        "source": "random pixels",
+        "licence": "CC0",
+    }
+    path = folder / "own.yaml"
+    path.write_text(yaml.safe_dump(config, sort_keys=False))
     return path

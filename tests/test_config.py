@@ -118,7 +118,11 @@ def _experiment(tmp_path: Path, text: str) -> Path:
         ("explore:\n  checkpoints: [10, 640]\n", "no longer than explore.path_length (320)"),
         ("model: 3\n", "exp.yaml: model: got 3 (int), expected a mapping of keys"),
         ("seed: -1\n", "exp.yaml: seed: got -1 (int), expected an integer >= 0"),
-        ("name: 'a b'\n", "exp.yaml: name: got 'a b', expected letters, digits"),
+        ("name: 'a b'\n", "exp.yaml: name: got 'a b' (str), expected 1 to 120 letters, digits, '-', '_' or '.'"),
+        ("name: ../escaped\n", "exp.yaml: name: got '../escaped' (str), expected 1 to 120 letters"),
+        (f"name: {'n' * 300}\n", "exp.yaml: name: got 'nnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnn... (str), expected 1 to 120"),
+        ("explore:\n  checkpoints: []\n", "explore.checkpoints: got [] (list), expected a non-empty list of integers"),
+        ("seed: 4294967296\n", "exp.yaml: seed: got 4294967296 (int), expected an integer >= 0 and <= 4294967295"),
         ("datasets: [no-such-map]\n", "exp.yaml: datasets[0]: no dataset 'no-such-map': expected one of aerial-mosaic"),
     ],
 )
@@ -246,3 +250,16 @@ def test_a_top_up_without_a_tile_cap_is_refused_on_the_command_line():
 
     with pytest.raises(ConfigError, match=r"^--set: words\.orb_fill_threshold: got 1, expected null when words\.orb_per_tile is null"):
         load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_fill_threshold=1"])
+
+
+@pytest.mark.parametrize("text, value", [("1e-3", 1e-3), ("1E5", 1e5), ("2.5e3", 2500.0), (".5", 0.5), ("5.", 5.0), ("-.5", -0.5)])
+def test_the_float_forms_people_type_are_numbers(text, value):
+    config = load_config(CONFIG_DIR / "quick.yaml", [f"drive.surge_cruise={text}"])
+    assert config.drive.surge_cruise == value
+
+
+def test_a_string_that_reads_as_a_float_is_saved_quoted(tmp_path):
+    config = load_config(CONFIG_DIR / "quick.yaml", ["name='1e5'"])
+    saved = tmp_path / "resolved.yaml"
+    saved.write_text(to_yaml(config))
+    assert load_config(saved) == config and config.name == "1e5"

@@ -15,13 +15,25 @@ from curiosity_cli.errors import CuriosityError
 
 
 class _ErrorMappingGroup(TyperGroup):
-    """Turns a library error anywhere below into one line and exit code 1, never a traceback."""
+    """Turns a library error or an OS error anywhere below into one line and exit code 1, never a traceback.
+
+    An OS error (a full disk, a read-only folder, a file where a folder belongs) is the
+    user's machine speaking, not a bug: it is reported by the path it concerns. A broken
+    pipe on stdout is left to click, which exits quietly.
+    """
 
     def invoke(self, ctx):
+        from curiosity_cli.files import os_error_message
+
         try:
             return super().invoke(ctx)
         except CuriosityError as exc:
             typer.echo(f"Error: {exc}", err=True)
+            raise typer.Exit(1) from None
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            typer.echo(f"Error: {os_error_message(exc)}", err=True)
             raise typer.Exit(1) from None
 
 
@@ -55,5 +67,28 @@ from curiosity_cli.cli import datasets, vocab, extract, explore, label, plot, re
 
 
 def main() -> None:
-    """Entry point of the ``curiosity`` console script."""
-    app()
+    """Entry point of the ``curiosity`` console script.
+
+    Ctrl-C (SIGINT) and SIGTERM stop any command the same way: KeyboardInterrupt unwinds
+    it, so worker processes and clusters are shut down on the way out, then one line on
+    stderr and exit code 130 or 143 (the shell's 128 + the signal's number). ``drive``
+    and ``simrobot`` handle both signals themselves while they run (STOP goes first).
+    """
+    import signal
+    import sys
+
+    received = []
+
+    def interrupt(signum, frame):
+        received.append(signum)
+        raise KeyboardInterrupt
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, interrupt)
+    try:
+        app()
+    except (SystemExit, KeyboardInterrupt):  # typer turns KeyboardInterrupt into exit code 130
+        if not received:
+            raise
+        typer.echo("Interrupted; finished work is kept, run the same command again to resume.", err=True)
+        sys.exit(128 + received[0])

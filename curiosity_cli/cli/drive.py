@@ -13,6 +13,15 @@ _CONFIG_HELP = "Experiment config whose model, words and drive sections (and see
 _START_HELP = "Start position ROW,COL in map pixels; default the map's centre."
 
 
+def _finite(value: float | None) -> float | None:
+    """A float option's value, refused unless finite: ``nan`` and ``inf`` parse as floats but steer nowhere."""
+    import math
+
+    if value is not None and not math.isfinite(value):
+        raise typer.BadParameter(f"got {value}, expected a finite number")
+    return value
+
+
 def _parse_start(text: str | None, map_shape: tuple[int, int]) -> tuple[float, float]:
     if text is None:
         return map_shape[0] / 2, map_shape[1] / 2
@@ -51,7 +60,7 @@ def drive(
     camera: str = typer.Option("0", "--camera", help="A device index, a video file, a stream URL, or 'sim' for the simulated robot's camera."),
     sim_map: str = typer.Option(None, "--sim-map", help="With --camera sim: the map the simulated robot is on (name or dataset YAML)."),
     start: str = typer.Option(None, "--start", metavar="ROW,COL", help="With --dry-run --camera sim: start position ROW,COL in map pixels; default the map's centre."),
-    heading_deg: float = typer.Option(None, "--heading-deg", help="With --dry-run --camera sim: start heading, degrees clockwise from the map's +col axis (default 0)."),
+    heading_deg: float = typer.Option(None, "--heading-deg", callback=_finite, help="With --dry-run --camera sim: start heading, degrees clockwise from the map's +col axis (default 0)."),
     config: Path = typer.Option(CONFIG_DIR / "paper-grid.yaml", "--config", help=_CONFIG_HELP),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a config key, e.g. --set drive.gamma=0.5."),
     seed: int = typer.Option(None, "--seed", min=0, help="Seed of the topic models; default the config's seed."),
@@ -177,10 +186,10 @@ def _drive(resolved, *, port, baud, camera, map_data, start_pose, seed, out, vid
 def simrobot(
     map_name: str = typer.Option(..., "--map", help="The map the robot moves over (name or dataset YAML)."),
     start: str = typer.Option(None, "--start", metavar="ROW,COL", help=_START_HELP),
-    heading_deg: float = typer.Option(0.0, "--heading-deg", help="Start heading, degrees clockwise from the map's +col axis."),
+    heading_deg: float = typer.Option(0.0, "--heading-deg", callback=_finite, help="Start heading, degrees clockwise from the map's +col axis."),
     noise: str = typer.Option("", "--noise", metavar="KIND=RATE,...", help="Line noise on what the robot sends: garbage, checksum, truncate, drop-ack, each a rate 0..1."),
     seed: int = typer.Option(None, "--seed", min=0, help="Seed of the noise; default the config's seed."),
-    estop_after: float = typer.Option(None, "--estop-after", min=0, metavar="SECONDS", help="Send ESTOP this long after the first VEL."),
+    estop_after: float = typer.Option(None, "--estop-after", min=0, metavar="SECONDS", callback=_finite, help="Send ESTOP this long after the first VEL."),
     link: Path = typer.Option(None, "--link", help="Also make this symlink to the pseudo-terminal (a fixed name for scripts)."),
     log_file: Path = typer.Option(None, "--log", help="Write the robot's events (frames received, watchdog, noise) as JSON Lines."),
     config: Path = typer.Option(CONFIG_DIR / "paper-grid.yaml", "--config", help=_CONFIG_HELP),

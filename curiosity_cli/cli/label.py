@@ -46,6 +46,8 @@ def label(
             config, folder, cache_dir=cache_dir, jobs=jobs, force=force,
             on_stage=progress.stage, on_done=progress.advance, backend=backend.value, scheduler=scheduler,
         )
+    if done["left_out"]:
+        typer.echo(f"not labelled ({len(done['left_out'])}): " + "; ".join(done["left_out"]), err=True)
     typer.echo(
         f"labelled {done['labelled']} runs in {done['seconds']:.0f} s ({done['skipped']} were up to date; "
         f"batch references: {done['batch_reused']} reused)"
@@ -60,8 +62,10 @@ def evaluate(folder: Path = EXPERIMENT) -> None:
     from curiosity_cli.files import display_path
 
     result = evaluate_experiment(folder)
-    for problem in result.skipped:
-        typer.echo(f"skipped: {problem}", err=True)
+    if result.skipped:
+        typer.echo(
+            f"skipped {len(result.skipped)} (listed in skipped.json): " + "; ".join(result.skipped), err=True
+        )
     typer.echo(
         f"wrote {display_path(folder / 'mi.csv')} ({len(result.mi)} rows), summary.csv, tests.csv, effects.csv, "
         "classes.csv, classes_summary.csv, headline.csv"

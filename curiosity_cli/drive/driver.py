@@ -8,7 +8,9 @@ reaches here.
 The log (``log.jsonl`` in the run folder) holds one ``frame`` row per frame, written
 when the next frame is done so that the row can carry its command's ACK latency, and
 the link's events (``resend``, ``refused``, ``nak``, ``estop``, ``stop``,
-``link-lost``) as they happen, then an ``end`` row with the outcome and counters.
+``link-lost``) as they happen, then an ``end`` row with the outcome and counters. A
+command replaced before it was sent (the link was busy) shares its row's ``seq`` and
+``ack_ms`` with the command that replaced it.
 """
 
 from __future__ import annotations

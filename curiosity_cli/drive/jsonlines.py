@@ -11,7 +11,8 @@ from pathlib import Path
 class JsonLines:
     """A JSON Lines file written line by line (each line flushed, so a killed run keeps its log).
 
-    ``write(event, **fields)`` adds ``{"event": ..., "time": <s since open>, ...}``;
+    ``write(event, **fields)`` adds ``{"event": ..., "time": <s since open>, ...}``, and
+    raises ValueError for a field that is not finite (every line is valid JSON);
     :attr:`ended` tells whether an ``end`` event was written.
     """
 
@@ -24,7 +25,8 @@ class JsonLines:
 
     def write(self, event: str, **fields) -> None:
         record = {"event": event, "time": round(time.monotonic() - self._start, 4), **fields}
-        text = json.dumps(record, separators=(",", ":"))
+        # NaN and Infinity are not JSON: a record holding one is a bug where it was made, not a line to write
+        text = json.dumps(record, separators=(",", ":"), allow_nan=False)
         with self._lock:
             if not self._file.closed:
                 self._file.write(text + "\n")

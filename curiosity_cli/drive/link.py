@@ -7,6 +7,10 @@ driver's thread only hands it the newest velocity command (:meth:`RobotLink.comm
 and reads the newest STATE. At most one host frame is in flight at a time; a newer
 command waits for the in-flight one to be answered and replaces any command already
 waiting, so a slow link never builds a queue of stale commands.
+
+SEQs count the frames on the wire (PROTOCOL.md section 2): a waiting command holds the
+next SEQ, a command that replaces it takes that SEQ over, and a waiting command dropped
+by STOP, ESTOP or a lost link gives its SEQ back, so the robot sees no gap.
 """
 
 from __future__ import annotations
@@ -197,17 +201,19 @@ class RobotLink:
         Returns
         -------
         int or None
-            The SEQ the command is sent with; None when the link no longer commands
+            The SEQ the command is sent with (a command replaced while it waits shares
+            its SEQ with the one that replaced it); None when the link no longer commands
             (after ESTOP, STOP or a failure).
         """
         with self._lock:
             if not self._commanding or self._error is not None:
                 return None
-            frame = Vel(self._take_seq(), surge, yaw_rate, pitch_rate)
             if self._inflight is None:
+                frame = Vel(self._take_seq(), surge, yaw_rate, pitch_rate)
                 self._transmit(frame)
             else:
-                self._waiting = frame
+                seq = self._take_seq() if self._waiting is None else self._waiting.seq
+                frame = self._waiting = Vel(seq, surge, yaw_rate, pitch_rate)
             return frame.seq
 
     def state(self) -> State | None:
@@ -246,7 +252,7 @@ class RobotLink:
             with self._lock:
                 if self._error is None and self._stop_seq is None:
                     self._commanding = False
-                    self._waiting = None
+                    self._drop_waiting()
                     self._inflight = None  # STOP goes out now, not after a stale command
                     self._stop_seq = self._seq
                     self._transmit(Stop(self._take_seq()))
@@ -271,6 +277,12 @@ class RobotLink:
         seq = self._seq
         self._seq = protocol.next_seq(seq)
         return seq
+
+    def _drop_waiting(self) -> None:
+        """Forget the waiting command (lock held) and give back its SEQ, the newest taken: it was never sent."""
+        if self._waiting is not None:
+            self._seq = self._waiting.seq
+            self._waiting = None
 
     def _transmit(self, frame) -> None:
         """Send a new frame (lock held); it becomes the one in flight."""
@@ -340,7 +352,7 @@ class RobotLink:
             if self._estop is None:
                 self._estop = item
                 self._commanding = False
-                self._waiting = None
+                self._drop_waiting()
                 self._log("estop", seq=item.seq, reason=item.reason)
                 self._new_state.notify_all()
 
@@ -382,7 +394,7 @@ class RobotLink:
             return
         self._error = reason
         self._commanding = False
-        self._waiting = None
+        self._drop_waiting()
         self._inflight = None
         self._new_state.notify_all()
         stop = Stop(self._take_seq())

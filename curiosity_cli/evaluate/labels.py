@@ -47,7 +47,7 @@ import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, to_dict
 from curiosity_cli.errors import CuriosityError
-from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz
 
 if TYPE_CHECKING:
     from curiosity_cli.evaluate.labeling import PathLabeller
@@ -156,12 +156,18 @@ def read_meta(npz) -> dict:
 
 
 def _batch_is_current(path: Path, config: ExperimentConfig, info: StoreInfo) -> bool:
-    """Whether a batch reference file exists and was made from this store with these settings."""
+    """Whether a batch reference file exists and was made from this store with these settings.
+
+    A corrupt one is not, and is noted on stderr as computed again.
+    """
     try:
-        with np.load(path) as npz:
+        with open_npz(path) as npz:
             stored = read_meta(npz)
-    except (OSError, ValueError, KeyError):
-        return False  # missing or unreadable: compute it again
+    except FileNotFoundError:
+        return False
+    except CorruptFileError as exc:
+        note(f"{exc}; computing it again")
+        return False
     stored.pop("seconds", None)
     return stored == _batch_meta(config, info.path.name, info.vocabulary_hashes)
 
@@ -222,7 +228,7 @@ def _map_references(entry: str, batch_file: str) -> tuple:
 
     map_data = load_map(entry)
     n_classes = max(c.id for c in map_data.legend) + 1 if map_data.labels is not None else 0
-    with np.load(batch_file) as npz:
+    with open_npz(batch_file) as npz:
         batch = npz["labels"]
     cell_classes = None
     if map_data.labels is not None:
@@ -315,14 +321,18 @@ def is_labelled(folder: Path, run_meta: dict, config: ExperimentConfig) -> bool:
     """Whether a run's label file exists and was made from this run with these settings.
 
     A map's file with human contingency tables but no classes found at the current
-    ``CLASS_SHARE_PERCENT`` (made before they were recorded) is not current.
+    ``CLASS_SHARE_PERCENT`` (made before they were recorded) is not current. Nor is a
+    corrupt one, which is noted on stderr as labelled again.
     """
     path = label_path(folder, run_meta["dataset"], run_meta["weight_function"], run_meta["restart"])
     try:
-        with np.load(path) as npz:
+        with open_npz(path) as npz:
             meta = read_meta(npz)
             members = set(npz.files)
-    except (OSError, ValueError, KeyError):
+    except FileNotFoundError:
+        return False
+    except CorruptFileError as exc:
+        note(f"{exc}; labelling the run again")
         return False
     # a file from before classes found were recorded, or with another share, is redone
     classes_current = "human" not in members or (
@@ -379,7 +389,8 @@ def label_experiment(
     Returns
     -------
     dict
-        ``labelled``, ``skipped``, ``batch_reused`` counts and ``seconds``.
+        ``labelled``, ``skipped``, ``batch_reused`` counts, ``seconds``, and ``left_out``:
+        a line per run folder without a ``run.json`` (not labelled), naming it.
 
     Raises
     ------
@@ -392,7 +403,7 @@ def label_experiment(
         reached or has unusable workers.
     """
     from curiosity_cli.explore.grid import prepare_stores
-    from curiosity_cli.explore.runs import RunError, is_complete, read_run
+    from curiosity_cli.explore.runs import RunError, read_run
     from curiosity_cli.parallel import Workers
     from curiosity_cli.words.store import load_store
 
@@ -401,9 +412,12 @@ def label_experiment(
     workers = workers or owned
     folder = Path(folder)
     stores = prepare_stores(config, cache_dir)
-    runs = sorted(p for p in (folder / "runs").glob("*/*/restart-*") if is_complete(p))
     names = {info.name for info in stores.values()}
-    runs = [p for p in runs if p.parent.parent.name in names]
+    folders = sorted(p for p in (folder / "runs").glob("*/*/restart-*") if p.parent.parent.name in names)
+    runs = [p for p in folders if (p / "run.json").is_file()]
+    left_out = [
+        f"{display_path(p)}: no run.json; run `curiosity explore` to redo it" for p in folders if p not in runs
+    ]
     if not runs:
         raise LabelError(f"{display_path(folder / 'runs')}: no finished runs; run `curiosity explore` first")
 
@@ -449,9 +463,13 @@ def label_experiment(
                     on_done()
     if problems:
         raise LabelError(
-            f"{todo - labelled} of {todo} runs could not be labelled (the others are written): " + "; ".join(problems)
+            f"{todo - labelled} of {todo} runs could not be labelled (the others are written): "
+            + "; ".join([*problems, *left_out])
         )
-    return {"labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": time.perf_counter() - started}
+    return {
+        "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": time.perf_counter() - started,
+        "left_out": left_out,
+    }
 
 
 def _batch_references(

@@ -347,6 +347,15 @@ def _maps_table(maps) -> list[str]:
     return lines + [""]
 
 
+def _short_means(mi, restarts: int) -> list[str]:
+    """A note per (dataset, weight function) whose means are over fewer runs than the configured ``restarts``."""
+    counts = mi.groupby(["dataset", "weight_function"], sort=True)["restart"].nunique()
+    return [
+        f"{dataset} / {name}: means over {n} of {restarts} restarts"
+        for (dataset, name), n in counts.items() if n < restarts
+    ]
+
+
 def write_report(
     folder: Path, config: ExperimentConfig, evaluation: Evaluation, figures: list[Path], figure_notes: list[str],
     seconds: dict[str, float], provenance: dict,
@@ -381,7 +390,7 @@ def write_report(
     lines += _effects_table(evaluation.effects, lengths)
     lines += _classes_sections(evaluation.classes_summary)
     lines += ["## Significance", ""] + _significance(tests)
-    left_out = [*evaluation.skipped, *figure_notes]
+    left_out = [*_short_means(evaluation.mi, config.explore.restarts), *evaluation.skipped, *figure_notes]
     if left_out:
         lines += ["## Left out", "", *[f"- {note}" for note in left_out], ""]
     lines += ["## Figures", ""]

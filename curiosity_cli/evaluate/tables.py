@@ -45,7 +45,7 @@ import numpy as np
 
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.explore.weights import CEILINGS
-from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.files import CorruptFileError, atomic_path, display_path, open_npz
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -83,14 +83,20 @@ class LabelRows:
 
     mi: list[dict]  # one per run and checkpoint
     classes: list[dict]  # one per run, checkpoint and class with pixels
-    skipped: list[str]  # files left out, and label files without classes found, each with why
+    skipped: list[str]  # files left out, runs without a label file, label files without classes found; each with why
 
 
 def _read_label_file(path: Path) -> tuple[dict, dict]:
-    """``(meta, arrays)`` of a run's label file; raises what numpy raises on a corrupt one."""
+    """``(meta, arrays)`` of a run's label file.
+
+    Raises
+    ------
+    CorruptFileError
+        The file cannot be read, or lacks an array a label file has.
+    """
     from curiosity_cli.evaluate.labels import read_meta
 
-    with np.load(path) as npz:
+    with open_npz(path) as npz:
         meta = read_meta(npz)
         arrays = {"lengths": npz["lengths"], "batch": npz["batch"]}  # a file without them is corrupt (KeyError)
         arrays.update({name: npz[name] for name in ("human", "class_first_step") if name in npz.files})
@@ -181,10 +187,10 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
     Raises
     ------
     EvaluationError
-        No label files at all, or a label file whose run or batch reference was made
-        from another word store (naming both stores).
+        No label files at all, a missing or corrupt batch reference, or a label file
+        whose run or batch reference was made from another word store (naming both stores).
     """
-    from curiosity_cli.evaluate.labels import CLASS_SHARE_PERCENT, batch_path, read_meta
+    from curiosity_cli.evaluate.labels import CLASS_SHARE_PERCENT, batch_path
     from curiosity_cli.explore.runs import RunError, read_run, run_folder
 
     folder = Path(folder)
@@ -197,8 +203,8 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
     for path in files:
         try:
             meta, arrays = _read_label_file(path)
-        except (OSError, ValueError, KeyError, EOFError) as exc:
-            skipped.append(f"{display_path(path)}: corrupt ({type(exc).__name__}); run `curiosity label --force`")
+        except CorruptFileError as exc:
+            skipped.append(f"{exc}; run `curiosity label` to redo it")
             continue
         run_path = run_folder(folder, meta["dataset"], meta["weight_function"], meta["restart"])
         try:
@@ -212,8 +218,7 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
                 f"{display_path(run_path)} from {run.meta['store']}; run `curiosity label --force`"
             )
         if meta["dataset"] not in batch_stores:
-            with np.load(batch_path(folder, meta["dataset"])) as npz:
-                batch_stores[meta["dataset"]] = read_meta(npz)["store"]
+            batch_stores[meta["dataset"]] = _batch_store(batch_path(folder, meta["dataset"]))
         if batch_stores[meta["dataset"]] != meta["store"]:
             raise EvaluationError(
                 f"{display_path(path)}: labels made from word store {meta['store']}, but the batch reference "
@@ -230,7 +235,42 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
             f"{display_path(folder / 'labels' / dataset)}: classes found left out of {count} label files made before "
             f"they were recorded (or at another share than {CLASS_SHARE_PERCENT} %); run `curiosity label` to redo them"
         )
+    skipped += _unlabelled_runs(folder, files)
     return LabelRows(rows, class_rows, skipped)
+
+
+def _batch_store(path: Path) -> str:
+    """The word store a map's batch reference was made from.
+
+    Raises
+    ------
+    EvaluationError
+        The batch reference is missing or corrupt: every label file of the map needs it.
+    """
+    from curiosity_cli.evaluate.labels import read_meta
+
+    try:
+        with open_npz(path) as npz:
+            return read_meta(npz)["store"]
+    except FileNotFoundError:
+        raise EvaluationError(f"{display_path(path)}: not found; run `curiosity label` to make it") from None
+    except CorruptFileError as exc:
+        raise EvaluationError(f"{exc}; run `curiosity label` to compute it again") from None
+
+
+def _unlabelled_runs(folder: Path, files: list[Path]) -> list[str]:
+    """A line for each run of the grid (``runs.csv``) that has no label file, naming the file it lacks."""
+    import pandas as pd
+
+    from curiosity_cli.evaluate.labels import label_path
+
+    planned = Path(folder) / "runs.csv"
+    if not planned.is_file():  # a folder from before the grid recorded its runs
+        return []
+    runs = pd.read_csv(planned, usecols=["dataset", "weight_function", "restart"])
+    present = set(files)
+    paths = (label_path(folder, r.dataset, r.weight_function, r.restart) for r in runs.itertuples())
+    return [f"{display_path(path)}: not found; run `curiosity label` to make it" for path in paths if path not in present]
 
 
 def _mean_ci(grouped) -> pd.DataFrame:

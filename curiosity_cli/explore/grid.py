@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.config import ExperimentConfig, to_dict, to_yaml
+from curiosity_cli.config import ExperimentConfig, load_config, to_dict, to_yaml
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.parallel import Workers
@@ -150,14 +150,13 @@ def check_saved_config(folder: Path, config: ExperimentConfig) -> None:
     Raises
     ------
     ConfigError
-        Naming the first key that differs, with both values.
+        Naming the first key that differs, with both values; or the saved config itself
+        does not validate (empty, not YAML, not a mapping, a bad key), naming it.
     """
-    import yaml
-
     saved_path = Path(folder) / "config.yaml"
     if not saved_path.is_file():
         return
-    saved = yaml.safe_load(saved_path.read_text())
+    saved = to_dict(load_config(saved_path))
     current = to_dict(config)
     for keys, old, new in _differences({k: saved.get(k) for k in _RUN_SECTIONS}, {k: current[k] for k in _RUN_SECTIONS}):
         if keys not in _SELECTION_KEYS:
@@ -165,6 +164,20 @@ def check_saved_config(folder: Path, config: ExperimentConfig) -> None:
                 f"{display_path(saved_path)}: {'.'.join(keys)} was {old!r} for the runs already there, now {new!r}; "
                 "use another experiment name or another results folder"
             )
+
+
+def _check_inside(path: Path, root: Path, what: str) -> None:
+    """Refuse a ``path`` built from names that does not resolve to somewhere below ``root``.
+
+    Names are validated when a config is loaded; this second line of defence keeps a name
+    that slipped through from writing outside the results or the cache.
+    """
+    resolved, top = Path(path).resolve(), Path(root).resolve()
+    if top not in resolved.parents:
+        raise ConfigError(
+            f"{what}: {display_path(path)} is not inside {display_path(root)}; "
+            "expected a name without '/' or '..'"
+        )
 
 
 def _differences(old, new, keys: tuple = ()):
@@ -233,9 +246,12 @@ def run_grid(
     owned = Workers(backend, scheduler, jobs) if workers is None else None  # checks the backend before any work
     workers = workers or owned
     folder = Path(results_dir) / config.name
+    _check_inside(folder, results_dir, "name")
     check_saved_config(folder, config)
     stores = prepare_stores(config, cache_dir)
     tasks = plan_runs(config, stores)
+    for task in tasks:
+        _check_inside(run_folder(folder, task.dataset, task.weight_function, task.restart), folder, task.dataset)
     by_name = {info.name: info for info in stores.values()}
     _write_experiment_files(folder, config, tasks, by_name)
     remove_partial_runs(folder)
@@ -286,6 +302,8 @@ def prepare_stores(config: ExperimentConfig, cache_dir: Path) -> dict[str, Store
     for entry in config.datasets:
         map_data = load_map(entry)
         name = map_data.config.name
+        # the store is named <cache_dir>/<name>-<hash>.npz
+        _check_inside(Path(cache_dir) / f"{name}-store", cache_dir, f"{display_path(Path(entry))}: name")
         if any(info.name == name for info in stores.values()):
             raise ConfigError(f"datasets: two entries are maps named {name!r}; runs are filed by map name")
         extraction = extract_words(map_data, config.words, cache_dir=cache_dir)

@@ -30,9 +30,14 @@ import numpy as np
 
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.explore.walker import Exploration, SparseCounts
-from curiosity_cli.files import display_path
+from curiosity_cli.files import CorruptFileError, display_path, naming_os_errors, note, open_npz
 
 RUN_FORMAT = 1
+#: What readers of a run take from its ``run.json``: a file without one of them is corrupt.
+_RUN_KEYS = (
+    "format", "dataset", "weight_function", "restart", "seed", "store", "vocabulary_hashes", "vocabulary_size",
+    "n_topics", "checkpoints",
+)
 _TMP_MARK = ".tmp-"
 
 
@@ -67,43 +72,50 @@ def write_run(folder: Path, exploration: Exploration, meta: dict, grid_cols: int
     grid_cols : int
         Cells per row of the map's grid, to write rows and columns.
     """
-    import pandas as pd
-
     folder = Path(folder)
     tmp = folder.parent / f".{folder.name}{_TMP_MARK}{uuid.uuid4().hex[:8]}"
     tmp.mkdir(parents=True)
     try:
-        e = exploration
-        rows, cols = np.divmod(e.path, grid_cols)
-        pd.DataFrame(
-            {
-                "step": np.arange(e.path.size), "row": rows, "col": cols, "cell": e.path,
-                "first_visit": e.first_visit, "words_sampled": e.words_sampled,
-                "log_likelihood": e.log_likelihood, "fallback": e.fallback, "boxed_in": e.boxed_in,
-            }
-        ).to_csv(tmp / "path.csv", index=False)
-        c_rows, c_cols = np.divmod(e.candidate_cell, grid_cols)
-        pd.DataFrame(
-            {
-                "step": e.candidate_step, "row": c_rows, "col": c_cols, "cell": e.candidate_cell,
-                "coverage": e.coverage, "word_perplexity": e.word_perplexity,
-                "topic_perplexity": e.topic_perplexity, "weight": e.weight, "chosen": e.chosen,
-            }
-        ).to_csv(tmp / "candidates.csv", index=False)
-        arrays = {"path": e.path.astype(np.int32), "lengths": np.array(sorted(e.checkpoints), np.int32)}
-        for length, counts in e.checkpoints.items():
-            arrays.update({f"{length}/words": counts.words, f"{length}/topics": counts.topics, f"{length}/counts": counts.counts})
-        np.savez_compressed(tmp / "checkpoints.npz", **arrays)
-        size = sum(p.stat().st_size for p in tmp.iterdir())
-        meta = {"format": RUN_FORMAT, **meta, "checkpoints": sorted(e.checkpoints), "bytes": size}
-        (tmp / "run.json").write_text(json.dumps(meta, indent=2) + "\n")
-        size += (tmp / "run.json").stat().st_size
+        with naming_os_errors(folder):  # a full disk names the run, not "no space left" alone
+            size = _write_files(tmp, exploration, meta, grid_cols)
         if folder.exists():
             shutil.rmtree(folder)
         os.rename(tmp, folder)
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
+    return size
+
+
+def _write_files(tmp: Path, exploration: Exploration, meta: dict, grid_cols: int) -> int:
+    """The files of a run folder (module docstring), written into ``tmp``; returns their size in bytes."""
+    import pandas as pd
+
+    e = exploration
+    rows, cols = np.divmod(e.path, grid_cols)
+    pd.DataFrame(
+        {
+            "step": np.arange(e.path.size), "row": rows, "col": cols, "cell": e.path,
+            "first_visit": e.first_visit, "words_sampled": e.words_sampled,
+            "log_likelihood": e.log_likelihood, "fallback": e.fallback, "boxed_in": e.boxed_in,
+        }
+    ).to_csv(tmp / "path.csv", index=False)
+    c_rows, c_cols = np.divmod(e.candidate_cell, grid_cols)
+    pd.DataFrame(
+        {
+            "step": e.candidate_step, "row": c_rows, "col": c_cols, "cell": e.candidate_cell,
+            "coverage": e.coverage, "word_perplexity": e.word_perplexity,
+            "topic_perplexity": e.topic_perplexity, "weight": e.weight, "chosen": e.chosen,
+        }
+    ).to_csv(tmp / "candidates.csv", index=False)
+    arrays = {"path": e.path.astype(np.int32), "lengths": np.array(sorted(e.checkpoints), np.int32)}
+    for length, counts in e.checkpoints.items():
+        arrays.update({f"{length}/words": counts.words, f"{length}/topics": counts.topics, f"{length}/counts": counts.counts})
+    np.savez_compressed(tmp / "checkpoints.npz", **arrays)
+    size = sum(p.stat().st_size for p in tmp.iterdir())
+    meta = {"format": RUN_FORMAT, **meta, "checkpoints": sorted(e.checkpoints), "bytes": size}
+    (tmp / "run.json").write_text(json.dumps(meta, indent=2) + "\n")
+    size += (tmp / "run.json").stat().st_size
     return size
 
 
@@ -138,8 +150,19 @@ class Run:
 
 
 def is_complete(folder: Path) -> bool:
-    """Whether a run folder exists under its real name (so it was written whole)."""
-    return (Path(folder) / "run.json").is_file()
+    """Whether a run folder exists under its real name (so it was written whole) and reads back.
+
+    A folder whose ``run.json`` or ``checkpoints.npz`` is corrupt counts as not done,
+    with a note on stderr, so that the grid redoes just that run.
+    """
+    if not (Path(folder) / "run.json").is_file():
+        return False
+    try:
+        _read(Path(folder))
+    except RunError as exc:
+        note(f"{exc}; redoing the run")
+        return False
+    return True
 
 
 def read_run(folder: Path) -> Run:
@@ -150,28 +173,42 @@ def read_run(folder: Path) -> Run:
     RunError
         A missing or corrupt ``run.json`` or ``checkpoints.npz``, naming the file.
     """
-    folder = Path(folder)
-    meta_path = folder / "run.json"
     try:
-        meta = json.loads(meta_path.read_text())
-    except FileNotFoundError:
-        raise RunError(f"{display_path(meta_path)}: not found; expected a finished run") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise RunError(f"{display_path(meta_path)}: corrupt ({exc}); run the grid with --force to redo it") from None
-    if meta.get("format") != RUN_FORMAT:
-        raise RunError(f"{display_path(meta_path)}: format {meta.get('format')!r}, expected {RUN_FORMAT}")
+        return _read(Path(folder))
+    except RunError as exc:
+        raise RunError(f"{exc}; run `curiosity explore` to redo it") from None
+
+
+def _read(folder: Path) -> Run:
+    """:func:`read_run` without the advice: the error names the file and what is wrong with it."""
+    meta = _read_meta(folder / "run.json")
     (path,) = _load_arrays(folder / "checkpoints.npz", ["path"])
     return Run(folder, meta, path.astype(np.int64))
 
 
-def _load_arrays(path: Path, names: list[str]) -> list[np.ndarray]:
-    import zipfile
-    import zlib
-
+def _read_meta(path: Path) -> dict:
+    """A run's ``run.json``, checked to be a mapping of this format with every key a reader needs."""
     try:
-        with np.load(path) as npz:
+        meta = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise RunError(f"{display_path(path)}: not found; the run is not finished") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise RunError(f"{display_path(path)}: corrupt ({exc})") from None
+    if not isinstance(meta, dict):
+        raise RunError(f"{display_path(path)}: a JSON {type(meta).__name__}, expected an object of the run's facts")
+    missing = [key for key in _RUN_KEYS if key not in meta]
+    if missing:
+        raise RunError(f"{display_path(path)}: no key {missing[0]!r}; expected a finished run's facts")
+    if meta["format"] != RUN_FORMAT:
+        raise RunError(f"{display_path(path)}: format {meta['format']!r}, expected {RUN_FORMAT}")
+    return meta
+
+
+def _load_arrays(path: Path, names: list[str]) -> list[np.ndarray]:
+    try:
+        with open_npz(path) as npz:
             return [npz[name] for name in names]
     except FileNotFoundError:
         raise RunError(f"{display_path(path)}: not found; the run folder is incomplete") from None
-    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
-        raise RunError(f"{display_path(path)}: corrupt ({exc}); run the grid with --force to redo it") from None
+    except CorruptFileError as exc:
+        raise RunError(str(exc)) from None

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.errors import CuriosityError
-from curiosity_cli.files import display_path
+from curiosity_cli.files import CorruptFileError, display_path, open_npz
 
 MI_COLUMNS = (
     "dataset", "weight_function", "restart", "path_length",
@@ -200,18 +200,13 @@ def read_path(experiment_dir: Path, dataset: str, weight_function: str, restart:
 
 
 def _read_npz(path: Path, keys: list[str], notes: list[str]) -> dict | None:
-    import zipfile
-    import zlib
-
     path = Path(path)
     if not path.is_file():
         notes.append(f"{display_path(path)}: not found (run `curiosity label` first)")
         return None
     try:
-        with np.load(path) as npz:
+        with open_npz(path) as npz:
             return {key: npz[key] for key in keys}
-    except KeyError as exc:
-        notes.append(f"{display_path(path)}: no array {exc}; not drawn")
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
-        notes.append(f"{display_path(path)}: corrupt ({exc}); not drawn")
+    except CorruptFileError as exc:
+        notes.append(f"{exc}; not drawn")
     return None

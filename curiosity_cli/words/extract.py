@@ -19,6 +19,7 @@ from curiosity_cli.checks import check_int
 from curiosity_cli.config import WordsConfig
 from curiosity_cli.data import MapData
 from curiosity_cli.errors import CuriosityError
+from curiosity_cli.files import CorruptFileError, note
 from curiosity_cli.words.store import STORE_FORMAT, WordStore, WordType, build_store, load_store, save_store
 from curiosity_cli.words.vocab import Vocabulary, load_vocabulary
 
@@ -144,7 +145,10 @@ def extract_words(
     params = _params(map_data, words, stride, cell_width)
     path = store_path(cache_dir, params, types)
     if path.is_file() and not force:
-        return Extraction(load_store(path), path, reused=True, seconds={})
+        try:
+            return Extraction(load_store(path), path, reused=True, seconds={})
+        except CorruptFileError as exc:  # a cache: make it again
+            note(f"{exc}; extracting the words again")
 
     from curiosity_cli.words.hamming import nearest_binary_words
     from curiosity_cli.words.textons import texton_words

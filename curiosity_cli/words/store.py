@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.errors import CuriosityError
-from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.files import atomic_path, display_path, open_npz
 
 STORE_FORMAT = 1
 
@@ -175,15 +175,17 @@ def load_store(path: Path) -> WordStore:
     Raises
     ------
     CuriosityError
-        The file is missing, not a store, or of another format version.
+        The file is missing, or of another format version.
+    CorruptFileError
+        The file is not a store: truncated, empty, or another kind of ``.npz``.
     """
     path = Path(path)
     try:
-        with np.load(path, allow_pickle=False) as data:
+        with open_npz(path) as data:
             meta = json.loads(str(data["meta"]))
             arrays = {k: data[k] for k in ("rows", "cols", "words", "cell_start")}
-    except (OSError, KeyError, ValueError) as exc:
-        raise CuriosityError(f"{display_path(path)}: not a word store ({exc})") from None
+    except FileNotFoundError:
+        raise CuriosityError(f"{display_path(path)}: not found; run `curiosity extract` to make it") from None
     if meta.get("format") != STORE_FORMAT:
         raise CuriosityError(
             f"{display_path(path)}: format: got {meta.get('format')!r}, expected {STORE_FORMAT}; "

@@ -19,6 +19,8 @@ from typing import Callable
 
 import numpy as np
 
+from curiosity_cli.checks import check_int
+from curiosity_cli.config import MAX_VOCABULARY
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 
@@ -131,12 +133,19 @@ def _source_images() -> dict[str, np.ndarray]:
 
 
 def build_orb_vocabulary(size: int, *, seed: int, log: Callable[[str], None] = lambda _: None) -> Vocabulary:
-    """Learn ORB words by k-majority clustering of descriptors from :data:`SOURCE_IMAGES`."""
+    """Learn ORB words by k-majority clustering of descriptors from :data:`SOURCE_IMAGES`.
+
+    Raises
+    ------
+    ParameterError
+        ``size`` outside 2..:data:`~curiosity_cli.config.MAX_VOCABULARY`.
+    """
     import cv2
 
     from curiosity_cli.words.binary_kmeans import binary_kmeans
     from curiosity_cli.words.orb import detect_orb
 
+    size = check_int("size", size, 2, MAX_VOCABULARY)
     descriptors = []
     for name, image in _source_images().items():
         for scale in ORB_SCALES:
@@ -157,10 +166,17 @@ def build_orb_vocabulary(size: int, *, seed: int, log: Callable[[str], None] = l
 def build_texton_vocabulary(
     size: int, *, seed: int, log: Callable[[str], None] = lambda _: None
 ) -> Vocabulary:
-    """Learn texton words by k-means on normalised MR8 responses of :data:`SOURCE_IMAGES`."""
+    """Learn texton words by k-means on normalised MR8 responses of :data:`SOURCE_IMAGES`.
+
+    Raises
+    ------
+    ParameterError
+        ``size`` outside 2..:data:`~curiosity_cli.config.MAX_VOCABULARY`.
+    """
     from curiosity_cli.words.filterbank import mr8_responses, normalise_responses
     from curiosity_cli.words.kmeans import kmeans
 
+    size = check_int("size", size, 2, MAX_VOCABULARY)
     rng = np.random.default_rng([seed, 1])
     samples = []
     for name, image in _source_images().items():

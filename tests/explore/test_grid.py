@@ -145,7 +145,7 @@ def test_corrupt_and_partial_run_folders_are_reported_or_removed(own_map, tmp_pa
     run_grid(grid_config(own_map, restarts=1), results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
     folder = run_folder(tmp_path / "grid", "own", "random-walk", 0)
     (folder / "checkpoints.npz").write_bytes(b"not a zip file")
-    with pytest.raises(RunError, match=r"restart-000/checkpoints.npz: corrupt .* --force"):
+    with pytest.raises(RunError, match=r"restart-000/checkpoints.npz: corrupt or truncated \(not a .npz archive\); run `curiosity explore`"):
         read_run(folder)
     (folder / "run.json").write_text("{")
     with pytest.raises(RunError, match=r"restart-000/run.json: corrupt"):

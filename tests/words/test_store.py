@@ -69,5 +69,5 @@ def test_counts_and_slices():
 def test_a_file_that_is_not_a_store_is_refused(tmp_path):
     path = tmp_path / "x.npz"
     np.savez(path, something=np.zeros(3))
-    with pytest.raises(CuriosityError, match=r"x\.npz: not a word store"):
+    with pytest.raises(CuriosityError, match=r"x\.npz: corrupt or truncated \(meta is not a file in the archive\)"):
         load_store(path)
