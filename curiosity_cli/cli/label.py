@@ -10,6 +10,9 @@ from curiosity_cli.cli import app
 from curiosity_cli.cli.explore import Backend
 from curiosity_cli.cli.progress import StagedProgress
 
+#: Skipped pieces named on the terminal by `evaluate` (skipped.json lists them all).
+_SHOWN = 3
+
 EXPERIMENT = typer.Argument(Path("results/quick"), help="Experiment folder written by `curiosity explore`.")
 
 
@@ -63,9 +66,10 @@ def evaluate(folder: Path = EXPERIMENT) -> None:
 
     result = evaluate_experiment(folder)
     if result.skipped:
-        typer.echo(
-            f"skipped {len(result.skipped)} (listed in skipped.json): " + "; ".join(result.skipped), err=True
-        )
+        # the first few on the terminal; every one is in skipped.json
+        shown = "; ".join(result.skipped[:_SHOWN])
+        more = f"; and {len(result.skipped) - _SHOWN} more" if len(result.skipped) > _SHOWN else ""
+        typer.echo(f"skipped {len(result.skipped)} (listed in skipped.json): {shown}{more}", err=True)
     typer.echo(
         f"wrote {display_path(folder / 'mi.csv')} ({len(result.mi)} rows), summary.csv, tests.csv, effects.csv, "
         "classes.csv, classes_summary.csv, headline.csv"

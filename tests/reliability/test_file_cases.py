@@ -238,6 +238,11 @@ REDOS = [
         lambda work: (work / LABEL_FILE).unlink(), lambda work: _skipped(work, LABEL_FILE), ("(14 rows)",),
     ),
     RedoCase(
+        "many-deleted-label-files-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 5", "; and 2 more"),
+        lambda work: [f.unlink() for f in sorted((work / EXPERIMENT / "labels").glob("*/*/restart-*.npz"))[:5]],
+        lambda work: _skipped(work, LABEL_FILE), ("(6 rows)",),
+    ),
+    RedoCase(
         "deleted-run-json-at-label", [*LABEL, "--force"], ("not labelled (1)", RUN, "no run.json"),
         lambda work: (work / RUN / "run.json").unlink(), outputs=("labelled 7 runs",),
     ),
