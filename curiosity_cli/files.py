@@ -107,38 +107,6 @@ def _reason(exc: Exception) -> str:
     return str(text) or type(exc).__name__
 
 
-def read_yaml(path: Path, what: str) -> dict:
-    """Read a YAML file whose top level is a mapping.
-
-    Raises
-    ------
-    ConfigError
-        Missing file, not YAML, not text, or not a mapping; the message names the file.
-    """
-    import yaml
-
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"{display_path(path)}: {what} not found")
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" (line {mark.line + 1})" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or "not valid YAML"
-        raise ConfigError(f"{display_path(path)}: not valid YAML{where}: {problem}") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"{display_path(path)}: not a text file; expected YAML") from None
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise ConfigError(
-            f"{display_path(path)}: expected a mapping of keys at the top level, "
-            f"got {type(data).__name__}"
-        )
-    return data
-
-
 @contextlib.contextmanager
 def atomic_path(path: Path):
     """Yield a temporary path beside ``path``; it replaces ``path`` only if the block succeeds.

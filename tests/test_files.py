@@ -5,7 +5,8 @@ import os
 import pytest
 
 from curiosity_cli.errors import ConfigError
-from curiosity_cli.files import atomic_path, read_yaml
+from curiosity_cli.files import atomic_path
+from curiosity_cli.yamlfile import read_yaml
 
 
 def test_atomic_path_replaces_only_on_success(tmp_path):

@@ -151,8 +151,26 @@ def _batch_meta(config: ExperimentConfig, store_name: str, hashes: list[str]) ->
     }
 
 
-def read_meta(npz) -> dict:
-    return json.loads(str(npz["meta"]))
+#: What every label file's ``meta`` names: a file without one of these is corrupt.
+LABEL_META_KEYS = ("dataset", "weight_function", "restart", "run_seed", "store", "vocabulary_hashes", "sweeps")
+
+
+def read_meta(npz, required: tuple[str, ...] = ()) -> dict:
+    """The JSON ``meta`` of a batch reference or label file, with the ``required`` keys.
+
+    Raises
+    ------
+    KeyError, ValueError
+        No meta, not a JSON object, or a required key missing: read inside
+        :func:`~curiosity_cli.files.open_npz`, the file is reported as corrupt.
+    """
+    meta = json.loads(str(npz["meta"]))
+    if not isinstance(meta, dict):
+        raise ValueError("its meta is not a JSON object")
+    missing = [key for key in required if key not in meta]
+    if missing:
+        raise KeyError(f"its meta lacks {', '.join(missing)}")
+    return meta
 
 
 def _batch_is_current(path: Path, config: ExperimentConfig, info: StoreInfo) -> bool:
@@ -327,7 +345,7 @@ def is_labelled(folder: Path, run_meta: dict, config: ExperimentConfig) -> bool:
     path = label_path(folder, run_meta["dataset"], run_meta["weight_function"], run_meta["restart"])
     try:
         with open_npz(path) as npz:
-            meta = read_meta(npz)
+            meta = read_meta(npz, LABEL_META_KEYS)
             members = set(npz.files)
     except FileNotFoundError:
         return False

@@ -94,10 +94,10 @@ def _read_label_file(path: Path) -> tuple[dict, dict]:
     CorruptFileError
         The file cannot be read, or lacks an array a label file has.
     """
-    from curiosity_cli.evaluate.labels import read_meta
+    from curiosity_cli.evaluate.labels import LABEL_META_KEYS, read_meta
 
     with open_npz(path) as npz:
-        meta = read_meta(npz)
+        meta = read_meta(npz, LABEL_META_KEYS)
         arrays = {"lengths": npz["lengths"], "batch": npz["batch"]}  # a file without them is corrupt (KeyError)
         arrays.update({name: npz[name] for name in ("human", "class_first_step") if name in npz.files})
     return meta, arrays

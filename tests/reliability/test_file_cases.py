@@ -212,6 +212,15 @@ def _loads(path: Path) -> None:
         assert npz.files
 
 
+def _replace_meta(path: Path, meta) -> None:
+    """Rewrite a label file with the same arrays and another ``meta``."""
+    import numpy as np
+
+    with np.load(path) as npz:
+        arrays = {name: npz[name] for name in npz.files if name != "meta"}
+    np.savez_compressed(path, **arrays, meta=json.dumps(meta))
+
+
 def _skipped(work: Path, name: str) -> None:
     assert any(name in line for line in json.loads((work / EXPERIMENT / "skipped.json").read_text()))
 
@@ -236,6 +245,15 @@ REDOS = [
     RedoCase(
         "deleted-label-file-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 1", LABEL_FILE, "not found"),
         lambda work: (work / LABEL_FILE).unlink(), lambda work: _skipped(work, LABEL_FILE), ("(14 rows)",),
+    ),
+    RedoCase(
+        "label-file-meta-without-keys-at-label", LABEL, (LABEL_FILE, "corrupt", "its meta lacks weight_function", "labelling the run again"),
+        lambda work: _replace_meta(work / LABEL_FILE, {"dataset": "own"}), lambda work: _loads(work / LABEL_FILE),
+        ("labelled 1 runs",),
+    ),
+    RedoCase(
+        "label-file-meta-a-list-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 1", LABEL_FILE, "not a JSON object"),
+        lambda work: _replace_meta(work / LABEL_FILE, [1, 2]), lambda work: _skipped(work, LABEL_FILE), ("(14 rows)",),
     ),
     RedoCase(
         "many-deleted-label-files-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 5", "; and 2 more"),
