@@ -393,13 +393,8 @@ def run_sweep(
     sweep: Sweep,
     *,
     results_dir: Path = Path("results"),
-    cache_dir: Path = Path("results/cache"),
-    jobs: int | None = None,
-    force: bool = False,
-    backend: str = "loky",
-    scheduler: str | None = None,
     on_stage: Callable[[str, int], None] | None = None,
-    on_done: Callable[[], None] | None = None,
+    **pipeline,
 ) -> Path:
     """Run every combination of ``sweep`` with the whole pipeline and write ``SWEEP.md``.
 
@@ -407,14 +402,14 @@ def run_sweep(
     ----------
     sweep : Sweep
         From :func:`plan_sweep`.
-    results_dir, cache_dir : Path
-        The sweep's folder goes under ``results_dir``; word stores are cached in ``cache_dir``.
-    jobs, force, backend, scheduler
-        As :func:`curiosity_cli.reproduce.reproduce`, for every combination.
-    on_stage, on_done : callable, optional
-        Progress callbacks, as :func:`~curiosity_cli.reproduce.reproduce`'s; each
-        combination is announced as a stage without units,
-        ``"combination 2/3: model.topics=32"``.
+    results_dir : Path
+        The sweep's folder goes under ``results_dir``.
+    on_stage : callable, optional
+        As :func:`~curiosity_cli.reproduce.reproduce`'s; each combination is also
+        announced as a stage without units, ``"combination 2/3: model.topics=32"``.
+    **pipeline
+        The other keywords of :func:`curiosity_cli.reproduce.reproduce` (``cache_dir``,
+        ``jobs``, ``force``, ``backend``, ``scheduler``, ``on_done``), for every combination.
 
     Returns
     -------
@@ -438,10 +433,7 @@ def run_sweep(
             on_stage(f"combination {combination.index}/{total}: {combination.label}", 0)
         started = time.perf_counter()
         try:
-            report = reproduce(
-                combination.config, results_dir=folder, cache_dir=cache_dir, jobs=jobs, force=force,
-                backend=backend, scheduler=scheduler, on_stage=on_stage, on_done=on_done,
-            )
+            report = reproduce(combination.config, results_dir=folder, on_stage=on_stage, **pipeline)
             outcomes.append(Outcome(combination, report, None, time.perf_counter() - started))
         except CuriosityError as exc:
             outcomes.append(Outcome(combination, None, str(exc), time.perf_counter() - started))

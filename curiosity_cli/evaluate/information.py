@@ -148,10 +148,11 @@ def cell_class_pixels(labels: np.ndarray, cell_width: int, n_classes: int) -> np
         raise ParameterError(f"labels: got shape {labels.shape}, expected (H, W)")
     if labels.size and (labels.min() < 0 or labels.max() >= n_classes):
         raise ParameterError(f"labels: class ids {labels.min()} .. {labels.max()}, expected 0 .. {n_classes - 1}")
+    from curiosity_cli.data import grid_shape
+
     rows, cols = labels.shape
-    grid_cols = -(-cols // cell_width)
-    n_cells = -(-rows // cell_width) * grid_cols
-    out = np.zeros((n_cells, n_classes), np.int64)
+    grid_rows, grid_cols = grid_shape(labels.shape, cell_width)
+    out = np.zeros((grid_rows * grid_cols, n_classes), np.int64)
     col_cells = np.arange(cols) // cell_width
     # one band of cell rows at a time: no (H, W) int64 index array for a large map
     for top in range(0, rows, cell_width):

@@ -315,12 +315,8 @@ def walkers_only(mi):
     return mi[~mi["weight_function"].isin(CEILINGS)]
 
 
-def paired_tests(mi):
-    """Wilcoxon signed-rank test between every pair of walkers, paired by restart (ceilings left out)."""
-    import pandas as pd
-    from scipy import stats
-
-    rows = []
+def _paired_blocks(mi):
+    """Per (against, dataset, path length): MI of the walkers (ceilings left out), a row per restart, a column per walker."""
     mi = walkers_only(mi)
     for against in ("human", "batch"):
         column = f"mi_{against}"
@@ -328,17 +324,27 @@ def paired_tests(mi):
             index=["dataset", "path_length", "restart"], columns="weight_function", values=column
         )
         for (dataset, length), block in table.groupby(level=["dataset", "path_length"]):
-            for a, b in itertools.combinations(block.columns, 2):
-                pair = block[[a, b]].dropna()
-                diff = pair[a] - pair[b]
-                if len(pair) == 0 or not diff.any():
-                    p = np.nan if len(pair) == 0 else 1.0
-                else:
-                    p = float(stats.wilcoxon(pair[a], pair[b]).pvalue)
-                rows.append({
-                    "dataset": dataset, "path_length": length, "against": against, "a": a, "b": b,
-                    "n": len(pair), "median_difference": float(diff.median()) if len(pair) else np.nan, "p_value": p,
-                })
+            yield against, dataset, length, block
+
+
+def paired_tests(mi):
+    """Wilcoxon signed-rank test between every pair of walkers, paired by restart (ceilings left out)."""
+    import pandas as pd
+    from scipy import stats
+
+    rows = []
+    for against, dataset, length, block in _paired_blocks(mi):
+        for a, b in itertools.combinations(block.columns, 2):
+            pair = block[[a, b]].dropna()
+            diff = pair[a] - pair[b]
+            if len(pair) == 0 or not diff.any():
+                p = np.nan if len(pair) == 0 else 1.0
+            else:
+                p = float(stats.wilcoxon(pair[a], pair[b]).pvalue)
+            rows.append({
+                "dataset": dataset, "path_length": length, "against": against, "a": a, "b": b,
+                "n": len(pair), "median_difference": float(diff.median()) if len(pair) else np.nan, "p_value": p,
+            })
     return pd.DataFrame(rows, columns=["dataset", "path_length", "against", "a", "b", "n", "median_difference", "p_value"])
 
 
@@ -391,28 +397,22 @@ def paired_effects(mi, tests=None):
 
     columns = ["dataset", "path_length", "against", "other", "n", "topic_perplexity", "other_mean",
                "mean_difference", "ci_low", "ci_high", "p_value"]
-    mi = walkers_only(mi)
     tests = paired_tests(mi) if tests is None else tests
     rows = []
-    for against in ("human", "batch"):
-        column = f"mi_{against}"
-        table = mi.dropna(subset=[column]).pivot_table(
-            index=["dataset", "path_length", "restart"], columns="weight_function", values=column
-        )
-        if HEADLINE_WEIGHT not in table.columns:
+    for against, dataset, length, block in _paired_blocks(mi):
+        if HEADLINE_WEIGHT not in block.columns:
             continue
-        for (dataset, length), block in table.groupby(level=["dataset", "path_length"]):
-            for other in block.columns.drop(HEADLINE_WEIGHT):
-                pair = block[[HEADLINE_WEIGHT, other]].dropna()
-                if pair.empty:
-                    continue
-                mean, low, high = paired_difference(pair[HEADLINE_WEIGHT].to_numpy(), pair[other].to_numpy())
-                rows.append({
-                    "dataset": dataset, "path_length": length, "against": against, "other": other, "n": len(pair),
-                    "topic_perplexity": float(pair[HEADLINE_WEIGHT].mean()), "other_mean": float(pair[other].mean()),
-                    "mean_difference": mean, "ci_low": low, "ci_high": high,
-                    "p_value": _wilcoxon_p(tests, dataset, length, against, HEADLINE_WEIGHT, other)[0],
-                })
+        for other in block.columns.drop(HEADLINE_WEIGHT):
+            pair = block[[HEADLINE_WEIGHT, other]].dropna()
+            if pair.empty:
+                continue
+            mean, low, high = paired_difference(pair[HEADLINE_WEIGHT].to_numpy(), pair[other].to_numpy())
+            rows.append({
+                "dataset": dataset, "path_length": length, "against": against, "other": other, "n": len(pair),
+                "topic_perplexity": float(pair[HEADLINE_WEIGHT].mean()), "other_mean": float(pair[other].mean()),
+                "mean_difference": mean, "ci_low": low, "ci_high": high,
+                "p_value": _wilcoxon_p(tests, dataset, length, against, HEADLINE_WEIGHT, other)[0],
+            })
     return pd.DataFrame(rows, columns=columns)
 
 
