@@ -366,7 +366,10 @@ def dask_client(scheduler: str | None, jobs: int):
             with _signals_deferred():
                 cluster = stack.enter_context(distributed.LocalCluster(
                     n_workers=jobs, threads_per_worker=1, processes=True, host="127.0.0.1",
-                    dashboard_address=None, silence_logs=logging.ERROR, preload=[__name__],
+                    # Every fault of a local cluster reaches the command as a task outcome
+                    # (KilledWorker) or a BackendError; its log lines only add noise, such
+                    # as a worker's heartbeat racing the scheduler's shutdown on Ctrl-C.
+                    dashboard_address=None, silence_logs=logging.CRITICAL, preload=[__name__],
                     # no dashboard, and the scheduler's HTTP routes on a free port, not on 8787
                     scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                 ))
