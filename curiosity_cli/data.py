@@ -8,6 +8,8 @@ is wrong in one line naming the file.
 
 from __future__ import annotations
 
+import hashlib
+
 import re
 import sys
 from dataclasses import dataclass
@@ -61,6 +63,15 @@ class MapData:
     def grid_shape(self) -> tuple[int, int]:
         """Cells per column and per row of the map (rows, cols); see :func:`grid_shape`."""
         return grid_shape(self.image.shape[:2], self.config.cell_width)
+
+    @property
+    def labels_digest(self) -> str | None:
+        """A digest of the human labels as evaluation reads them (class ids and their count); None without labels."""
+        if self.labels is None:
+            return None
+        n_classes = max(c.id for c in self.legend) + 1
+        head = f"{self.labels.dtype.str}{self.labels.shape}{n_classes}{self.config.cell_width}".encode()
+        return hashlib.sha256(head + np.ascontiguousarray(self.labels).tobytes()).hexdigest()[:16]
 
 
 def grid_shape(image_shape: tuple[int, int], cell_width: int) -> tuple[int, int]:

@@ -31,7 +31,7 @@ def experiment_config(folder: Path, overrides: list[str]):
 @app.command("label")
 def label(
     folder: Path = EXPERIMENT,
-    overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a key, e.g. --set label.sweeps=8."),
+    overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a label setting, e.g. --set label.sweeps=8; it is recorded in the experiment's config.yaml."),
     jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
     force: bool = typer.Option(False, "--force", help="Recompute labels that are up to date."),
     cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),

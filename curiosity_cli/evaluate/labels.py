@@ -4,8 +4,9 @@ Written under ``results/<experiment>/``:
 
 - ``batch/<dataset>.npz``: the batch reference Z_b of a map: ``labels`` (H, W) int16
   pixel topics, ``word_labels`` (N,) int16, ``log_likelihood`` (batch_sweeps,) float64
-  and ``meta`` (JSON: word store, vocabulary hashes, seed, sweeps, model). Reused while
-  its ``meta`` matches the experiment's.
+  and ``meta`` (JSON: its recipe, :func:`batch_recipe`, and seconds). Reused while its
+  recipe is the one the experiment's settings give; otherwise computed again, with a note
+  saying what changed.
 - ``labels/<dataset>/<weight function>/restart-<NNN>.npz``: for one run, per checkpoint
   length (``lengths``), the contingency tables of Z_p against the human labels
   (``human``, (n, K, C) int64, absent for a map without labels) and against Z_b
@@ -14,7 +15,10 @@ Written under ``results/<experiment>/``:
   map with human labels also ``class_first_step`` ((C,) int32): the step at which the
   path first stood in a cell where class ``h`` covers at least ``CLASS_SHARE_PERCENT`` %
   of the pixels, -1 if never (the classes found within ``n`` steps are those below
-  ``n``); ``meta["class_share_percent"]`` records the share.
+  ``n``); ``meta["class_share_percent"]`` records the share. A label file is current
+  while its recipe (:func:`label_recipe`: its run's and batch reference's digests, the
+  label settings, the share and the human labels) is the one they give now; the others
+  are labelled again, and how many and why is noted.
 - ``labels/<dataset>/examples/<weight function>-restart-<NNN>-<length>.npz``: the pixel
   label map Z_p (``labels``, (H, W) int16) of restart 0 at path length 80 and at its
   last checkpoint, for the figures.
@@ -45,9 +49,10 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from curiosity_cli.config import ExperimentConfig, to_dict
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.config import ExperimentConfig, load_config, to_dict, to_yaml
+from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz
+from curiosity_cli.recipes import Recipe, differences, recorded_digest
 
 if TYPE_CHECKING:
     from curiosity_cli.evaluate.labeling import PathLabeller
@@ -60,6 +65,8 @@ LABEL_FORMAT = 1
 #: A human class counts as found in a visited cell when it covers at least this share
 #: (percent) of the cell's pixels: enough to be seen, not a sliver at the cell's edge.
 CLASS_SHARE_PERCENT = 10
+#: Why a run without a label file is labelled (:func:`label_changes`).
+NOT_LABELLED = "not labelled yet"
 #: Path lengths whose Z_p maps are kept for restart 0 (besides the last checkpoint).
 EXAMPLE_LENGTHS = (80,)
 # tags that keep the label streams apart from the runs' own
@@ -144,11 +151,20 @@ def example_path(folder: Path, dataset: str, weight_function: str, restart: int,
     return Path(folder) / "labels" / dataset / "examples" / f"{weight_function}-restart-{restart:03d}-{length}.npz"
 
 
-def _batch_meta(config: ExperimentConfig, store_name: str, hashes: list[str]) -> dict:
-    return {
-        "format": LABEL_FORMAT, "store": store_name, "vocabulary_hashes": hashes, "seed": config.seed,
-        "sweeps": config.label.batch_sweeps, "model": to_dict(config.model),
-    }
+def batch_recipe(config: ExperimentConfig, info: StoreInfo) -> Recipe:
+    """What a map's batch reference depends on (:mod:`curiosity_cli.recipes`)."""
+    return Recipe({
+        "format": LABEL_FORMAT, "store": info.path.name, "vocabulary_hashes": info.vocabulary_hashes,
+        "seed": config.seed, "sweeps": config.label.batch_sweeps, "model": to_dict(config.model),
+    })
+
+
+def label_recipe(run: str, batch: str, config: ExperimentConfig, human: str | None) -> Recipe:
+    """What a run's label file depends on: the digests of its ``run`` and ``batch`` reference, and of the ``human`` labels."""
+    return Recipe({
+        "format": LABEL_FORMAT, "run": run, "batch": batch, "label": to_dict(config.label),
+        "class_share_percent": CLASS_SHARE_PERCENT, "human": human,
+    })
 
 
 #: What every label file's ``meta`` names: a file without one of these is corrupt.
@@ -173,21 +189,23 @@ def read_meta(npz, required: tuple[str, ...] = ()) -> dict:
     return meta
 
 
-def _batch_is_current(path: Path, config: ExperimentConfig, info: StoreInfo) -> bool:
-    """Whether a batch reference file exists and was made from this store with these settings.
+def _batch_is_current(path: Path, recipe: Recipe) -> bool:
+    """Whether a batch reference file exists and was made from ``recipe``.
 
-    A corrupt one is not, and is noted on stderr as computed again.
+    A corrupt one is not, nor one made otherwise; each is noted on stderr, saying why,
+    as computed again.
     """
     try:
         with open_npz(path) as npz:
-            stored = read_meta(npz)
+            change = recipe.changes(read_meta(npz))
     except FileNotFoundError:
         return False
     except CorruptFileError as exc:
         note(f"{exc}; computing it again")
         return False
-    stored.pop("seconds", None)
-    return stored == _batch_meta(config, info.path.name, info.vocabulary_hashes)
+    if change is not None:
+        note(f"{display_path(path)}: {change}; computing it again")
+    return change is None
 
 
 def _compute_batch(
@@ -207,8 +225,8 @@ def _compute_batch(
     return pixel_labels(store, word_labels, image_shape), word_labels, trace, seconds
 
 
-def _write_batch(path: Path, config: ExperimentConfig, info: StoreInfo, labels, word_labels, trace, seconds: float) -> None:
-    meta = {**_batch_meta(config, info.path.name, info.vocabulary_hashes), "seconds": round(seconds, 2)}
+def _write_batch(path: Path, recipe: Recipe, labels, word_labels, trace, seconds: float) -> None:
+    meta = {"recipe": recipe.record(), "seconds": round(seconds, 2)}
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as handle:
@@ -335,32 +353,20 @@ def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None
             np.savez_compressed(handle, **arrays, meta=json.dumps(meta, sort_keys=True))
 
 
-def is_labelled(folder: Path, run_meta: dict, config: ExperimentConfig) -> bool:
-    """Whether a run's label file exists and was made from this run with these settings.
+def label_changes(path: Path, recipe: Recipe) -> str | None:
+    """Why a run's label file at ``path`` must be made again, in words; ``None`` when it was made from ``recipe``.
 
-    A map's file with human contingency tables but no classes found at the current
-    ``CLASS_SHARE_PERCENT`` (made before they were recorded) is not current. Nor is a
-    corrupt one, which is noted on stderr as labelled again.
+    A missing file gives :data:`NOT_LABELLED`; a corrupt one is noted on stderr as
+    labelled again.
     """
-    path = label_path(folder, run_meta["dataset"], run_meta["weight_function"], run_meta["restart"])
     try:
         with open_npz(path) as npz:
-            meta = read_meta(npz, LABEL_META_KEYS)
-            members = set(npz.files)
+            return recipe.changes(read_meta(npz, LABEL_META_KEYS))
     except FileNotFoundError:
-        return False
+        return NOT_LABELLED
     except CorruptFileError as exc:
         note(f"{exc}; labelling the run again")
-        return False
-    # a file from before classes found were recorded, or with another share, is redone
-    classes_current = "human" not in members or (
-        "class_first_step" in members and meta.get("class_share_percent") == CLASS_SHARE_PERCENT
-    )
-    return (
-        meta["run_seed"] == run_meta["seed"] and meta["store"] == run_meta["store"]
-        and meta["sweeps"] == config.label.sweeps and meta.get("warm_sweeps") == config.label.warm_sweeps
-        and classes_current
-    )
+        return str(exc)
 
 
 def label_experiment(
@@ -381,7 +387,8 @@ def label_experiment(
     Parameters
     ----------
     config : ExperimentConfig
-        The experiment's settings.
+        The experiment's settings: its ``config.yaml``, whose ``label`` section may differ
+        (it is then recorded there, :func:`record_label_settings`).
     folder : Path
         The experiment folder: its runs are read and its labels written there, whatever
         its name (a copied or renamed experiment labels itself, not its original).
@@ -407,21 +414,26 @@ def label_experiment(
     Returns
     -------
     dict
-        ``labelled``, ``skipped``, ``batch_reused`` counts, ``seconds``, and ``left_out``:
-        a line per run folder without a ``run.json`` (not labelled), naming it.
+        ``labelled``, ``skipped``, ``batch_reused`` counts, ``seconds``, ``left_out``: a
+        line per run folder without a ``run.json`` (not labelled), naming it, and
+        ``relabelled``: a line per label file made again because it was made otherwise
+        (other settings, another run or batch reference), saying what changed.
 
     Raises
     ------
+    ConfigError
+        ``config`` differs from the saved one outside its ``label`` section.
     LabelError
-        No finished runs; or, after labelling the others, runs that could not be
-        labelled (corrupt, made from another word store, a task that raised, a batch
-        reference that failed), all of them named.
+        No finished runs; runs made otherwise than ``config`` makes them (before any
+        work, naming them); or, after labelling the others, runs that could not be
+        labelled (corrupt, a task that raised, a batch reference that failed), all of
+        them named.
     ParameterError, BackendError
         As :class:`~curiosity_cli.parallel.Workers`; and a Dask scheduler that cannot be
         reached or has unusable workers.
     """
     from curiosity_cli.explore.grid import prepare_stores
-    from curiosity_cli.explore.runs import RunError, read_run
+    from curiosity_cli.explore.runs import RunError
     from curiosity_cli.parallel import Workers
     from curiosity_cli.words.store import load_store
 
@@ -429,32 +441,44 @@ def label_experiment(
     owned = Workers(backend, scheduler, jobs) if workers is None else None  # checks the backend before any work
     workers = workers or owned
     folder = Path(folder)
+    record_label_settings(folder, config)
     stores = prepare_stores(config, cache_dir)
-    names = {info.name for info in stores.values()}
-    folders = sorted(p for p in (folder / "runs").glob("*/*/restart-*") if p.parent.parent.name in names)
+    by_name = {info.name: info for info in stores.values()}
+    folders = sorted(p for p in (folder / "runs").glob("*/*/restart-*") if p.parent.parent.name in by_name)
     runs = [p for p in folders if (p / "run.json").is_file()]
     left_out = [
         f"{display_path(p)}: no run.json; run `curiosity explore` to redo it" for p in folders if p not in runs
     ]
     if not runs:
         raise LabelError(f"{display_path(folder / 'runs')}: no finished runs; run `curiosity explore` first")
+    finished, problems = _runs_as_configured(folder, runs, config, by_name)
 
     with owned or contextlib.nullcontext():  # new workers (a local cluster) stop with the labelling
-        batch_files, reused, problems = _batch_references(folder, config, stores, workers, force, on_stage, on_done)
+        batch_files, reused, batch_problems = _batch_references(folder, config, stores, workers, force, on_stage, on_done)
+        problems += batch_problems
         inputs = {
             info.name: MapInputs(info.name, entry, str(info.path), str(batch_files[info.name]))
             for entry, info in stores.items() if info.name in batch_files
         }
-        skipped, tasks = 0, []
-        for run_path in runs:
-            try:
-                run = read_run(run_path)
-                if not force and is_labelled(folder, run.meta, config):
-                    skipped += 1
-                elif run_path.parent.parent.name in inputs:  # else its batch reference failed, named in problems
-                    tasks.append(_run_task(run, inputs[run_path.parent.parent.name]))
-            except (RunError, LabelError) as exc:
-                problems.append(str(exc))
+        skipped, tasks, recipes, relabelled = 0, [], {}, []
+        for run in finished:
+            info = by_name[run.meta["dataset"]]
+            recipe = label_recipe(recorded_digest(run.meta), batch_recipe(config, info).digest, config, info.labels_digest)
+            path = label_path(folder, info.name, run.meta["weight_function"], run.meta["restart"])
+            change = None if force else label_changes(path, recipe)
+            if not force and change is None:
+                skipped += 1
+                continue
+            if change not in (None, NOT_LABELLED):
+                relabelled.append(f"{display_path(path)}: {change}")
+            if info.name in inputs:  # else its batch reference failed, named in problems
+                try:
+                    tasks.append((RunInputs.of(run), inputs[info.name]))
+                    recipes[run.folder] = recipe
+                except RunError as exc:
+                    problems.append(str(exc))
+        if relabelled:
+            note(f"labelling {len(relabelled)} runs again whose label files were made otherwise, e.g. {relabelled[0]}")
         todo = len(runs) - skipped
         shipped = {}  # loky workers read the maps' files themselves
         if workers.ships:  # before the stage starts: an unusable cluster is the only message
@@ -475,7 +499,8 @@ def label_experiment(
                 if isinstance(outcome, str):
                     problems.append("{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome)
                 else:
-                    write_labels(folder, *outcome)
+                    arrays, examples, meta = outcome
+                    write_labels(folder, arrays, examples, {**meta, "recipe": recipes[run.folder].record()})
                     labelled += 1
                 if on_done is not None:
                     on_done()
@@ -486,8 +511,76 @@ def label_experiment(
         )
     return {
         "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": time.perf_counter() - started,
-        "left_out": left_out,
+        "left_out": left_out, "relabelled": relabelled,
     }
+
+
+def record_label_settings(folder: Path, config: ExperimentConfig) -> None:
+    """Write ``config`` as the experiment's ``config.yaml`` when only its ``label`` section differs.
+
+    Labels are made with the settings the folder records, so a label setting overridden
+    for one command becomes the experiment's, with a note saying which; every other
+    setting was fixed when the runs were explored.
+
+    Raises
+    ------
+    ConfigError
+        ``config`` differs from the saved config outside ``label``, naming the first key.
+    """
+    saved_path = Path(folder) / "config.yaml"
+    saved = to_dict(load_config(saved_path)) if saved_path.is_file() else {}
+    changed = list(differences(saved, to_dict(config)))
+    for keys, old, new in changed:
+        if keys[0] != "label" and saved:
+            raise ConfigError(
+                f"{'.'.join(keys)}: the experiment in {display_path(folder)} was explored with {old!r}, not {new!r}; "
+                "only label settings can change once its runs exist"
+            )
+    if not changed:
+        return
+    with atomic_path(saved_path) as tmp:
+        tmp.write_text(to_yaml(config))
+    if saved:
+        shown = ", ".join(f"{'.'.join(keys)}={new!r}" for keys, _, new in changed)
+        note(f"recorded {shown} in {display_path(saved_path)}; labels made otherwise are made again")
+
+
+def _runs_as_configured(folder: Path, runs: list[Path], config: ExperimentConfig, by_name: dict) -> tuple[list, list[str]]:
+    """The finished runs of ``runs`` read back, and a line for each that cannot be read.
+
+    Raises
+    ------
+    LabelError
+        Runs made otherwise than ``config`` and the maps' current word stores make them
+        (:func:`~curiosity_cli.explore.grid.run_recipe`): labelling them would compare
+        them with a batch reference and settings they were not made with.
+    """
+    from curiosity_cli.explore.grid import run_recipe
+    from curiosity_cli.explore.runs import RunError, read_run
+
+    finished, problems, otherwise = [], [], []
+    for run_path in runs:
+        try:
+            run = read_run(run_path)
+        except RunError as exc:
+            problems.append(str(exc))
+            continue
+        info = by_name[run_path.parent.parent.name]
+        change = run_recipe(
+            config, info.name, info.path.name, info.vocabulary_hashes, run.meta["weight_function"], run.meta["restart"],
+        ).changes(run.meta)
+        if change is None:
+            finished.append(run)
+        else:
+            otherwise.append(f"{display_path(run_path / 'run.json')}: {change}")
+    if otherwise:
+        more = f"; and {len(otherwise) - 1} more" if len(otherwise) > 1 else ""
+        raise LabelError(
+            f"{len(otherwise)} runs were made otherwise than {display_path(Path(folder) / 'config.yaml')} and the maps' "
+            f"words make them now ({otherwise[0]}{more}); restore the config, or run `curiosity explore --force` "
+            "to redo the runs"
+        )
+    return finished, problems
 
 
 def _batch_references(
@@ -506,7 +599,10 @@ def _batch_references(
 
     sweeps = config.label.batch_sweeps
     files = {info.name: batch_path(folder, info.name) for info in stores.values()}
-    stale = {entry: info for entry, info in stores.items() if force or not _batch_is_current(files[info.name], config, info)}
+    recipes = {info.name: batch_recipe(config, info) for info in stores.values()}
+    stale = {
+        entry: info for entry, info in stores.items() if force or not _batch_is_current(files[info.name], recipes[info.name])
+    }
     problems = []
 
     def swept(*_) -> None:
@@ -519,7 +615,7 @@ def _batch_references(
                 on_stage(f"batch reference {info.name}", sweeps)
             image_shape = load_map(entry).image.shape[:2]
             computed = _compute_batch(info, config, load_store(info.path), image_shape, threads=workers.jobs, on_sweep=swept)
-            _write_batch(files[info.name], config, info, *computed)
+            _write_batch(files[info.name], recipes[info.name], *computed)
     elif stale:
         threads = workers.whole_machine_threads(len(stale))  # reaches a scheduler first: no stage for an unusable one
         shapes = {info.name: load_map(entry).image.shape[:2] for entry, info in stale.items()}
@@ -536,28 +632,10 @@ def _batch_references(
                     problems.append(f"the batch reference of {info.name}: {outcome}; its runs were not labelled")
                     del files[info.name]
                 else:
-                    _write_batch(files[info.name], config, info, *outcome)
+                    _write_batch(files[info.name], recipes[info.name], *outcome)
                 for _ in range(sweeps):
                     swept()
     return files, len(stores) - len(stale), problems
-
-
-def _run_task(run: Run, inputs: MapInputs) -> tuple[RunInputs, MapInputs]:
-    """A run to label and its map, checked and read here (so a bad run is named without a worker).
-
-    Raises
-    ------
-    LabelError
-        The run was made from another word store than the map's current one.
-    RunError
-        Its checkpoints are missing or corrupt.
-    """
-    if run.meta["store"] != Path(inputs.store_path).name:
-        raise LabelError(
-            f"{display_path(run.folder)}: made from word store {run.meta['store']}, but {inputs.name}'s words are now "
-            f"{Path(inputs.store_path).name}; run `curiosity explore --force` to redo the runs"
-        )
-    return RunInputs.of(run), inputs
 
 
 def _label_task(

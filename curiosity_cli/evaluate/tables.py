@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import itertools
 import json
-from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -46,6 +45,7 @@ import numpy as np
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, open_npz
+from curiosity_cli.recipes import recorded_digest, recorded_inputs
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -83,7 +83,7 @@ class LabelRows:
 
     mi: list[dict]  # one per run and checkpoint
     classes: list[dict]  # one per run, checkpoint and class with pixels
-    skipped: list[str]  # files left out, runs without a label file, label files without classes found; each with why
+    skipped: list[str]  # files left out, runs without a label file; each with why
 
 
 def _read_label_file(path: Path) -> tuple[dict, dict]:
@@ -101,15 +101,6 @@ def _read_label_file(path: Path) -> tuple[dict, dict]:
         arrays = {"lengths": npz["lengths"], "batch": npz["batch"]}  # a file without them is corrupt (KeyError)
         arrays.update({name: npz[name] for name in ("human", "class_first_step") if name in npz.files})
     return meta, arrays
-
-
-def _first_steps(meta: dict, arrays: dict) -> np.ndarray | None:
-    """The label file's ``class_first_step`` if it was made at the current share, else None."""
-    from curiosity_cli.evaluate.labels import CLASS_SHARE_PERCENT
-
-    if "class_first_step" not in arrays or meta.get("class_share_percent") != CLASS_SHARE_PERCENT:
-        return None
-    return arrays["class_first_step"]
 
 
 def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None) -> tuple[list[dict], list[dict]]:
@@ -137,7 +128,7 @@ def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None
     )
 
     human, batch = arrays.get("human"), arrays["batch"]
-    first = _first_steps(meta, arrays) if human is not None else None
+    first = arrays.get("class_first_step")
     run = {"dataset": meta["dataset"], "weight_function": meta["weight_function"], "restart": meta["restart"]}
     rows, class_rows = [], []
     for i, length in enumerate(arrays["lengths"].tolist()):
@@ -173,9 +164,10 @@ def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None
 def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = None) -> LabelRows:
     """The table rows of every label file of an experiment, and the files left out, with why.
 
-    A label file of a map with human labels but without classes found at the current
-    share (made before they were recorded) keeps its MI and recall rows; its
-    ``classes_found`` is NaN, and a note per map says so and how to redo the files.
+    Every label file must have been made from its run and its map's batch reference as
+    they are now and with the label settings of the experiment's ``config.yaml``, and
+    every run with the settings there (:mod:`curiosity_cli.recipes`); the human labels'
+    digest is taken as recorded, as evaluating reads no map.
 
     Parameters
     ----------
@@ -187,19 +179,20 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
     Raises
     ------
     EvaluationError
-        No label files at all, a missing or corrupt batch reference, or a label file
-        whose run or batch reference was made from another word store (naming both stores).
+        No label files at all, no readable ``config.yaml``, a missing or corrupt batch
+        reference, or label files or runs made otherwise (naming them and what changed).
     """
-    from curiosity_cli.evaluate.labels import CLASS_SHARE_PERCENT, batch_path
+    from curiosity_cli.evaluate.labels import batch_path, label_recipe
+    from curiosity_cli.explore.grid import run_recipe
     from curiosity_cli.explore.runs import RunError, read_run, run_folder
 
     folder = Path(folder)
     files = sorted((folder / "labels").glob("*/*/restart-*.npz"))
     if not files:
         raise EvaluationError(f"{display_path(folder / 'labels')}: no label files; run `curiosity label` first")
-    rows, class_rows, skipped = [], [], []
-    batch_stores = {}
-    without_classes = Counter()
+    config = _saved_config(folder)
+    rows, class_rows, skipped, otherwise = [], [], [], []
+    batch_digests = {}
     for path in files:
         try:
             meta, arrays = _read_label_file(path)
@@ -212,35 +205,52 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
         except RunError as exc:
             skipped.append(str(exc))
             continue
-        if (run.meta["store"], run.meta["vocabulary_hashes"]) != (meta["store"], meta["vocabulary_hashes"]):
-            raise EvaluationError(
-                f"{display_path(path)}: labels made from word store {meta['store']}, but the run "
-                f"{display_path(run_path)} from {run.meta['store']}; run `curiosity label --force`"
-            )
-        if meta["dataset"] not in batch_stores:
-            batch_stores[meta["dataset"]] = _batch_store(batch_path(folder, meta["dataset"]))
-        if batch_stores[meta["dataset"]] != meta["store"]:
-            raise EvaluationError(
-                f"{display_path(path)}: labels made from word store {meta['store']}, but the batch reference "
-                f"{display_path(batch_path(folder, meta['dataset']))} from {batch_stores[meta['dataset']]}; "
-                "run `curiosity label --force`"
-            )
-        if "human" in arrays and _first_steps(meta, arrays) is None:
-            without_classes[meta["dataset"]] += 1
+        run_change = run_recipe(
+            config, run.meta["dataset"], run.meta["store"], run.meta["vocabulary_hashes"], run.meta["weight_function"],
+            run.meta["restart"],
+        ).changes(run.meta)
+        if run_change is not None:
+            otherwise.append(f"{display_path(run_path / 'run.json')}: {run_change}")
+            continue
+        if meta["dataset"] not in batch_digests:
+            batch_digests[meta["dataset"]] = _batch_digest(batch_path(folder, meta["dataset"]))
+        human = recorded_inputs(meta).get("human")  # evaluating reads no map: taken as recorded
+        change = label_recipe(recorded_digest(run.meta), batch_digests[meta["dataset"]], config, human).changes(meta)
+        if change is not None:
+            otherwise.append(f"{display_path(path)}: {change}")
+            continue
         mi, classes = run_rows(meta, arrays, (class_names or {}).get(meta["dataset"]))
         rows += mi
         class_rows += classes
-    for dataset, count in without_classes.items():
-        skipped.append(
-            f"{display_path(folder / 'labels' / dataset)}: classes found left out of {count} label files made before "
-            f"they were recorded (or at another share than {CLASS_SHARE_PERCENT} %); run `curiosity label` to redo them"
+    if otherwise:
+        more = f"; and {len(otherwise) - 1} more" if len(otherwise) > 1 else ""
+        raise EvaluationError(
+            f"{len(otherwise)} label files or runs were made otherwise than {display_path(folder / 'config.yaml')} "
+            f"and the files they come from say ({otherwise[0]}{more}); run `curiosity label` to label them again "
+            "(`curiosity explore --force` first for runs)"
         )
     skipped += _unlabelled_runs(folder, files)
     return LabelRows(rows, class_rows, skipped)
 
 
-def _batch_store(path: Path) -> str:
-    """The word store a map's batch reference was made from.
+def _saved_config(folder: Path):
+    """The experiment's ``config.yaml``, which says with what settings its files must have been made.
+
+    Raises
+    ------
+    EvaluationError
+        It is missing or does not validate.
+    """
+    from curiosity_cli.config import load_config
+
+    path = Path(folder) / "config.yaml"
+    if not path.is_file():
+        raise EvaluationError(f"{display_path(path)}: not found; an experiment folder written by `curiosity explore` has it")
+    return load_config(path)
+
+
+def _batch_digest(path: Path) -> str | None:
+    """The recipe digest of a map's batch reference (None if it records none).
 
     Raises
     ------
@@ -251,7 +261,7 @@ def _batch_store(path: Path) -> str:
 
     try:
         with open_npz(path) as npz:
-            return read_meta(npz)["store"]
+            return recorded_digest(read_meta(npz))
     except FileNotFoundError:
         raise EvaluationError(f"{display_path(path)}: not found; run `curiosity label` to make it") from None
     except CorruptFileError as exc:

@@ -25,7 +25,9 @@ Design, in the order a grid runs:
 - **Resumable.** Finished runs are skipped unless ``force``; the experiment folder
   keeps the resolved config, ``provenance.yaml`` (seed, version, commit) and
   ``runs.csv`` (every run's start cell and seed). A resumed grid must agree with the
-  saved config on everything that changes a run's numbers.
+  saved config on everything that changes a run's numbers, and every finished run with
+  the recipe this config gives it (:mod:`curiosity_cli.recipes`): a run made otherwise
+  is refused by name before anything is written, or redone with ``force``.
 """
 
 from __future__ import annotations
@@ -44,11 +46,14 @@ from curiosity_cli.config import ExperimentConfig, load_config, to_dict, to_yaml
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.parallel import Workers
+from curiosity_cli.recipes import Recipe, differences
 
 #: The config sections a run's numbers depend on ...
 _RUN_SECTIONS = ("seed", "model", "words", "explore")
 #: ... except these keys, which choose which runs a grid holds.
 _SELECTION_KEYS = {("explore", "weight_functions"), ("explore", "restarts")}
+#: Runs whose recipes differ that a refusal names besides the first.
+_NAMED_STALE = 2
 
 
 class GridError(CuriosityError):
@@ -78,6 +83,7 @@ class StoreInfo:
     vocabulary_hashes: list[str]
     word_counts: dict[str, int]  # words of each kind ("orb", "texton", "hue")
     stands_in_for: str | None  # the paper's map it compares with
+    labels_digest: str | None  # of the map's human labels (MapData.labels_digest)
 
 
 @dataclass(frozen=True)
@@ -110,6 +116,25 @@ def start_cells(seed: int, dataset: str, n_cells: int, restarts: int) -> np.ndar
         raise ConfigError(f"explore.restarts: got {restarts}, but {dataset} has only {n_cells} cells to start from")
     rng = np.random.default_rng(np.random.SeedSequence((seed, name_key(dataset))))
     return rng.permutation(n_cells)[:restarts].astype(np.int64)
+
+
+def run_recipe(
+    config: ExperimentConfig, dataset: str, store: str, vocabulary_hashes: list[str], weight_function: str, restart: int,
+) -> Recipe:
+    """What one run's numbers depend on (:mod:`curiosity_cli.recipes`).
+
+    ``store`` is the file name of the map's word store, which hashes the image's pixels,
+    the word settings and the vocabularies. The start cell and the seed entropy follow
+    from the map, the experiment seed and the restart.
+    """
+    explore = {
+        key: value for key, value in to_dict(config.explore).items() if ("explore", key) not in _SELECTION_KEYS
+    }
+    return Recipe({
+        "store": store, "vocabulary_hashes": vocabulary_hashes, "dataset": dataset,
+        "weight_function": weight_function, "restart": restart, "seed": config.seed,
+        "model": to_dict(config.model), "explore": explore,
+    })
 
 
 def plan_runs(config: ExperimentConfig, stores: dict[str, StoreInfo]) -> list[RunTask]:
@@ -158,7 +183,7 @@ def check_saved_config(folder: Path, config: ExperimentConfig) -> None:
         return
     saved = to_dict(load_config(saved_path))
     current = to_dict(config)
-    for keys, old, new in _differences({k: saved.get(k) for k in _RUN_SECTIONS}, {k: current[k] for k in _RUN_SECTIONS}):
+    for keys, old, new in differences({k: saved.get(k) for k in _RUN_SECTIONS}, {k: current[k] for k in _RUN_SECTIONS}):
         if keys not in _SELECTION_KEYS:
             raise ConfigError(
                 f"{display_path(saved_path)}: {'.'.join(keys)} was {old!r} for the runs already there, now {new!r}; "
@@ -178,14 +203,6 @@ def _check_inside(path: Path, root: Path, what: str) -> None:
             f"{what}: {display_path(path)} is not inside {display_path(root)}; "
             "expected a name without '/' or '..'"
         )
-
-
-def _differences(old, new, keys: tuple = ()):
-    if isinstance(old, dict) and isinstance(new, dict):
-        for key in sorted(set(old) | set(new)):
-            yield from _differences(old.get(key), new.get(key), keys + (key,))
-    elif old != new:
-        yield keys, old, new
 
 
 def run_grid(
@@ -212,7 +229,7 @@ def run_grid(
         Worker processes (of ``loky``, or of the local Dask cluster); default the number
         of cores. Ignored with a ``scheduler``: the cluster's worker threads decide.
     force : bool
-        Redo finished runs too.
+        Redo finished runs too, those made from other recipes included.
     on_prepared : callable, optional
         Called as ``on_prepared(to_run, skipped)`` before the first run starts.
     on_run : callable, optional
@@ -229,7 +246,8 @@ def run_grid(
     Raises
     ------
     ConfigError
-        A saved config that disagrees, or a map too small for the grid.
+        A saved config that disagrees, finished runs made from other recipes (without
+        ``force``), or a map too small for the grid.
     ParameterError
         An unknown backend, or a scheduler without ``backend="dask"``.
     BackendError
@@ -239,7 +257,7 @@ def run_grid(
     GridError
         After the whole grid, if some runs raised or kept killing their Dask workers: each named, with its error.
     """
-    from curiosity_cli.explore.runs import is_complete, remove_partial_runs, run_folder
+    from curiosity_cli.explore.runs import finished_meta, remove_partial_runs, run_folder
     from curiosity_cli.words.store import load_store
 
     started = time.perf_counter()
@@ -253,10 +271,28 @@ def run_grid(
     for task in tasks:
         _check_inside(run_folder(folder, task.dataset, task.weight_function, task.restart), folder, task.dataset)
     by_name = {info.name: info for info in stores.values()}
+    recipes = {
+        t: run_recipe(config, t.dataset, Path(t.store_path).name, by_name[t.dataset].vocabulary_hashes, t.weight_function,
+                      t.restart)
+        for t in tasks
+    }
+    todo, stale = [], []
+    for task in tasks:
+        run_path = run_folder(folder, task.dataset, task.weight_function, task.restart)
+        meta = None if force else finished_meta(run_path)
+        if meta is None:
+            todo.append(task)
+        elif (change := recipes[task].changes(meta)) is not None:
+            stale.append(f"{display_path(run_path / 'run.json')}: {change}")
+    if stale:
+        named = "; ".join(stale[:_NAMED_STALE]) + (f"; and {len(stale) - _NAMED_STALE} more" if len(stale) > _NAMED_STALE else "")
+        raise ConfigError(
+            f"{len(stale)} finished runs were made otherwise than this config makes them ({named}); "
+            "use another experiment name or results folder, or --force to redo them"
+        )
     _write_experiment_files(folder, config, tasks, by_name)
     remove_partial_runs(folder)
 
-    todo = [t for t in tasks if force or not is_complete(run_folder(folder, t.dataset, t.weight_function, t.restart))]
     if on_prepared is not None:
         on_prepared(len(todo), len(tasks) - len(todo))
     failed, fallbacks, written = [], 0, 0
@@ -275,7 +311,7 @@ def run_grid(
                     failed.append(f"{task.dataset} / {task.weight_function} / restart {task.restart}: {outcome}")
                 else:
                     exploration, seconds = outcome
-                    size = _write(folder, task, exploration, seconds, config, by_name[task.dataset])
+                    size = _write(folder, task, exploration, seconds, recipes[task], config, by_name[task.dataset])
                     fallbacks += int(exploration.fallback.sum())
                     written += size
                 if on_run is not None:
@@ -310,7 +346,7 @@ def prepare_stores(config: ExperimentConfig, cache_dir: Path) -> dict[str, Store
         store = extraction.store
         stores[entry] = StoreInfo(
             name, extraction.path, store.grid_shape, store.vocabulary_size, [t.sha256 for t in store.types],
-            store.count_by_type(), map_data.config.stands_in_for,
+            store.count_by_type(), map_data.config.stands_in_for, map_data.labels_digest,
         )
     return stores
 
@@ -341,7 +377,9 @@ def compute_run(task: RunTask, config: ExperimentConfig, store=None, *, threads:
     return exploration, time.perf_counter() - started
 
 
-def _write(folder: Path, task: RunTask, exploration, seconds: float, config: ExperimentConfig, store: StoreInfo) -> int:
+def _write(
+    folder: Path, task: RunTask, exploration, seconds: float, recipe: Recipe, config: ExperimentConfig, store: StoreInfo,
+) -> int:
     from curiosity_cli import __version__
     from curiosity_cli.explore.runs import run_folder, write_run
 
@@ -364,6 +402,7 @@ def _write(folder: Path, task: RunTask, exploration, seconds: float, config: Exp
         "words_sampled": int(exploration.words_sampled.sum()),
         "seconds": round(seconds, 3),
         "curiosity": __version__,
+        "recipe": recipe.record(),
     }
     return write_run(run_folder(folder, task.dataset, task.weight_function, task.restart), exploration, meta, grid_shape[1])
 

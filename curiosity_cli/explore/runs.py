@@ -9,8 +9,9 @@
 - ``checkpoints.npz`` (compressed): the path's cells and, for every checkpoint length
   ``L``, the non-zero word-topic counts Φ_p as ``L/words``, ``L/topics``, ``L/counts``;
 - ``run.json``: what the run was (dataset, weight function, restart, start cell, seed,
-  word store, vocabulary hashes, model parameters) and what it cost (seconds, and
-  ``bytes``: the size of the three files above).
+  word store, vocabulary hashes, model parameters), its ``recipe``
+  (:mod:`curiosity_cli.recipes`) and what it cost (seconds, and ``bytes``: the size of
+  the three files above).
 
 The folder is built under a hidden temporary name and renamed into place, so a folder
 under its real name is always complete; a killed writer leaves only a hidden
@@ -149,20 +150,20 @@ class Run:
         return SparseCounts(words, topics, counts, (self.meta["vocabulary_size"], self.meta["n_topics"])).dense()
 
 
-def is_complete(folder: Path) -> bool:
-    """Whether a run folder exists under its real name (so it was written whole) and reads back.
+def finished_meta(folder: Path) -> dict | None:
+    """The ``run.json`` of a run folder that exists under its real name (so it was written whole) and reads back.
 
-    A folder whose ``run.json`` or ``checkpoints.npz`` is corrupt counts as not done,
-    with a note on stderr, so that the grid redoes just that run.
+    ``None`` for a folder not there; also for one whose ``run.json`` or
+    ``checkpoints.npz`` is corrupt, with a note on stderr, so that the grid redoes just
+    that run.
     """
     if not (Path(folder) / "run.json").is_file():
-        return False
+        return None
     try:
-        _read(Path(folder))
+        return _read(Path(folder)).meta
     except RunError as exc:
         note(f"{exc}; redoing the run")
-        return False
-    return True
+        return None
 
 
 def read_run(folder: Path) -> Run:

@@ -8,6 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from curiosity_cli.config import LabelConfig
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.evaluate.information import (
     cell_class_pixels,
@@ -17,8 +18,16 @@ from curiosity_cli.evaluate.information import (
     matched_recall,
     mean_recall,
 )
-from curiosity_cli.evaluate.labels import CLASS_SHARE_PERCENT, is_labelled, label_path, write_labels
+from curiosity_cli.evaluate.labels import (
+    CLASS_SHARE_PERCENT,
+    NOT_LABELLED,
+    label_changes,
+    label_path,
+    label_recipe,
+    write_labels,
+)
 from curiosity_cli.evaluate.tables import run_rows
+from curiosity_cli.recipes import Recipe
 
 
 def test_cell_class_pixels_counts_each_cell_with_partial_border_cells_of_their_own():
@@ -163,22 +172,30 @@ def test_run_rows_give_classes_found_recall_and_first_steps_per_checkpoint():
     assert first[2:] == [(12, "sand", True, 0.0, 0, 1.0), (12, "rock", True, 7.0, 1, 1.0)]
 
 
-def test_an_old_label_file_without_classes_found_is_not_current_and_leaves_them_empty(tmp_path):
-    config = SimpleNamespace(label=SimpleNamespace(sweeps=2, warm_sweeps=1))
-    run_meta = {"dataset": "own", "weight_function": "random-walk", "restart": 1, "seed": [0, 1], "store": "s.npz"}
-    write_labels(tmp_path, label_file_arrays(first_step=False), {}, label_meta())
-    assert not is_labelled(tmp_path, run_meta, config)
+def test_a_label_file_is_current_only_for_the_recipe_it_was_made_from(tmp_path):
+    config = SimpleNamespace(label=LabelConfig(sweeps=2, warm_sweeps=1, batch_sweeps=3))
+    recipe = label_recipe("run-digest", "batch-digest", config, "human-digest")
+    path = label_path(tmp_path, "own", "random-walk", 1)
+    assert label_changes(path, recipe) == NOT_LABELLED
+    write_labels(tmp_path, label_file_arrays(), {}, label_meta())  # from before recipes were recorded
+    assert label_changes(path, recipe) == "made before recipes were recorded"
+    write_labels(tmp_path, label_file_arrays(), {}, label_meta(recipe=recipe.record()))
+    assert label_changes(path, recipe) is None
+    # another share of a cell makes a class found; other sweeps; a batch reference made again
+    other_share = Recipe({**recipe.inputs, "class_share_percent": CLASS_SHARE_PERCENT + 5})
+    assert label_changes(path, other_share) == f"class_share_percent was {CLASS_SHARE_PERCENT}, now {CLASS_SHARE_PERCENT + 5}"
+    more_sweeps = SimpleNamespace(label=LabelConfig(sweeps=4, warm_sweeps=1, batch_sweeps=3))
+    assert label_changes(path, label_recipe("run-digest", "batch-digest", more_sweeps, "human-digest")) == (
+        "label.sweeps was 2, now 4"
+    )
+    assert label_changes(path, label_recipe("run-digest", "new-batch", config, "human-digest")) == (
+        "the batch reference changed"
+    )
+    with np.load(path) as npz:
+        assert json.loads(str(npz["meta"]))["restart"] == 1
+
+
+def test_a_label_file_without_classes_found_leaves_them_empty():
     rows, classes = run_rows(label_meta(), label_file_arrays(first_step=False))
     assert all(np.isnan(r["classes_found"]) for r in rows) and rows[0]["mean_recall"] == pytest.approx(0.75)
     assert all(np.isnan(c["found"]) and np.isnan(c["first_step"]) for c in classes)
-    # made at another share: not current either, and not used
-    write_labels(tmp_path, label_file_arrays(), {}, label_meta(class_share_percent=CLASS_SHARE_PERCENT + 5))
-    assert not is_labelled(tmp_path, run_meta, config)
-    assert np.isnan(run_rows(label_meta(class_share_percent=CLASS_SHARE_PERCENT + 5), label_file_arrays())[0][0]["classes_found"])
-    write_labels(tmp_path, label_file_arrays(), {}, label_meta(class_share_percent=CLASS_SHARE_PERCENT))
-    assert is_labelled(tmp_path, run_meta, config)
-    # a map without human labels needs no classes found
-    write_labels(tmp_path, {"lengths": np.array([5], np.int32), "batch": np.eye(2, dtype=int)[None]}, {}, label_meta())
-    assert is_labelled(tmp_path, run_meta, config)
-    with np.load(label_path(tmp_path, "own", "random-walk", 1)) as npz:
-        assert json.loads(str(npz["meta"]))["restart"] == 1

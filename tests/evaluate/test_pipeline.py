@@ -16,6 +16,7 @@ from curiosity_cli.evaluate.labels import LabelError, batch_path, example_path, 
 from curiosity_cli.evaluate.tables import EvaluationError, evaluate_experiment
 from curiosity_cli.explore.grid import run_grid
 from curiosity_cli.explore.runs import read_run, run_folder
+from curiosity_cli.recipes import Recipe
 from curiosity_cli.words.store import load_store
 
 runner = CliRunner()
@@ -104,17 +105,21 @@ def test_a_corrupt_label_file_is_reported_and_left_out(own_map, tmp_path):
     assert json.loads((folder / "skipped.json").read_text()) == evaluation.skipped
 
 
-def test_labels_from_another_word_store_are_refused_naming_both(own_map, tmp_path):
+def test_labels_of_a_run_made_again_from_other_words_are_refused_naming_what_changed(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     meta_path = run_folder(folder, "own", "random-walk", 0) / "run.json"
     meta = json.loads(meta_path.read_text())
-    real = meta["store"]
-    meta["store"] = "own-0000000000000000.npz"
+    real, other = meta["store"], "own-0000000000000000.npz"
+    # the run as explored again from another word store: its recipe records that store
+    meta["store"] = other
+    meta["recipe"] = Recipe({**meta["recipe"]["inputs"], "store": other}).record()
     meta_path.write_text(json.dumps(meta))
-    with pytest.raises(EvaluationError, match=f"labels made from word store {real}, but the run .* from own-0000000000000000.npz"):
+    with pytest.raises(EvaluationError, match=r"1 label files or runs were made otherwise .*random-walk/restart-000.npz: "
+                                              r"its run changed\); run `curiosity label`"):
         evaluate_experiment(folder)
-    with pytest.raises(LabelError, match=f"made from word store own-0000000000000000.npz, but own's words are now {real}"):
+    with pytest.raises(LabelError, match=f"1 runs were made otherwise .*restart-000/run.json: store was '{other}', "
+                                         f"now '{real}'\\); restore the config, or run `curiosity explore --force`"):
         label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1, force=True)
 
 

@@ -14,6 +14,13 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+#: The experiment the reliability cases break (``tests/reliability/conftest.py``), and its commands.
+EXPERIMENT = "results/grid"
+# two worker processes: a worker's error must come back as one line too
+FAST_LABELS = ["--jobs", "2", "--set", "label.sweeps=2", "--set", "label.batch_sweeps=5"]
+LABEL = ["label", EXPERIMENT, *FAST_LABELS]
+EXPLORE = ["explore", "grid.yaml", "--jobs", "2"]
+
 
 @dataclass(frozen=True)
 class Outcome:

@@ -20,42 +20,25 @@ from pathlib import Path
 
 import pytest
 import yaml
-from cli_cases import assert_clean_error, assert_written_only_inside, files_under, run_cli
-from small_maps import grid_yaml, write_own_map
+from cli_cases import (
+    EXPERIMENT,
+    EXPLORE,
+    FAST_LABELS,
+    LABEL,
+    assert_clean_error,
+    assert_written_only_inside,
+    files_under,
+    run_cli,
+)
 
 from curiosity_cli.config import load_config
 from curiosity_cli.evaluate.report import write_report
 from curiosity_cli.evaluate.tables import evaluate_experiment
 from curiosity_cli.files import atomic_path, display_path, os_error_message
 
-EXPERIMENT = "results/grid"
-# two worker processes: a worker's error must come back as one line too
-FAST_LABELS = ["--jobs", "2", "--set", "label.sweeps=2", "--set", "label.batch_sweeps=5"]
-LABEL = ["label", EXPERIMENT, *FAST_LABELS]
-EXPLORE = ["explore", "grid.yaml", "--jobs", "2"]
 RUN = f"{EXPERIMENT}/runs/own/random-walk/restart-000"
 LABEL_FILE = f"{EXPERIMENT}/labels/own/random-walk/restart-000.npz"
 BATCH = f"{EXPERIMENT}/batch/own.npz"
-
-
-@pytest.fixture(scope="module")
-def experiment(tmp_path_factory) -> Path:
-    """A folder holding the own map, ``grid.yaml`` and ``results/grid`` explored, labelled and evaluated."""
-    root = tmp_path_factory.mktemp("experiment")
-    grid_yaml(write_own_map(root), root)
-    for args in (EXPLORE, LABEL, ["evaluate", EXPERIMENT]):
-        outcome = run_cli(args, cwd=root)
-        assert outcome.code == 0, outcome.output
-    return root
-
-
-@pytest.fixture
-def work(experiment: Path, tmp_path: Path) -> Path:
-    """A copy of the experiment's config and results to break (the map stays where the config names it)."""
-    shutil.copy(experiment / "grid.yaml", tmp_path)
-    shutil.copytree(experiment / "results", tmp_path / "results")
-    (tmp_path / "a-file").write_text("not a folder\n")
-    return tmp_path
 
 
 def _truncate(path: Path) -> None:
