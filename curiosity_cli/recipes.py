@@ -87,6 +87,11 @@ def differences(old, new, keys: tuple = ()) -> Iterator[tuple[tuple, object, obj
         yield keys, old, new
 
 
+def first_of(lines: list[str]) -> str:
+    """The first of several lines of files made otherwise, and how many more there are, for one error line."""
+    return lines[0] + (f"; and {len(lines) - 1} more" if len(lines) > 1 else "")
+
+
 def _in_words(keys: tuple, old, new) -> str:
     name = ".".join(map(str, keys))
     if name in _DIGEST_INPUTS:

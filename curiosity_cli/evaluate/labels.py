@@ -52,7 +52,7 @@ import numpy as np
 from curiosity_cli.config import ExperimentConfig, load_config, to_dict, to_yaml
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz
-from curiosity_cli.recipes import Recipe, differences, recorded_digest
+from curiosity_cli.recipes import Recipe, differences, first_of, recorded_digest
 
 if TYPE_CHECKING:
     from curiosity_cli.evaluate.labeling import PathLabeller
@@ -574,10 +574,9 @@ def _runs_as_configured(folder: Path, runs: list[Path], config: ExperimentConfig
         else:
             otherwise.append(f"{display_path(run_path / 'run.json')}: {change}")
     if otherwise:
-        more = f"; and {len(otherwise) - 1} more" if len(otherwise) > 1 else ""
         raise LabelError(
             f"{len(otherwise)} runs were made otherwise than {display_path(Path(folder) / 'config.yaml')} and the maps' "
-            f"words make them now ({otherwise[0]}{more}); restore the config, or run `curiosity explore --force` "
+            f"words make them now ({first_of(otherwise)}); restore the config, or run `curiosity explore --force` "
             "to redo the runs"
         )
     return finished, problems

@@ -45,7 +45,7 @@ import numpy as np
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, open_npz
-from curiosity_cli.recipes import recorded_digest, recorded_inputs
+from curiosity_cli.recipes import first_of, recorded_digest, recorded_inputs
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -223,10 +223,9 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
         rows += mi
         class_rows += classes
     if otherwise:
-        more = f"; and {len(otherwise) - 1} more" if len(otherwise) > 1 else ""
         raise EvaluationError(
             f"{len(otherwise)} label files or runs were made otherwise than {display_path(folder / 'config.yaml')} "
-            f"and the files they come from say ({otherwise[0]}{more}); run `curiosity label` to label them again "
+            f"and the files they come from say ({first_of(otherwise)}); run `curiosity label` to label them again "
             "(`curiosity explore --force` first for runs)"
         )
     skipped += _unlabelled_runs(folder, files)

@@ -46,14 +46,12 @@ from curiosity_cli.config import ExperimentConfig, load_config, to_dict, to_yaml
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.parallel import Workers
-from curiosity_cli.recipes import Recipe, differences
+from curiosity_cli.recipes import Recipe, differences, first_of
 
 #: The config sections a run's numbers depend on ...
 _RUN_SECTIONS = ("seed", "model", "words", "explore")
 #: ... except these keys, which choose which runs a grid holds.
 _SELECTION_KEYS = {("explore", "weight_functions"), ("explore", "restarts")}
-#: Runs whose recipes differ that a refusal names besides the first.
-_NAMED_STALE = 2
 
 
 class GridError(CuriosityError):
@@ -285,9 +283,8 @@ def run_grid(
         elif (change := recipes[task].changes(meta)) is not None:
             stale.append(f"{display_path(run_path / 'run.json')}: {change}")
     if stale:
-        named = "; ".join(stale[:_NAMED_STALE]) + (f"; and {len(stale) - _NAMED_STALE} more" if len(stale) > _NAMED_STALE else "")
         raise ConfigError(
-            f"{len(stale)} finished runs were made otherwise than this config makes them ({named}); "
+            f"{len(stale)} finished runs were made otherwise than this config makes them ({first_of(stale)}); "
             "use another experiment name or results folder, or --force to redo them"
         )
     _write_experiment_files(folder, config, tasks, by_name)
