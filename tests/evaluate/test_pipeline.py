@@ -193,3 +193,41 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
     assert "labelled 0 runs" in result.stdout and "8 were up to date" in result.stdout
     result = runner.invoke(app, ["evaluate", str(folder)])
     assert result.exit_code == 0 and "wrote" in result.stdout and "(16 rows)" in result.stdout
+
+
+#: The tables `evaluate` writes; a resumed reproduction must give them byte for byte.
+TABLES = ("mi.csv", "summary.csv", "tests.csv", "effects.csv", "headline.csv", "classes.csv", "classes_summary.csv")
+
+
+@pytest.mark.slow
+def test_a_reproduction_killed_while_labelling_resumes_to_the_tables_of_an_uninterrupted_one(own_map, tmp_path):
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    config_path = grid_yaml(own_map, tmp_path)
+    # enough sweeps that labelling lasts long enough for the kill to land in it
+    command = [sys.executable, "-m", "curiosity_cli", "reproduce", str(config_path), "--jobs", "1",
+               "--cache-dir", str(tmp_path / "cache"), "--set", "label.sweeps=600", "--set", "label.warm_sweeps=200"]
+    whole = subprocess.run([*command, "--results-dir", str(tmp_path / "whole")], capture_output=True, text=True)
+    assert whole.returncode == 0, whole.stderr
+
+    killed = tmp_path / "killed" / "grid"
+    process = subprocess.Popen([*command, "--results-dir", str(tmp_path / "killed")],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline and not list((killed / "labels").glob("*/*/restart-*.npz")):
+        time.sleep(0.02)
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait()
+    labelled = len(list((killed / "labels").glob("*/*/restart-*.npz")))
+    assert 1 <= labelled < 8, "the kill should land while labelling"
+    assert not (killed / "mi.csv").exists()
+
+    resumed = subprocess.run([*command, "--results-dir", str(tmp_path / "killed")], capture_output=True, text=True)
+    assert resumed.returncode == 0, resumed.stderr
+    for table in TABLES:
+        assert (killed / table).read_bytes() == (tmp_path / "whole" / "grid" / table).read_bytes(), table
+    assert not list(killed.rglob("*.tmp*")), "no half-written file is left"
