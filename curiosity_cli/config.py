@@ -29,6 +29,9 @@ from curiosity_cli.yamlfile import SHOWN_CHARS, dump_yaml, parse_yaml, read_yaml
 PROJECT_ROOT = Path(__file__).resolve().parent.parent
 CONFIG_DIR = PROJECT_ROOT / "configs"
 DATASET_CONFIG_DIR = CONFIG_DIR / "datasets"
+#: The vocabularies shipped with the package, which a config names ``shipped`` (a saved
+#: config too, so that an experiment folder copied to another machine finds them there).
+SHIPPED_VOCABULARIES = {"shipped": PROJECT_ROOT / "data" / "vocab"}
 
 #: Where a value given on the command line with ``--set KEY=VALUE`` "comes from".
 _OVERRIDE = "--set"
@@ -52,11 +55,14 @@ def _spec(
     choices: tuple | None = None,
     must_exist: bool = False,
     file_name: bool = False,
+    named: dict[str, Path] | None = None,
     default: Any = dataclasses.MISSING,
 ):
     """A dataclass field with the checks the validator applies to it.
 
     ``file_name`` marks a string that becomes a file or folder name (:data:`MAX_NAME`).
+    ``named`` gives a path field names for paths of this checkout (e.g.
+    :data:`SHIPPED_VOCABULARIES`): a config may use the name, and a saved config does.
 
     Only dataset YAMLs, which a user writes per map, have optional keys (``default``);
     experiment configs name every key, their values coming from ``configs/paper.yaml``.
@@ -71,6 +77,7 @@ def _spec(
             choices=choices,
             must_exist=must_exist,
             file_name=file_name,
+            named=named,
         )
     )
 
@@ -90,7 +97,7 @@ class ModelConfig:
 class WordsConfig:
     """Visual words (paper section 5.1)."""
 
-    vocabulary_dir: Path = _spec(must_exist=True)
+    vocabulary_dir: Path = _spec(must_exist=True, named=SHIPPED_VOCABULARIES)
     orb_vocabulary: int = _spec(min=2, max=MAX_VOCABULARY)
     texton_vocabulary: int = _spec(min=2, max=MAX_VOCABULARY)
     orb_tile: int = _spec(min=1)
@@ -409,15 +416,15 @@ def dataset_path(name_or_path: str | Path, relative_to: Path | None = None) -> P
 
 
 def to_dict(config) -> dict:
-    """A config as plain YAML-ready data (paths as strings, tuples as lists)."""
+    """A config as plain YAML-ready data (paths as strings or their names, tuples as lists)."""
 
-    def plain(value):
+    def plain(value, named=None):
         if dataclasses.is_dataclass(value):
-            return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+            return {f.name: plain(getattr(value, f.name), f.metadata.get("named")) for f in dataclasses.fields(value)}
         if isinstance(value, tuple):
             return [plain(v) for v in value]
         if isinstance(value, Path):
-            return str(value)
+            return next((name for name, path in (named or {}).items() if value == path), str(value))
         return value
 
     return plain(config)
@@ -546,7 +553,8 @@ def _convert(tp, meta: dict, value: Any, keys: tuple, raw: _Raw):
     elif tp is Path:
         if not isinstance(value, str) or not value or "\0" in value:
             refuse("a file path")
-        result = _resolve_path(value, keys, raw)
+        named = meta["named"] or {}
+        result = named[value] if value in named else _resolve_path(value, keys, raw)
         if meta["must_exist"] and not result.exists():
             raise ConfigError(f"{_where(raw, keys)}: file not found: {display_path(result)}")
         return result

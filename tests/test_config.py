@@ -8,6 +8,7 @@ import yaml
 
 from curiosity_cli.config import (
     CONFIG_DIR,
+    SHIPPED_VOCABULARIES,
     ExperimentConfig,
     dataset_names,
     load_config,
@@ -85,6 +86,23 @@ def test_resolved_config_reloads_to_the_same_config(tmp_path):
     saved = tmp_path / "resolved.yaml"
     saved.write_text(to_yaml(config))
     assert load_config(saved) == config
+
+
+def test_a_saved_config_names_the_shipped_vocabularies_not_this_machines_path(tmp_path, monkeypatch):
+    config = load_config(CONFIG_DIR / "quick.yaml")
+    assert config.words.vocabulary_dir == SHIPPED_VOCABULARIES["shipped"] and config.words.vocabulary_dir.is_dir()
+    saved = yaml.safe_load(to_yaml(config))
+    assert saved["words"]["vocabulary_dir"] == "shipped"
+    # another folder of vocabularies is saved as its path
+    (tmp_path / "vocab").mkdir()
+    own = load_config(CONFIG_DIR / "quick.yaml", [f"words.vocabulary_dir={tmp_path / 'vocab'}"])
+    assert yaml.safe_load(to_yaml(own))["words"]["vocabulary_dir"] == str(tmp_path / "vocab")
+    # the saved config loads from anywhere: copied to another folder and read from another cwd
+    copy = tmp_path / "elsewhere" / "config.yaml"
+    copy.parent.mkdir()
+    copy.write_text(to_yaml(config))
+    monkeypatch.chdir(tmp_path)
+    assert load_config(copy) == config
 
 
 def test_an_int_is_accepted_where_a_number_is_expected():
