@@ -33,6 +33,8 @@ DATASET_CONFIG_DIR = CONFIG_DIR / "datasets"
 #: config too, so that an experiment folder copied to another machine finds them there).
 SHIPPED_VOCABULARIES = {"shipped": PROJECT_ROOT / "data" / "vocab"}
 
+#: The shipped config a saved experiment config builds on (:func:`saved_yaml`).
+_SAVED_BASE = "paper.yaml"
 #: Where a value given on the command line with ``--set KEY=VALUE`` "comes from".
 _OVERRIDE = "--set"
 
@@ -271,6 +273,8 @@ def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
                 f"{display_path(path)}: base: got {shown(base)}, expected a path to a YAML config"
             )
         base_path = path.parent / base
+        if not base_path.is_file() and Path(base).name == base and (CONFIG_DIR / base).is_file():
+            base_path = CONFIG_DIR / base  # a shipped config, named from anywhere (a saved config does)
         if not base_path.is_file():
             raise ConfigError(f"{display_path(path)}: base: file not found: {display_path(base_path)}")
         _load_chain(base_path, raw, seen + (path,))
@@ -431,8 +435,20 @@ def to_dict(config) -> dict:
 
 
 def to_yaml(config) -> str:
-    """The resolved config as YAML, as a run saves it next to its results."""
+    """The resolved config as YAML: every key."""
     return dump_yaml(to_dict(config))
+
+
+def saved_yaml(config) -> str:
+    """The config as an experiment folder saves it: every key, on top of the shipped ``paper.yaml``.
+
+    Every key is written, so the file says what the experiment ran with; the ``base``
+    gives a key added to the project after the file was saved its default from
+    ``configs/paper.yaml``, so the folder still loads. A file made with another value
+    than that default is then refused or made again by its recipe
+    (:mod:`curiosity_cli.recipes`), never taken as made with it.
+    """
+    return f"base: {_SAVED_BASE}  # the shipped configs/{_SAVED_BASE}: defaults for keys added after saving\n" + to_yaml(config)
 
 
 # --------------------------------------------------------------------------- validation

@@ -13,6 +13,7 @@ from curiosity_cli.config import (
     dataset_names,
     load_config,
     load_dataset_config,
+    saved_yaml,
     to_yaml,
 )
 from curiosity_cli.errors import ConfigError
@@ -103,6 +104,25 @@ def test_a_saved_config_names_the_shipped_vocabularies_not_this_machines_path(tm
     copy.write_text(to_yaml(config))
     monkeypatch.chdir(tmp_path)
     assert load_config(copy) == config
+
+
+def test_a_saved_config_still_loads_after_a_key_is_added_to_the_project(tmp_path):
+    config = load_config(CONFIG_DIR / "quick.yaml", ["explore.restarts=2"])
+    saved = tmp_path / "results" / "quick" / "config.yaml"
+    saved.parent.mkdir(parents=True)
+    saved.write_text(saved_yaml(config))
+    assert load_config(saved) == config
+    # a folder saved before explore.min_d2 existed: the key takes its default from paper.yaml
+    data = yaml.safe_load(saved.read_text())
+    del data["explore"]["min_d2"]
+    saved.write_text(yaml.safe_dump(data, sort_keys=False))
+    paper = yaml.safe_load((CONFIG_DIR / "paper.yaml").read_text())
+    assert "min_d2" in paper["explore"]
+    assert load_config(saved).explore.min_d2 == paper["explore"]["min_d2"]
+    # a base beside the config still comes first
+    (saved.parent / "paper.yaml").write_text("seed: 7\n")
+    with pytest.raises(ConfigError, match="missing key"):
+        load_config(saved)
 
 
 def test_an_int_is_accepted_where_a_number_is_expected():

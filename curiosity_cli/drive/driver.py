@@ -99,13 +99,13 @@ def prepare_folder(folder: Path, config: ExperimentConfig, seed: int) -> None:
     """Write the resolved config and the run's provenance into ``folder``."""
     import yaml
 
-    from curiosity_cli.config import to_yaml
+    from curiosity_cli.config import saved_yaml
     from curiosity_cli.files import atomic_path
     from curiosity_cli.provenance import provenance
 
     folder.mkdir(parents=True, exist_ok=True)
     with atomic_path(folder / "config.yaml") as tmp:
-        tmp.write_text(to_yaml(config))
+        tmp.write_text(saved_yaml(config))
     with atomic_path(folder / "provenance.yaml") as tmp:
         tmp.write_text(yaml.safe_dump(provenance(seed), sort_keys=False))
 

@@ -49,7 +49,7 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from curiosity_cli.config import ExperimentConfig, load_config, to_dict, to_yaml
+from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz
 from curiosity_cli.recipes import Recipe, differences, first_of, recorded_digest
@@ -539,7 +539,7 @@ def record_label_settings(folder: Path, config: ExperimentConfig) -> None:
     if not changed:
         return
     with atomic_path(saved_path) as tmp:
-        tmp.write_text(to_yaml(config))
+        tmp.write_text(saved_yaml(config))
     if saved:
         shown = ", ".join(f"{'.'.join(keys)}={new!r}" for keys, _, new in changed)
         note(f"recorded {shown} in {display_path(saved_path)}; labels made otherwise are made again")

@@ -42,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.config import ExperimentConfig, load_config, to_dict, to_yaml
+from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.parallel import Workers
@@ -412,7 +412,7 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
 
     folder.mkdir(parents=True, exist_ok=True)
     with atomic_path(folder / "config.yaml") as tmp:
-        tmp.write_text(to_yaml(config))
+        tmp.write_text(saved_yaml(config))
     with atomic_path(folder / "provenance.yaml") as tmp:
         tmp.write_text(yaml.safe_dump(provenance(config.seed), sort_keys=False))
     rows = []
