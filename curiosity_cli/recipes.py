@@ -62,7 +62,7 @@ class Recipe:
         if recorded_digest(meta) == self.digest:
             return None
         changed = [_in_words(keys, old, new) for keys, old, new in differences(inputs, self.inputs)]
-        return ", ".join(changed) or "its recorded digest does not match its inputs"
+        return ", ".join(changed) or "its recorded digest does not match its inputs (edited by hand?)"
 
 
 def recorded_digest(meta: dict) -> str | None:
@@ -78,11 +78,24 @@ def recorded_inputs(meta: dict) -> dict:
     return inputs if isinstance(inputs, dict) else {}
 
 
+class _Absent:
+    """A key one of two mappings lacks (a file made before the key existed), shown as ``absent``."""
+
+    def __repr__(self) -> str:
+        return "absent"
+
+
+ABSENT = _Absent()
+
+
 def differences(old, new, keys: tuple = ()) -> Iterator[tuple[tuple, object, object]]:
-    """``(keys, old value, new value)`` for each leaf where two nested mappings differ, in key order."""
+    """``(keys, old value, new value)`` for each leaf where two nested mappings differ, in key order.
+
+    A key only one of them has differs, with :data:`ABSENT` for the other's value.
+    """
     if isinstance(old, dict) and isinstance(new, dict):
         for key in sorted(set(old) | set(new)):
-            yield from differences(old.get(key), new.get(key), keys + (key,))
+            yield from differences(old.get(key, ABSENT), new.get(key, ABSENT), keys + (key,))
     elif old != new:
         yield keys, old, new
 
