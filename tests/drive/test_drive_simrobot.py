@@ -190,4 +190,5 @@ def test_the_watchdog_stops_the_simulated_robot_when_the_host_goes_silent(tmp_pa
     assert "simrobot: stopped by SIGTERM" in stderr
     events = [json.loads(line) for line in log.read_text().splitlines()]
     watchdog = [e for e in events if e["event"] == "watchdog"]
-    assert len(watchdog) == 1 and watchdog[0]["silent"] > 1.0
+    # it fires once silence exceeds 1 s; the log rounds to ms, so 1.0004 s reads 1.0
+    assert len(watchdog) == 1 and watchdog[0]["silent"] >= 1.0
