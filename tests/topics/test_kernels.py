@@ -236,6 +236,21 @@ def test_frozen_refine_cells_matches_twin(spatial):
 
 
 @pytest.mark.parametrize("threads", [1, 2])
+def test_frozen_sweeps_over_runs_of_one_word_id_match_twin(threads):
+    """Cells sorted by word id, as word stores are: long runs of one word id in a cell."""
+    rows, cols = BATCH_GRID["rows"], BATCH_GRID["cols"]
+    rng = np.random.default_rng(17)
+    model = TopicModel(5, 12, grid_neighbours(rows, cols, 4), alpha=0.3, beta=0.2, seed=17,
+                       frozen_counts=rng.integers(0, 5, (12, 5)))
+    for cell in range(rows * cols):
+        model.add_cell(cell, np.sort(rng.integers(0, 3, rng.integers(0, 15))))
+    twin = NaiveModel.of(model)
+    model.refine_batch(3, threads=threads)
+    refine_batch_naive(twin, 3)
+    assert_matches(model, twin)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
 def test_frozen_refine_batch_matches_twin(threads):
     model, _ = frozen_model(12, **BATCH_GRID)
     twin = NaiveModel.of(model)
