@@ -9,7 +9,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from curiosity_cli.errors import ConfigError, CuriosityError
+from curiosity_cli.errors import CuriosityError
 
 
 #: The first bytes of a zip archive, and so of every ``.npz`` file.

@@ -11,13 +11,14 @@ from collections.abc import Callable
 from pathlib import Path
 
 from curiosity_cli.config import ExperimentConfig
+from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder
 
 
 def reproduce(
     config: ExperimentConfig,
     *,
-    results_dir: Path = Path("results"),
-    cache_dir: Path = Path("results/cache"),
+    results_dir: Path = DEFAULT_RESULTS,
+    cache_dir: Path = DEFAULT_CACHE,
     jobs: int | None = None,
     force: bool = False,
     backend: str = "loky",
@@ -73,5 +74,5 @@ def reproduce(
     figures = write_figures(folder)
     seconds["plot"] = time.perf_counter() - mark
     seconds["total"] = time.perf_counter() - started
-    provenance = read_yaml(folder / "provenance.yaml", "provenance file")
+    provenance = read_yaml(ExperimentFolder(folder).provenance, "provenance file")
     return write_report(folder, config, evaluation, list(figures), figures.skipped, seconds, provenance)

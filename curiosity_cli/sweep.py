@@ -72,6 +72,7 @@ from pathlib import Path
 from curiosity_cli.config import ExperimentConfig, load_config
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.layout import DEFAULT_RESULTS, ExperimentFolder
 
 #: The headline columns, as ``headline.csv`` has them (:func:`curiosity_cli.evaluate.tables.headline`).
 HEADLINE_COLUMNS = (
@@ -154,10 +155,10 @@ class Sweep:
         """The sweep's folder under ``results_dir``."""
         return Path(results_dir) / f"{self.name}-sweep"
 
-    def command(self, results_dir: Path = Path("results")) -> str:
+    def command(self, results_dir: Path = DEFAULT_RESULTS) -> str:
         """The ``curiosity reproduce`` command that runs (or resumes) this sweep in ``results_dir``."""
         words = ["curiosity", "reproduce", display_path(self.config_path)]
-        if Path(results_dir) != Path("results"):
+        if Path(results_dir) != DEFAULT_RESULTS:
             words += ["--results-dir", display_path(results_dir)]
         for text in self.sets:
             words += ["--set", text]
@@ -392,7 +393,7 @@ def _sweep_message(text: str, keys: Sequence[str], overrides: Sequence[str]) -> 
 def run_sweep(
     sweep: Sweep,
     *,
-    results_dir: Path = Path("results"),
+    results_dir: Path = DEFAULT_RESULTS,
     on_stage: Callable[[str, int], None] | None = None,
     **pipeline,
 ) -> Path:
@@ -493,7 +494,7 @@ def read_headline(folder: Path):
     """
     import pandas as pd
 
-    path = Path(folder) / "headline.csv"
+    path = ExperimentFolder(folder).table("headline")
     if not path.is_file():
         return pd.DataFrame(columns=list(HEADLINE_COLUMNS))
     text = {"dataset": str, "next_best": str, "paper_map": str}  # an empty paper_map stays ""

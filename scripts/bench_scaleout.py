@@ -40,6 +40,7 @@ from pathlib import Path
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.evaluate.labels import label_experiment
 from curiosity_cli.explore.grid import run_grid
+from curiosity_cli.layout import DEFAULT_CACHE
 
 
 def noop(i: int) -> int:
@@ -112,7 +113,7 @@ def main() -> None:
     parser.add_argument("--noop", type=int, default=500, help="no-op tasks for the overhead per task")
     parser.add_argument("--batch-sweeps", type=int, default=20,
                         help="of the batch reference, computed once and untimed (it does not change the labelling's speed)")
-    parser.add_argument("--cache-dir", type=Path, default=Path("results/cache"))
+    parser.add_argument("--cache-dir", type=Path, default=DEFAULT_CACHE)
     args = parser.parse_args()
 
     base = load_config(CONFIG_DIR / "quick.yaml")

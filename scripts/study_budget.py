@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.layout import DEFAULT_RESULTS
 from curiosity_cli.reproduce import reproduce
 
 LENGTHS = (80, 320)
@@ -28,7 +29,7 @@ LENGTHS = (80, 320)
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--config", type=Path, default=CONFIG_DIR / "quick.yaml")
-    parser.add_argument("--results-dir", type=Path, default=Path("results/studies"))
+    parser.add_argument("--results-dir", type=Path, default=DEFAULT_RESULTS / "studies")
     parser.add_argument("--jobs", type=int, default=None)
     args = parser.parse_args()
 

@@ -35,8 +35,9 @@ from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.data import load_map
 from curiosity_cli.evaluate.information import contingency, mutual_information
 from curiosity_cli.evaluate.labeling import PathLabeller, pixel_labels
-from curiosity_cli.evaluate.labels import batch_path, path_seed
-from curiosity_cli.explore.runs import read_run, run_folder
+from curiosity_cli.evaluate.labels import path_seed
+from curiosity_cli.explore.runs import read_run
+from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
 from curiosity_cli.words.store import load_store
 
 
@@ -53,7 +54,7 @@ def study_map(folder: Path, config, dataset: str, entry: str, store_file: Path, 
     map_data = load_map(entry)
     human = map_data.labels
     n_classes = max(c.id for c in map_data.legend) + 1 if human is not None else 0
-    with np.load(batch_path(folder, dataset)) as npz:
+    with np.load(ExperimentFolder(folder).batch(dataset)) as npz:
         batch = npz["labels"]
     shape, k = map_data.image.shape[:2], config.model.topics
     labeller = PathLabeller(store, config.model)
@@ -61,7 +62,7 @@ def study_map(folder: Path, config, dataset: str, entry: str, store_file: Path, 
     rows = []
     for weight in config.explore.weight_functions:
         for restart in range(args.restarts):
-            run = read_run(run_folder(folder, dataset, weight, restart))
+            run = read_run(ExperimentFolder(folder).run(dataset, weight, restart))
             lengths = run.meta["checkpoints"]
             phis = [run.phi(n) for n in lengths]
             seed = path_seed(run.meta["seed"])
@@ -130,7 +131,7 @@ def main() -> None:
     parser.add_argument("--warm", type=int, nargs="+", default=[1, 2, 4, 8, 16])
     parser.add_argument("--tolerance", type=float, default=0.01)
     parser.add_argument("--threads", type=int, default=2)
-    parser.add_argument("--cache-dir", type=Path, default=Path("results/cache"))
+    parser.add_argument("--cache-dir", type=Path, default=DEFAULT_CACHE)
     parser.add_argument("--out", type=Path, help="CSV of every labelling (default EXPERIMENT/label-sweeps.csv)")
     args = parser.parse_args()
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli import app
+from curiosity_cli.layout import DEFAULT_RESULTS
 
 datasets_app = typer.Typer(help="List and preview the maps (embedded or your own).", no_args_is_help=True)
 app.add_typer(datasets_app, name="datasets")
@@ -107,6 +108,6 @@ def show(
         typer.echo("")
     if out is None:
         stem = maps[0].config.name if len(maps) == 1 else "overview"
-        out = Path("results") / "datasets" / f"{stem}.png"
+        out = DEFAULT_RESULTS / "datasets" / f"{stem}.png"
     write_preview(maps, out)
     typer.echo(f"wrote {display_path(out)}")

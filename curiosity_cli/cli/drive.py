@@ -8,6 +8,7 @@ import typer
 
 from curiosity_cli.cli import app
 from curiosity_cli.config import CONFIG_DIR
+from curiosity_cli.layout import DEFAULT_RESULTS
 
 _CONFIG_HELP = "Experiment config whose model, words and drive sections (and seed) to use."
 _START_HELP = "Start position ROW,COL in map pixels; default the map's centre."
@@ -49,7 +50,7 @@ def _load(config: Path, overrides: list[str]):
 def _default_out() -> Path:
     from datetime import datetime
 
-    return Path("results") / "drive" / datetime.now().strftime("%Y%m%d-%H%M%S")
+    return DEFAULT_RESULTS / "drive" / datetime.now().strftime("%Y%m%d-%H%M%S")
 
 
 @app.command("drive")

@@ -11,6 +11,7 @@ import typer
 from curiosity_cli.cli import app
 from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.config import CONFIG_DIR
+from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS
 
 
 class Backend(str, enum.Enum):
@@ -30,8 +31,8 @@ def explore(
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override any config key, e.g. --set model.eta=0.8."),
     jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
     force: bool = typer.Option(False, "--force", help="Redo runs that are already finished."),
-    results_dir: Path = typer.Option(Path("results"), "--results-dir", help="Experiment folders go here."),
-    cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
+    results_dir: Path = typer.Option(DEFAULT_RESULTS, "--results-dir", help="Experiment folders go here."),
+    cache_dir: Path = typer.Option(DEFAULT_CACHE, "--cache-dir", help="Where word stores are kept."),
     backend: Backend = typer.Option(Backend.loky, "--backend", help="loky: processes on this machine; dask: a Dask cluster (needs the distributed extra)."),
     scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler, e.g. tcp://10.0.0.5:8786; default a local cluster of --jobs workers."),
 ) -> None:

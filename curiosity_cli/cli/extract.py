@@ -8,6 +8,7 @@ import typer
 
 from curiosity_cli.cli import app
 from curiosity_cli.config import CONFIG_DIR
+from curiosity_cli.layout import DEFAULT_CACHE
 
 
 @app.command("extract")
@@ -17,7 +18,7 @@ def extract(
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a words key, e.g. --set words.colour_words=true."),
     stride: int = typer.Option(None, "--stride", help="Texton words every N pixels; default the dataset's word_stride."),
     cell_width: int = typer.Option(None, "--cell-width", help="Cell side in pixels; default the dataset's."),
-    cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
+    cache_dir: Path = typer.Option(DEFAULT_CACHE, "--cache-dir", help="Where word stores are kept."),
     force: bool = typer.Option(False, "--force", help="Extract again even if a cached store exists."),
     density: Path = typer.Option(None, "--density", help="Also write a PNG of words per cell and a sample of words."),
 ) -> None:

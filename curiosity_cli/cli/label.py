@@ -9,11 +9,12 @@ import typer
 from curiosity_cli.cli import app
 from curiosity_cli.cli.explore import Backend
 from curiosity_cli.cli.progress import StagedProgress
+from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder
 
 #: Skipped pieces named on the terminal by `evaluate` (skipped.json lists them all).
 _SHOWN = 3
 
-EXPERIMENT = typer.Argument(Path("results/quick"), help="Experiment folder written by `curiosity explore`.")
+EXPERIMENT = typer.Argument(DEFAULT_RESULTS / "quick", help="Experiment folder written by `curiosity explore`.")
 
 
 def experiment_config(folder: Path, overrides: list[str]):
@@ -22,7 +23,7 @@ def experiment_config(folder: Path, overrides: list[str]):
     from curiosity_cli.errors import CuriosityError
     from curiosity_cli.files import display_path
 
-    saved = Path(folder) / "config.yaml"
+    saved = ExperimentFolder(folder).config
     if not saved.is_file():
         raise CuriosityError(f"{display_path(saved)}: not found; run `curiosity explore` to make the experiment first")
     return load_config(saved, overrides)
@@ -34,7 +35,7 @@ def label(
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a label setting, e.g. --set label.sweeps=8; it is recorded in the experiment's config.yaml."),
     jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
     force: bool = typer.Option(False, "--force", help="Recompute labels that are up to date."),
-    cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
+    cache_dir: Path = typer.Option(DEFAULT_CACHE, "--cache-dir", help="Where word stores are kept."),
     backend: Backend = typer.Option(Backend.loky, "--backend", help="loky: processes on this machine; dask: a Dask cluster (needs the distributed extra)."),
     scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler, e.g. tcp://10.0.0.5:8786; default a local cluster of --jobs workers."),
 ) -> None:
@@ -71,7 +72,7 @@ def evaluate(folder: Path = EXPERIMENT) -> None:
         more = f"; and {len(result.skipped) - _SHOWN} more" if len(result.skipped) > _SHOWN else ""
         typer.echo(f"skipped {len(result.skipped)} (listed in skipped.json): {shown}{more}", err=True)
     typer.echo(
-        f"wrote {display_path(folder / 'mi.csv')} ({len(result.mi)} rows), summary.csv, tests.csv, effects.csv, "
+        f"wrote {display_path(ExperimentFolder(folder).table('mi'))} ({len(result.mi)} rows), summary.csv, tests.csv, effects.csv, "
         "classes.csv, classes_summary.csv, headline.csv"
     )
     for row in result.headline.to_dict("records"):

@@ -7,12 +7,13 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli import app
+from curiosity_cli.layout import DEFAULT_RESULTS
 
 
 @app.command("plot")
 def plot(
     experiment_dir: Path = typer.Argument(
-        Path("results/quick"), help="Experiment folder holding mi.csv and summary.csv from `curiosity evaluate`."
+        DEFAULT_RESULTS / "quick", help="Experiment folder holding mi.csv and summary.csv from `curiosity evaluate`."
     ),
 ) -> None:
     """The paper's figures from the results tables: MI against path length, paths and label maps.

@@ -10,6 +10,7 @@ from curiosity_cli.cli import app
 from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.cli.explore import Backend
 from curiosity_cli.config import CONFIG_DIR
+from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS
 
 
 @app.command("reproduce")
@@ -27,8 +28,8 @@ def reproduce(
     force: bool = typer.Option(False, "--force", help="Redo runs and labels that are already finished."),
     backend: Backend = typer.Option(Backend.loky, "--backend", help="Where exploration and labelling run: loky (this machine) or dask (a Dask cluster, needs the distributed extra)."),
     scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler; default a local cluster of --jobs workers, shared by both stages."),
-    results_dir: Path = typer.Option(Path("results"), "--results-dir", help="Experiment folders go here."),
-    cache_dir: Path = typer.Option(Path("results/cache"), "--cache-dir", help="Where word stores are kept."),
+    results_dir: Path = typer.Option(DEFAULT_RESULTS, "--results-dir", help="Experiment folders go here."),
+    cache_dir: Path = typer.Option(DEFAULT_CACHE, "--cache-dir", help="Where word stores are kept."),
 ) -> None:
     """Extract, explore, label, evaluate and plot, then write results/<experiment>/REPORT.md.
 

@@ -52,6 +52,7 @@ import numpy as np
 from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz
+from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
 from curiosity_cli.recipes import Recipe, differences, first_of, recorded_digest
 
 if TYPE_CHECKING:
@@ -137,18 +138,6 @@ class RunInputs:
     def phi(self, length: int) -> np.ndarray:
         """(V, K) int32 ndarray: the word-topic counts Φ_p after ``length`` steps."""
         return self.checkpoints[length].dense()
-
-
-def batch_path(folder: Path, dataset: str) -> Path:
-    return Path(folder) / "batch" / f"{dataset}.npz"
-
-
-def label_path(folder: Path, dataset: str, weight_function: str, restart: int) -> Path:
-    return Path(folder) / "labels" / dataset / weight_function / f"restart-{restart:03d}.npz"
-
-
-def example_path(folder: Path, dataset: str, weight_function: str, restart: int, length: int) -> Path:
-    return Path(folder) / "labels" / dataset / "examples" / f"{weight_function}-restart-{restart:03d}-{length}.npz"
 
 
 def batch_recipe(config: ExperimentConfig, info: StoreInfo) -> Recipe:
@@ -341,12 +330,12 @@ def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordSto
 def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None:
     """Write a run's label file and its example maps, each atomically (examples first)."""
     for length, pixels in examples.items():
-        path = example_path(folder, meta["dataset"], meta["weight_function"], meta["restart"], length)
+        path = ExperimentFolder(folder).example(meta["dataset"], meta["weight_function"], meta["restart"], length)
         path.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as handle:
                 np.savez_compressed(handle, labels=pixels)
-    path = label_path(folder, meta["dataset"], meta["weight_function"], meta["restart"])
+    path = ExperimentFolder(folder).label_file(meta["dataset"], meta["weight_function"], meta["restart"])
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as handle:
@@ -373,7 +362,7 @@ def label_experiment(
     config: ExperimentConfig,
     folder: Path,
     *,
-    cache_dir: Path = Path("results/cache"),
+    cache_dir: Path = DEFAULT_CACHE,
     jobs: int | None = None,
     force: bool = False,
     on_stage: Callable[[str, int], None] | None = None,
@@ -441,16 +430,17 @@ def label_experiment(
     owned = Workers(backend, scheduler, jobs) if workers is None else None  # checks the backend before any work
     workers = workers or owned
     folder = Path(folder)
+    layout = ExperimentFolder(folder)
     record_label_settings(folder, config)
     stores = prepare_stores(config, cache_dir)
     by_name = {info.name: info for info in stores.values()}
-    folders = sorted(p for p in (folder / "runs").glob("*/*/restart-*") if p.parent.parent.name in by_name)
+    folders = [p for p in layout.run_folders() if p.parent.parent.name in by_name]
     runs = [p for p in folders if (p / "run.json").is_file()]
     left_out = [
         f"{display_path(p)}: no run.json; run `curiosity explore` to redo it" for p in folders if p not in runs
     ]
     if not runs:
-        raise LabelError(f"{display_path(folder / 'runs')}: no finished runs; run `curiosity explore` first")
+        raise LabelError(f"{display_path(layout.runs)}: no finished runs; run `curiosity explore` first")
     finished, problems = _runs_as_configured(folder, runs, config, by_name)
 
     with owned or contextlib.nullcontext():  # new workers (a local cluster) stop with the labelling
@@ -464,7 +454,7 @@ def label_experiment(
         for run in finished:
             info = by_name[run.meta["dataset"]]
             recipe = label_recipe(recorded_digest(run.meta), batch_recipe(config, info).digest, config, info.labels_digest)
-            path = label_path(folder, info.name, run.meta["weight_function"], run.meta["restart"])
+            path = layout.label_file(info.name, run.meta["weight_function"], run.meta["restart"])
             change = None if force else label_changes(path, recipe)
             if not force and change is None:
                 skipped += 1
@@ -527,7 +517,7 @@ def record_label_settings(folder: Path, config: ExperimentConfig) -> None:
     ConfigError
         ``config`` differs from the saved config outside ``label``, naming the first key.
     """
-    saved_path = Path(folder) / "config.yaml"
+    saved_path = ExperimentFolder(folder).config
     saved = to_dict(load_config(saved_path)) if saved_path.is_file() else {}
     changed = list(differences(saved, to_dict(config)))
     for keys, old, new in changed:
@@ -575,7 +565,7 @@ def _runs_as_configured(folder: Path, runs: list[Path], config: ExperimentConfig
             otherwise.append(f"{display_path(run_path / 'run.json')}: {change}")
     if otherwise:
         raise LabelError(
-            f"{len(otherwise)} runs were made otherwise than {display_path(Path(folder) / 'config.yaml')} and the maps' "
+            f"{len(otherwise)} runs were made otherwise than {display_path(ExperimentFolder(folder).config)} and the maps' "
             f"words make them now ({first_of(otherwise)}); restore the config, or run `curiosity explore --force` "
             "to redo the runs"
         )
@@ -597,7 +587,7 @@ def _batch_references(
     from curiosity_cli.words.store import load_store
 
     sweeps = config.label.batch_sweeps
-    files = {info.name: batch_path(folder, info.name) for info in stores.values()}
+    files = {info.name: ExperimentFolder(folder).batch(info.name) for info in stores.values()}
     recipes = {info.name: batch_recipe(config, info) for info in stores.values()}
     stale = {
         entry: info for entry, info in stores.items() if force or not _batch_is_current(files[info.name], recipes[info.name])

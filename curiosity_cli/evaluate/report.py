@@ -20,6 +20,7 @@ from curiosity_cli.evaluate.labels import CLASS_SHARE_PERCENT
 from curiosity_cli.evaluate.tables import ALPHA, CONFIDENCE, HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation
 from curiosity_cli.explore.weights import CEILINGS, WEIGHT_FUNCTIONS
 from curiosity_cli.files import atomic_path
+from curiosity_cli.layout import ExperimentFolder
 
 # the paper: "For short path lengths (40 steps or less), we do not see any statistical difference"
 _SHORT = 40
@@ -408,7 +409,7 @@ def write_report(
         "",
         "```yaml", to_yaml(config).rstrip(), "```", "",
     ]
-    path = Path(folder) / "REPORT.md"
+    path = ExperimentFolder(folder).report
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(lines))
     return path

@@ -45,6 +45,7 @@ import numpy as np
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, open_npz
+from curiosity_cli.layout import ExperimentFolder
 from curiosity_cli.recipes import first_of, recorded_digest, recorded_inputs
 
 if TYPE_CHECKING:
@@ -182,14 +183,15 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
         No label files at all, no readable ``config.yaml``, a missing or corrupt batch
         reference, or label files or runs made otherwise (naming them and what changed).
     """
-    from curiosity_cli.evaluate.labels import batch_path, label_recipe
+    from curiosity_cli.evaluate.labels import label_recipe
     from curiosity_cli.explore.grid import run_recipe
-    from curiosity_cli.explore.runs import RunError, read_run, run_folder
+    from curiosity_cli.explore.runs import RunError, read_run
 
     folder = Path(folder)
-    files = sorted((folder / "labels").glob("*/*/restart-*.npz"))
+    layout = ExperimentFolder(folder)
+    files = layout.label_files()
     if not files:
-        raise EvaluationError(f"{display_path(folder / 'labels')}: no label files; run `curiosity label` first")
+        raise EvaluationError(f"{display_path(layout.labels)}: no label files; run `curiosity label` first")
     config = _saved_config(folder)
     rows, class_rows, skipped, otherwise = [], [], [], []
     batch_digests = {}
@@ -199,7 +201,7 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
         except CorruptFileError as exc:
             skipped.append(f"{exc}; run `curiosity label` to redo it")
             continue
-        run_path = run_folder(folder, meta["dataset"], meta["weight_function"], meta["restart"])
+        run_path = layout.run(meta["dataset"], meta["weight_function"], meta["restart"])
         try:
             run = read_run(run_path)
         except RunError as exc:
@@ -213,7 +215,7 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
             otherwise.append(f"{display_path(run_path / 'run.json')}: {run_change}")
             continue
         if meta["dataset"] not in batch_digests:
-            batch_digests[meta["dataset"]] = _batch_digest(batch_path(folder, meta["dataset"]))
+            batch_digests[meta["dataset"]] = _batch_digest(layout.batch(meta["dataset"]))
         human = recorded_inputs(meta).get("human")  # evaluating reads no map: taken as recorded
         change = label_recipe(recorded_digest(run.meta), batch_digests[meta["dataset"]], config, human).changes(meta)
         if change is not None:
@@ -224,7 +226,7 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
         class_rows += classes
     if otherwise:
         raise EvaluationError(
-            f"{len(otherwise)} label files or runs were made otherwise than {display_path(folder / 'config.yaml')} "
+            f"{len(otherwise)} label files or runs were made otherwise than {display_path(layout.config)} "
             f"and the files they come from say ({first_of(otherwise)}); run `curiosity label` to label them again "
             "(`curiosity explore --force` first for runs)"
         )
@@ -242,7 +244,7 @@ def _saved_config(folder: Path):
     """
     from curiosity_cli.config import load_config
 
-    path = Path(folder) / "config.yaml"
+    path = ExperimentFolder(folder).config
     if not path.is_file():
         raise EvaluationError(f"{display_path(path)}: not found; an experiment folder written by `curiosity explore` has it")
     return load_config(path)
@@ -271,14 +273,12 @@ def _unlabelled_runs(folder: Path, files: list[Path]) -> list[str]:
     """A line for each run of the grid (``runs.csv``) that has no label file, naming the file it lacks."""
     import pandas as pd
 
-    from curiosity_cli.evaluate.labels import label_path
-
-    planned = Path(folder) / "runs.csv"
+    planned = ExperimentFolder(folder).runs_csv
     if not planned.is_file():  # a folder from before the grid recorded its runs
         return []
     runs = pd.read_csv(planned, usecols=["dataset", "weight_function", "restart"])
     present = set(files)
-    paths = (label_path(folder, r.dataset, r.weight_function, r.restart) for r in runs.itertuples())
+    paths = (ExperimentFolder(folder).label_file(r.dataset, r.weight_function, r.restart) for r in runs.itertuples())
     return [f"{display_path(path)}: not found; run `curiosity label` to make it" for path in paths if path not in present]
 
 
@@ -499,7 +499,7 @@ def read_class_names(folder: Path) -> dict[str, dict[int, str]]:
 
     names = {}
     try:
-        entries = load_config(Path(folder) / "config.yaml").datasets
+        entries = load_config(ExperimentFolder(folder).config).datasets
     except (CuriosityError, OSError):
         return names
     for entry in entries:
@@ -517,7 +517,7 @@ def read_maps(folder: Path):
     for, written by ``explore``), or None for a folder from before it existed."""
     import pandas as pd
 
-    path = Path(folder) / "maps.csv"
+    path = ExperimentFolder(folder).maps_csv
     if not path.is_file():
         return None
     try:
@@ -540,7 +540,7 @@ def evaluate_experiment(folder: Path) -> Evaluation:
     found = label_rows(folder, read_class_names(folder))
     skipped = found.skipped
     if not found.mi:
-        raise EvaluationError(f"{display_path(folder / 'labels')}: every label file was left out: " + "; ".join(skipped))
+        raise EvaluationError(f"{display_path(ExperimentFolder(folder).labels)}: every label file was left out: " + "; ".join(skipped))
     mi = pd.DataFrame(found.mi).sort_values(_KEYS, ignore_index=True)
     class_columns = [*_KEYS, "class_id", "class_name", "pixels", "found", "first_step", "topic", "recall"]
     classes = pd.DataFrame(found.classes, columns=class_columns).sort_values([*_KEYS, "class_id"], ignore_index=True)
@@ -556,10 +556,10 @@ def evaluate_experiment(folder: Path) -> Evaluation:
         "effects": effects, "headline": top,
     }
     for name, table in tables.items():
-        with atomic_path(folder / f"{name}.csv") as tmp:
+        with atomic_path(ExperimentFolder(folder).table(name)) as tmp:
             table.to_csv(tmp, index=False)
-    with atomic_path(folder / "mi.parquet") as tmp:
+    with atomic_path(ExperimentFolder(folder).table("mi", ".parquet")) as tmp:
         mi.to_parquet(tmp, index=False)
-    with atomic_path(folder / "skipped.json") as tmp:
+    with atomic_path(ExperimentFolder(folder).skipped) as tmp:
         tmp.write_text(json.dumps(skipped, indent=2) + "\n")
     return Evaluation(mi, summary, tests, top, skipped, maps, effects, classes, classes_summary)

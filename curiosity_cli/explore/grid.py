@@ -45,6 +45,7 @@ import numpy as np
 from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder
 from curiosity_cli.parallel import Workers
 from curiosity_cli.recipes import Recipe, differences, first_of
 
@@ -176,7 +177,7 @@ def check_saved_config(folder: Path, config: ExperimentConfig) -> None:
         Naming the first key that differs, with both values; or the saved config itself
         does not validate (empty, not YAML, not a mapping, a bad key), naming it.
     """
-    saved_path = Path(folder) / "config.yaml"
+    saved_path = ExperimentFolder(folder).config
     if not saved_path.is_file():
         return
     saved = to_dict(load_config(saved_path))
@@ -206,8 +207,8 @@ def _check_inside(path: Path, root: Path, what: str) -> None:
 def run_grid(
     config: ExperimentConfig,
     *,
-    results_dir: Path = Path("results"),
-    cache_dir: Path = Path("results/cache"),
+    results_dir: Path = DEFAULT_RESULTS,
+    cache_dir: Path = DEFAULT_CACHE,
     jobs: int | None = None,
     force: bool = False,
     on_prepared: Callable[[int, int], None] | None = None,
@@ -255,7 +256,7 @@ def run_grid(
     GridError
         After the whole grid, if some runs raised or kept killing their Dask workers: each named, with its error.
     """
-    from curiosity_cli.explore.runs import finished_meta, remove_partial_runs, run_folder
+    from curiosity_cli.explore.runs import finished_meta, remove_partial_runs
     from curiosity_cli.words.store import load_store
 
     started = time.perf_counter()
@@ -267,7 +268,7 @@ def run_grid(
     stores = prepare_stores(config, cache_dir)
     tasks = plan_runs(config, stores)
     for task in tasks:
-        _check_inside(run_folder(folder, task.dataset, task.weight_function, task.restart), folder, task.dataset)
+        _check_inside(ExperimentFolder(folder).run(task.dataset, task.weight_function, task.restart), folder, task.dataset)
     by_name = {info.name: info for info in stores.values()}
     recipes = {
         t: run_recipe(config, t.dataset, Path(t.store_path).name, by_name[t.dataset].vocabulary_hashes, t.weight_function,
@@ -276,7 +277,7 @@ def run_grid(
     }
     todo, stale = [], []
     for task in tasks:
-        run_path = run_folder(folder, task.dataset, task.weight_function, task.restart)
+        run_path = ExperimentFolder(folder).run(task.dataset, task.weight_function, task.restart)
         meta = None if force else finished_meta(run_path)
         if meta is None:
             todo.append(task)
@@ -378,7 +379,7 @@ def _write(
     folder: Path, task: RunTask, exploration, seconds: float, recipe: Recipe, config: ExperimentConfig, store: StoreInfo,
 ) -> int:
     from curiosity_cli import __version__
-    from curiosity_cli.explore.runs import run_folder, write_run
+    from curiosity_cli.explore.runs import write_run
 
     grid_shape = store.grid_shape
     meta = {
@@ -401,7 +402,7 @@ def _write(
         "curiosity": __version__,
         "recipe": recipe.record(),
     }
-    return write_run(run_folder(folder, task.dataset, task.weight_function, task.restart), exploration, meta, grid_shape[1])
+    return write_run(ExperimentFolder(folder).run(task.dataset, task.weight_function, task.restart), exploration, meta, grid_shape[1])
 
 
 def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[RunTask], stores) -> None:
@@ -411,9 +412,10 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
     from curiosity_cli.provenance import provenance
 
     folder.mkdir(parents=True, exist_ok=True)
-    with atomic_path(folder / "config.yaml") as tmp:
+    layout = ExperimentFolder(folder)
+    with atomic_path(layout.config) as tmp:
         tmp.write_text(saved_yaml(config))
-    with atomic_path(folder / "provenance.yaml") as tmp:
+    with atomic_path(layout.provenance) as tmp:
         tmp.write_text(yaml.safe_dump(provenance(config.seed), sort_keys=False))
     rows = []
     for t in tasks:
@@ -423,7 +425,7 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
              "start_row": t.start_cell // cols, "start_col": t.start_cell % cols,
              "seed": " ".join(map(str, t.seed)), "store": Path(t.store_path).name}
         )
-    with atomic_path(folder / "runs.csv") as tmp:
+    with atomic_path(layout.runs_csv) as tmp:
         pd.DataFrame(rows).to_csv(tmp, index=False)
     maps = []
     for name, info in stores.items():
@@ -433,5 +435,5 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
              "words": total, **{f"{kind}_words": n for kind, n in info.word_counts.items()},
              "orb_share": info.word_counts.get("orb", 0) / total if total else float("nan"), "store": info.path.name}
         )
-    with atomic_path(folder / "maps.csv") as tmp:
+    with atomic_path(layout.maps_csv) as tmp:
         pd.DataFrame(maps).to_csv(tmp, index=False)

@@ -1,6 +1,6 @@
 """One run's folder on disk: written whole or not at all, and read back.
 
-``results/<experiment>/runs/<dataset>/<weight function>/restart-<NNN>/`` holds:
+A run's folder (:meth:`~curiosity_cli.layout.ExperimentFolder.run`) holds:
 
 - ``path.csv``: one row per step: ``step, row, col, cell, first_visit, words_sampled,
   log_likelihood, fallback, boxed_in``;
@@ -32,6 +32,7 @@ import numpy as np
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.explore.walker import Exploration, SparseCounts
 from curiosity_cli.files import CorruptFileError, display_path, naming_os_errors, note, open_npz
+from curiosity_cli.layout import ExperimentFolder
 
 RUN_FORMAT = 1
 #: What readers of a run take from its ``run.json``: a file without one of them is corrupt.
@@ -46,15 +47,10 @@ class RunError(CuriosityError):
     """A run folder that is missing, incomplete or corrupt."""
 
 
-def run_folder(root: Path, dataset: str, weight_function: str, restart: int) -> Path:
-    """Where a run lives under an experiment folder ``root``."""
-    return Path(root) / "runs" / dataset / weight_function / f"restart-{restart:03d}"
-
-
 def remove_partial_runs(root: Path) -> int:
     """Delete the temporary folders killed writers left under ``root/runs``; returns how many."""
     removed = 0
-    for tmp in (Path(root) / "runs").glob(f"*/*/.restart-*{_TMP_MARK}*"):
+    for tmp in ExperimentFolder(root).runs.glob(f"*/*/.restart-*{_TMP_MARK}*"):
         shutil.rmtree(tmp, ignore_errors=True)
         removed += 1
     return removed
@@ -66,7 +62,7 @@ def write_run(folder: Path, exploration: Exploration, meta: dict, grid_cols: int
     Parameters
     ----------
     folder : Path
-        From :func:`run_folder`.
+        From :meth:`~curiosity_cli.layout.ExperimentFolder.run`.
     exploration : Exploration
     meta : dict
         JSON-ready facts about the run; ``format``, ``checkpoints`` and ``bytes`` are added.

@@ -23,6 +23,7 @@ import numpy as np
 
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import CorruptFileError, display_path, open_npz
+from curiosity_cli.layout import ExperimentFolder
 
 MI_COLUMNS = (
     "dataset", "weight_function", "restart", "path_length",
@@ -91,7 +92,7 @@ def load_maps(experiment_dir: Path, notes: list[str]) -> dict:
     from curiosity_cli.config import load_config
     from curiosity_cli.data import load_map
 
-    config_path = Path(experiment_dir) / "config.yaml"
+    config_path = ExperimentFolder(experiment_dir).config
     if not config_path.is_file():
         notes.append(f"{display_path(config_path)}: not found, so no map figures (run `curiosity explore` first)")
         return {}
@@ -123,7 +124,7 @@ class Example:
 
 def find_examples(experiment_dir: Path, dataset: str) -> list[Example]:
     """Every example labelling of a map, sorted by weight function, restart and length."""
-    folder = Path(experiment_dir) / "labels" / dataset / "examples"
+    folder = ExperimentFolder(experiment_dir).examples(dataset)
     found = []
     for path in folder.glob("*.npz") if folder.is_dir() else ():
         match = _EXAMPLE_NAME.match(path.name)
@@ -186,7 +187,7 @@ def read_path(experiment_dir: Path, dataset: str, weight_function: str, restart:
     """
     import pandas as pd
 
-    path = Path(experiment_dir) / "runs" / dataset / weight_function / f"restart-{restart:03d}" / "path.csv"
+    path = ExperimentFolder(experiment_dir).run(dataset, weight_function, restart) / "path.csv"
     if not path.is_file():
         notes.append(f"{display_path(path)}: not found; no path figure (run `curiosity explore` first)")
         return None

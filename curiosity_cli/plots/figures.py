@@ -28,6 +28,7 @@ import numpy as np
 
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.layout import ExperimentFolder
 from curiosity_cli.plots import palette
 from curiosity_cli.plots.experiment_inputs import (
     MI_COLUMNS,
@@ -114,18 +115,19 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
     import pandas as pd
 
     experiment_dir = Path(experiment_dir)
+    layout = ExperimentFolder(experiment_dir)
     if not experiment_dir.is_dir():
         raise PlotError(f"{display_path(experiment_dir)}: no such experiment folder; run `curiosity explore` first")
-    mi = read_table(experiment_dir / "mi.csv", MI_COLUMNS, "curiosity evaluate")
+    mi = read_table(layout.table("mi"), MI_COLUMNS, "curiosity evaluate")
     if mi.empty:
-        raise PlotError(f"{display_path(experiment_dir / 'mi.csv')}: no rows; run `curiosity evaluate` first")
-    out = experiment_dir / "figures"
+        raise PlotError(f"{display_path(layout.table('mi'))}: no rows; run `curiosity evaluate` first")
+    out = layout.figures
     written = WrittenFigures()
     notes = written.skipped
     maps = load_maps(experiment_dir, notes)
     order = list(maps) + [d for d in dict.fromkeys(mi["dataset"].astype(str)) if d not in maps]
 
-    summary_path = experiment_dir / "summary.csv"
+    summary_path = layout.table("summary")
     try:
         summary = read_table(summary_path, SUMMARY_COLUMNS, "curiosity evaluate")
         for column in ("path_length", "n", "mean", "std", "ci_low", "ci_high"):
@@ -145,7 +147,7 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
 
         traces = {}
         for name, m in maps.items():
-            batch_file = experiment_dir / "batch" / f"{name}.npz"
+            batch_file = layout.batch(name)
             z_b = read_label_map(batch_file, m.image.shape[:2], notes)
             trace = read_log_likelihood(batch_file, notes) if batch_file.is_file() else None
             if trace is not None:

@@ -61,7 +61,6 @@ def nearest_centres_kernel(vectors, centres):
     The result is therefore the float64 brute-force argmin, not an approximation of it.
     """
     n, d = vectors.shape
-    k = centres.shape[0]
     c64, ct, cn, cnorm = _prepare_centres(centres)
     kp = cn.shape[0]
     gamma = 1.1 * (d + 4) * _U32

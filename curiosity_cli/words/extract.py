@@ -20,6 +20,7 @@ from curiosity_cli.config import WordsConfig
 from curiosity_cli.data import MapData
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import CorruptFileError, note
+from curiosity_cli.layout import DEFAULT_CACHE
 from curiosity_cli.words.store import STORE_FORMAT, WordStore, WordType, build_store, load_store, save_store
 from curiosity_cli.words.vocab import Vocabulary, load_vocabulary
 
@@ -96,7 +97,7 @@ def extract_words(
     *,
     stride: int | None = None,
     cell_width: int | None = None,
-    cache_dir: Path = Path("results/cache"),
+    cache_dir: Path = DEFAULT_CACHE,
     force: bool = False,
 ) -> Extraction:
     """The word store of a map: from the cache when present, else extracted and cached.

@@ -22,11 +22,11 @@ from curiosity_cli.evaluate.labels import (
     CLASS_SHARE_PERCENT,
     NOT_LABELLED,
     label_changes,
-    label_path,
     label_recipe,
     write_labels,
 )
 from curiosity_cli.evaluate.tables import run_rows
+from curiosity_cli.layout import ExperimentFolder
 from curiosity_cli.recipes import Recipe
 
 
@@ -175,7 +175,7 @@ def test_run_rows_give_classes_found_recall_and_first_steps_per_checkpoint():
 def test_a_label_file_is_current_only_for_the_recipe_it_was_made_from(tmp_path):
     config = SimpleNamespace(label=LabelConfig(sweeps=2, warm_sweeps=1, batch_sweeps=3))
     recipe = label_recipe("run-digest", "batch-digest", config, "human-digest")
-    path = label_path(tmp_path, "own", "random-walk", 1)
+    path = ExperimentFolder(tmp_path).label_file("own", "random-walk", 1)
     assert label_changes(path, recipe) == NOT_LABELLED
     write_labels(tmp_path, label_file_arrays(), {}, label_meta())  # from before recipes were recorded
     assert label_changes(path, recipe) == "made before recipes were recorded"

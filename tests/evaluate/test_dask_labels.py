@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
 from curiosity_cli.evaluate.labels import LabelError, label_experiment
-from curiosity_cli.explore.runs import run_folder
+from curiosity_cli.layout import ExperimentFolder
 from curiosity_cli.parallel import dask_client
 
 runner = CliRunner()
@@ -65,7 +65,7 @@ def test_labels_on_a_cluster_equal_the_loky_labels_byte_for_byte(own_map, tmp_pa
 @pytest.mark.parametrize("backend", ["loky", "dask"])
 def test_a_label_task_that_raises_is_named_and_the_others_are_written(own_map, tmp_path, scheduler, backend):
     config, folder = small_experiment(own_map, tmp_path)
-    meta_path = run_folder(folder, "own", "random-walk", 1) / "run.json"
+    meta_path = ExperimentFolder(folder).run("own", "random-walk", 1) / "run.json"
     meta = json.loads(meta_path.read_text())
     meta_path.write_text(json.dumps({**meta, "n_topics": 9}))  # its checkpoints do not fit the model: labelling raises
     where = {"jobs": 2} if backend == "loky" else {"backend": "dask", "scheduler": scheduler}

@@ -12,10 +12,11 @@ from small_maps import grid_config, grid_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.evaluate.labels import LabelError, batch_path, example_path, label_experiment, label_path
+from curiosity_cli.evaluate.labels import LabelError, label_experiment
 from curiosity_cli.evaluate.tables import EvaluationError, evaluate_experiment
 from curiosity_cli.explore.grid import run_grid
-from curiosity_cli.explore.runs import read_run, run_folder
+from curiosity_cli.explore.runs import read_run
+from curiosity_cli.layout import ExperimentFolder
 from curiosity_cli.recipes import Recipe
 from curiosity_cli.words.store import load_store
 
@@ -34,14 +35,14 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     done = label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     assert (done["labelled"], done["skipped"], done["batch_reused"]) == (8, 0, 0)
-    with np.load(batch_path(folder, "own")) as npz:
+    with np.load(ExperimentFolder(folder).batch("own")) as npz:
         assert npz["labels"].shape == (96, 128) and npz["log_likelihood"].shape == (8,)
-    with np.load(label_path(folder, "own", "random-walk", 1)) as npz:
+    with np.load(ExperimentFolder(folder).label_file("own", "random-walk", 1)) as npz:
         assert npz["lengths"].tolist() == [5, 12]
         # every pixel counted once per checkpoint, against 2 human classes and K = 8 batch topics
         assert npz["human"].shape == (2, 8, 2) and (npz["human"].sum(axis=(1, 2)) == 96 * 128).all()
         assert npz["batch"].shape == (2, 8, 8) and (npz["batch"].sum(axis=(1, 2)) == 96 * 128).all()
-    with np.load(example_path(folder, "own", "topic-perplexity", 0, 12)) as npz:
+    with np.load(ExperimentFolder(folder).example("own", "topic-perplexity", 0, 12)) as npz:
         assert npz["labels"].shape == (96, 128)
 
     again = label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
@@ -79,10 +80,10 @@ def test_labels_record_the_classes_each_path_found(own_map, tmp_path):
     classes = pd.read_csv(folder / "classes.csv", keep_default_na=False, na_values=[""])
     for weight in config.explore.weight_functions:
         for restart in range(2):
-            path = read_run(run_folder(folder, "own", weight, restart)).path
+            path = read_run(ExperimentFolder(folder).run("own", weight, restart)).path
             right = path % 8 >= 4
             expected = [int(np.argmax(~right)) if (~right).any() else -1, int(np.argmax(right)) if right.any() else -1]
-            with np.load(label_path(folder, "own", weight, restart)) as npz:
+            with np.load(ExperimentFolder(folder).label_file("own", weight, restart)) as npz:
                 assert npz["class_first_step"].tolist() == expected
             for length in (5, 12):
                 found = sum(0 <= step < length for step in expected)
@@ -98,7 +99,7 @@ def test_labels_record_the_classes_each_path_found(own_map, tmp_path):
 def test_a_corrupt_label_file_is_reported_and_left_out(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
-    label_path(folder, "own", "word-perplexity", 0).write_bytes(b"garbage")
+    ExperimentFolder(folder).label_file("own", "word-perplexity", 0).write_bytes(b"garbage")
     evaluation = evaluate_experiment(folder)
     assert len(evaluation.skipped) == 1 and "word-perplexity/restart-000.npz: corrupt" in evaluation.skipped[0]
     assert len(evaluation.mi) == 14
@@ -108,7 +109,7 @@ def test_a_corrupt_label_file_is_reported_and_left_out(own_map, tmp_path):
 def test_labels_of_a_run_made_again_from_other_words_are_refused_naming_what_changed(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
-    meta_path = run_folder(folder, "own", "random-walk", 0) / "run.json"
+    meta_path = ExperimentFolder(folder).run("own", "random-walk", 0) / "run.json"
     meta = json.loads(meta_path.read_text())
     real, other = meta["store"], "own-0000000000000000.npz"
     # the run as explored again from another word store: its recipe records that store
@@ -125,7 +126,7 @@ def test_labels_of_a_run_made_again_from_other_words_are_refused_naming_what_cha
 
 def test_a_corrupt_checkpoint_is_named_and_the_other_runs_are_labelled(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
-    (run_folder(folder, "own", "random-walk", 1) / "checkpoints.npz").write_bytes(b"garbage")
+    (ExperimentFolder(folder).run("own", "random-walk", 1) / "checkpoints.npz").write_bytes(b"garbage")
     with pytest.raises(LabelError, match=r"1 of 8 runs could not be labelled .*random-walk/restart-001/checkpoints.npz: corrupt"):
         label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     assert len(list((folder / "labels" / "own").glob("*/restart-*.npz"))) == 7

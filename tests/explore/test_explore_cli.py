@@ -6,7 +6,8 @@ from small_maps import grid_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.explore.runs import read_run, run_folder
+from curiosity_cli.explore.runs import read_run
+from curiosity_cli.layout import ExperimentFolder
 
 runner = CliRunner()
 
@@ -28,7 +29,7 @@ def test_explore_runs_a_grid_and_resumes_it(own_map, tmp_path):
     assert result.exit_code == 0, result.output
     assert "grid: 4 runs to do, 0 already finished" in result.stderr
     assert "wrote 4 runs" in result.stdout
-    run = read_run(run_folder(tmp_path / "results" / "grid", "own", "topic-perplexity", 1))
+    run = read_run(ExperimentFolder(tmp_path / "results" / "grid").run("own", "topic-perplexity", 1))
     assert run.path.size == 8 and run.meta["checkpoints"] == [5, 8]
 
     again = explore(config, "--weights", "random-walk,topic-perplexity", "--steps", "8", *common)

@@ -21,7 +21,8 @@ from curiosity_cli.config import load_config
 from curiosity_cli.errors import ConfigError
 from curiosity_cli.explore import weights
 from curiosity_cli.explore.grid import GridError, run_grid, start_cells
-from curiosity_cli.explore.runs import RunError, read_run, remove_partial_runs, run_folder
+from curiosity_cli.explore.runs import RunError, read_run, remove_partial_runs
+from curiosity_cli.layout import ExperimentFolder
 
 
 def folder_contents(root: Path) -> dict:
@@ -49,14 +50,14 @@ def test_a_grid_writes_every_run_with_its_config_seeds_and_provenance(own_map, t
     assert len(plan) == 14 and set(plan.weight_function) == set(weights.WEIGHT_FUNCTIONS)
     # paired design: every walker starts restart r from the same cell
     assert plan.groupby("restart")[["start_row", "start_col"]].nunique().eq(1).all().all()
-    run = read_run(run_folder(folder, "own", "topic-perplexity", 1))
+    run = read_run(ExperimentFolder(folder).run("own", "topic-perplexity", 1))
     assert run.path.size == 12 and run.meta["checkpoints"] == [5, 12]
     assert (run.meta["start_row"], run.meta["start_col"]) == divmod(int(run.path[0]), 8)
     assert run.phi(5).sum() < run.phi(12).sum() or np.unique(run.path).size == np.unique(run.path[:5]).size
     assert summary.bytes_written == sum(p.stat().st_size for p in (folder / "runs").glob("*/*/*/*"))
-    mower = read_run(run_folder(folder, "own", "lawnmower", 1))
+    mower = read_run(ExperimentFolder(folder).run("own", "lawnmower", 1))
     assert mower.path[0] == run.path[0] and (np.abs(np.diff(np.divmod(mower.path, 8))).sum(axis=0) == 1).all()
-    block = read_run(run_folder(folder, "own", "compact-block", 1))
+    block = read_run(ExperimentFolder(folder).run("own", "compact-block", 1))
     assert block.path[0] == run.path[0]
 
 
@@ -143,7 +144,7 @@ def test_a_failing_run_is_named_and_the_others_are_written(own_map, tmp_path, mo
 
 def test_corrupt_and_partial_run_folders_are_reported_or_removed(own_map, tmp_path):
     run_grid(grid_config(own_map, restarts=1), results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
-    folder = run_folder(tmp_path / "grid", "own", "random-walk", 0)
+    folder = ExperimentFolder(tmp_path / "grid").run("own", "random-walk", 0)
     (folder / "checkpoints.npz").write_bytes(b"not a zip file")
     with pytest.raises(RunError, match=r"restart-000/checkpoints.npz: corrupt or truncated \(not a .npz archive\); run `curiosity explore`"):
         read_run(folder)

@@ -23,7 +23,6 @@ import yaml
 from cli_cases import (
     EXPERIMENT,
     EXPLORE,
-    FAST_LABELS,
     LABEL,
     assert_clean_error,
     assert_written_only_inside,

@@ -15,8 +15,7 @@ from pathlib import Path
 import yaml
 from cli_cases import EXPERIMENT, EXPLORE, FAST_LABELS, assert_clean_error, run_cli
 
-from curiosity_cli.evaluate.labels import batch_path, label_path
-from curiosity_cli.explore.runs import run_folder
+from curiosity_cli.layout import ExperimentFolder
 
 CONFIG = f"{EXPERIMENT}/config.yaml"
 
@@ -36,7 +35,7 @@ def _recipe(path: Path) -> dict:
 
 
 def test_an_edited_seed_is_refused_at_label_before_the_batch_reference_is_touched(work):
-    batch = batch_path(work / EXPERIMENT, "own")
+    batch = ExperimentFolder(work / EXPERIMENT).batch("own")
     before = batch.read_bytes()
     _edit_config(work, None, "seed", 5)
     error = assert_clean_error(
@@ -49,7 +48,7 @@ def test_an_edited_seed_is_refused_at_label_before_the_batch_reference_is_touche
 
 def test_a_label_override_is_recorded_and_what_it_changes_is_made_again(work):
     folder = work / EXPERIMENT
-    first = label_path(folder, "own", "random-walk", 0)
+    first = ExperimentFolder(folder).label_file("own", "random-walk", 0)
     old = _recipe(first)
     outcome = run_cli(["label", EXPERIMENT, *FAST_LABELS, "--set", "label.batch_sweeps=3"], cwd=work)
     assert outcome.code == 0, outcome.output
@@ -58,7 +57,7 @@ def test_a_label_override_is_recorded_and_what_it_changes_is_made_again(work):
     assert "batch/own.npz: sweeps was 5, now 3; computing it again" in outcome.stderr
     assert "labelling 8 runs again whose label files were made otherwise" in outcome.stderr
     assert "the batch reference changed" in outcome.stderr
-    assert _recipe(batch_path(folder, "own"))["inputs"]["sweeps"] == 3
+    assert _recipe(ExperimentFolder(folder).batch("own"))["inputs"]["sweeps"] == 3
     assert _recipe(first)["inputs"]["batch"] != old["inputs"]["batch"]
     # the same command again finds everything current
     again = run_cli(["label", EXPERIMENT, *FAST_LABELS, "--set", "label.batch_sweeps=3"], cwd=work)
@@ -92,7 +91,7 @@ def test_force_redoes_runs_made_otherwise_and_labels_follow(work):
     (folder / "config.yaml").unlink()
     outcome = run_cli([*EXPLORE, "--set", "seed=5", "--force"], cwd=work)
     assert outcome.code == 0, outcome.output
-    assert json.loads((run_folder(folder, "own", "random-walk", 0) / "run.json").read_text())["seed"][0] == 5
+    assert json.loads((ExperimentFolder(folder).run("own", "random-walk", 0) / "run.json").read_text())["seed"][0] == 5
     assert yaml.safe_load((folder / "config.yaml").read_text())["seed"] == 5
     # the labels were made from the old runs: evaluate refuses them, label makes them again
     assert_clean_error(run_cli(["evaluate", EXPERIMENT], cwd=work), "label files or runs were made otherwise",
