@@ -9,7 +9,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import ConfigError, CuriosityError
 
 
 #: The first bytes of a zip archive, and so of every ``.npz`` file.
@@ -157,3 +157,17 @@ def user_cache_dir() -> Path:
     if env:
         return Path(env).expanduser()
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "curiosity"
+
+
+def check_inside(path: Path, root: Path, what: str) -> None:
+    """Refuse a ``path`` built from names that does not resolve to somewhere below ``root``.
+
+    Names are validated when a config is loaded; this second line of defence keeps a name
+    that slipped through from writing outside the results or the cache.
+    """
+    resolved, top = Path(path).resolve(), Path(root).resolve()
+    if top not in resolved.parents:
+        raise ConfigError(
+            f"{what}: {display_path(path)} is not inside {display_path(root)}; "
+            "expected a name without '/' or '..'"
+        )

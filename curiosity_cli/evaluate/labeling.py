@@ -23,7 +23,7 @@ from curiosity_cli.words.store import WordStore
 
 
 def _whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_counts=None):
-    from curiosity_cli.explore.walker import map_topic_model
+    from curiosity_cli.topics.map_model import map_topic_model
 
     topic_model = map_topic_model(store, model, seed, frozen_counts=frozen_counts)
     for cell in range(store.n_cells):

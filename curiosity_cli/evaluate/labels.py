@@ -57,7 +57,7 @@ from curiosity_cli.recipes import Recipe, differences, first_of, recorded_digest
 
 if TYPE_CHECKING:
     from curiosity_cli.evaluate.labeling import PathLabeller
-    from curiosity_cli.explore.grid import StoreInfo
+    from curiosity_cli.map_stores import StoreInfo
     from curiosity_cli.explore.runs import Run
     from curiosity_cli.parallel import Workers
     from curiosity_cli.words.store import WordStore
@@ -203,7 +203,7 @@ def _compute_batch(
 ) -> tuple:
     """A map's batch reference, in this process or a worker: ``(pixel labels, word labels, trace, seconds)``."""
     from curiosity_cli.evaluate.labeling import batch_labels, pixel_labels
-    from curiosity_cli.explore.grid import name_key
+    from curiosity_cli.seeds import name_key
 
     seed = int(np.random.SeedSequence((config.seed, name_key(info.name), _BATCH_TAG)).generate_state(1, np.uint64)[0])
     started = time.perf_counter()
@@ -421,7 +421,7 @@ def label_experiment(
         As :class:`~curiosity_cli.parallel.Workers`; and a Dask scheduler that cannot be
         reached or has unusable workers.
     """
-    from curiosity_cli.explore.grid import prepare_stores
+    from curiosity_cli.map_stores import prepare_stores
     from curiosity_cli.explore.runs import RunError
     from curiosity_cli.parallel import Workers
     from curiosity_cli.words.store import load_store

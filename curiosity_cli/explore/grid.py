@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import contextlib
 import time
-import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
@@ -44,10 +43,12 @@ import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
 from curiosity_cli.errors import ConfigError, CuriosityError
-from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.files import atomic_path, check_inside, display_path
 from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder
+from curiosity_cli.map_stores import StoreInfo, prepare_stores
 from curiosity_cli.parallel import Workers
 from curiosity_cli.recipes import Recipe, differences, first_of
+from curiosity_cli.seeds import name_key
 
 #: The config sections a run's numbers depend on ...
 _RUN_SECTIONS = ("seed", "model", "words", "explore")
@@ -72,20 +73,6 @@ class RunTask:
 
 
 @dataclass(frozen=True)
-class StoreInfo:
-    """A map's cached word store, as the grid needs it."""
-
-    name: str
-    path: Path
-    grid_shape: tuple[int, int]
-    vocabulary_size: int
-    vocabulary_hashes: list[str]
-    word_counts: dict[str, int]  # words of each kind ("orb", "texton", "hue")
-    stands_in_for: str | None  # the paper's map it compares with
-    labels_digest: str | None  # of the map's human labels (MapData.labels_digest)
-
-
-@dataclass(frozen=True)
 class GridSummary:
     """What a call to :func:`run_grid` did."""
 
@@ -96,11 +83,6 @@ class GridSummary:
     fallbacks: int
     bytes_written: int
     seconds: float
-
-
-def name_key(name: str) -> int:
-    """A map's or weight function's name as seed entropy (CRC-32, the same on every machine)."""
-    return zlib.crc32(name.encode())
 
 
 def start_cells(seed: int, dataset: str, n_cells: int, restarts: int) -> np.ndarray:
@@ -190,20 +172,6 @@ def check_saved_config(folder: Path, config: ExperimentConfig) -> None:
             )
 
 
-def _check_inside(path: Path, root: Path, what: str) -> None:
-    """Refuse a ``path`` built from names that does not resolve to somewhere below ``root``.
-
-    Names are validated when a config is loaded; this second line of defence keeps a name
-    that slipped through from writing outside the results or the cache.
-    """
-    resolved, top = Path(path).resolve(), Path(root).resolve()
-    if top not in resolved.parents:
-        raise ConfigError(
-            f"{what}: {display_path(path)} is not inside {display_path(root)}; "
-            "expected a name without '/' or '..'"
-        )
-
-
 def run_grid(
     config: ExperimentConfig,
     *,
@@ -263,12 +231,12 @@ def run_grid(
     owned = Workers(backend, scheduler, jobs) if workers is None else None  # checks the backend before any work
     workers = workers or owned
     folder = Path(results_dir) / config.name
-    _check_inside(folder, results_dir, "name")
+    check_inside(folder, results_dir, "name")
     check_saved_config(folder, config)
     stores = prepare_stores(config, cache_dir)
     tasks = plan_runs(config, stores)
     for task in tasks:
-        _check_inside(ExperimentFolder(folder).run(task.dataset, task.weight_function, task.restart), folder, task.dataset)
+        check_inside(ExperimentFolder(folder).run(task.dataset, task.weight_function, task.restart), folder, task.dataset)
     by_name = {info.name: info for info in stores.values()}
     recipes = {
         t: run_recipe(config, t.dataset, Path(t.store_path).name, by_name[t.dataset].vocabulary_hashes, t.weight_function,
@@ -319,34 +287,6 @@ def run_grid(
     if failed:
         raise GridError(f"{len(failed)} of {len(todo)} runs failed (the others are written): " + "; ".join(failed))
     return summary
-
-
-def prepare_stores(config: ExperimentConfig, cache_dir: Path) -> dict[str, StoreInfo]:
-    """Each entry of ``config.datasets``: its map's word store, extracted now if not cached.
-
-    Raises
-    ------
-    ConfigError
-        Two entries naming maps of the same name (their runs would share folders).
-    """
-    from curiosity_cli.data import load_map
-    from curiosity_cli.words.extract import extract_words
-
-    stores = {}
-    for entry in config.datasets:
-        map_data = load_map(entry)
-        name = map_data.config.name
-        # the store is named <cache_dir>/<name>-<hash>.npz
-        _check_inside(Path(cache_dir) / f"{name}-store", cache_dir, f"{display_path(Path(entry))}: name")
-        if any(info.name == name for info in stores.values()):
-            raise ConfigError(f"datasets: two entries are maps named {name!r}; runs are filed by map name")
-        extraction = extract_words(map_data, config.words, cache_dir=cache_dir)
-        store = extraction.store
-        stores[entry] = StoreInfo(
-            name, extraction.path, store.grid_shape, store.vocabulary_size, [t.sha256 for t in store.types],
-            store.count_by_type(), map_data.config.stands_in_for, map_data.labels_digest,
-        )
-    return stores
 
 
 @lru_cache(maxsize=4)

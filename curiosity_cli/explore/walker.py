@@ -36,6 +36,7 @@ import numpy as np
 from curiosity_cli.config import ExploreConfig, ModelConfig
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, Plan, coverage_potential
+from curiosity_cli.topics.map_model import map_topic_model
 from curiosity_cli.words.store import WordStore
 
 # word samples per call when refining against the clock: small enough to stop on time
@@ -133,27 +134,6 @@ def in_bounds_neighbours(cell: int, grid_shape: tuple[int, int]) -> np.ndarray:
         if 0 <= r < rows and 0 <= c < cols:
             out.append(r * cols + c)
     return np.array(out, np.int64)
-
-
-def map_topic_model(store: WordStore, model: ModelConfig, seed: int, *, frozen_counts=None):
-    """An empty :class:`~curiosity_cli.topics.model.TopicModel` over a map's cell grid.
-
-    ``frozen_counts`` (V, K) fixes Φ (see the model); the vocabulary hashes of the store's
-    word types go into the model, so a saved model names what its word ids mean.
-    """
-    from curiosity_cli.topics.model import TopicModel
-    from curiosity_cli.topics.neighbours import grid_neighbours
-
-    return TopicModel(
-        model.topics,
-        store.vocabulary_size,
-        grid_neighbours(*store.grid_shape, model.spatial_neighbours),
-        alpha=model.alpha,
-        beta=model.beta,
-        seed=seed,
-        vocabulary_hashes=[t.sha256 for t in store.types],
-        frozen_counts=frozen_counts,
-    )
 
 
 def draw_move(weights: np.ndarray, rng: np.random.Generator) -> tuple[int, bool]:
