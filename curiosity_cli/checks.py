@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from curiosity_cli.errors import ParameterError
@@ -16,6 +18,31 @@ def check_int(name: str, value, minimum: int, maximum: int | None = None) -> int
     if value < minimum or (maximum is not None and value > maximum):
         raise ParameterError(f"{name}: got {value}, expected an integer {expected}")
     return int(value)
+
+
+def check_float(
+    name: str, value, low: float | None = None, high: float | None = None, *, low_open: bool = False,
+    high_open: bool = False,
+) -> float:
+    """``value`` as a finite float within the bounds given, else :class:`ParameterError` naming ``name``.
+
+    ``low`` and ``high`` are inclusive unless ``low_open`` / ``high_open``; a bool is not a number.
+    """
+    if low is not None and high is None:
+        expected = f"a finite number {'>' if low_open else '>='} {low:g}"
+    elif low is not None and not (low_open or high_open):
+        expected = f"a number between {low:g} and {high:g}"
+    elif low is not None:
+        expected = f"a number in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
+    else:
+        expected = "a finite number"
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"{name}: got {shown(value)}, expected {expected}")
+    too_low = low is not None and (value <= low if low_open else value < low)
+    too_high = high is not None and (value >= high if high_open else value > high)
+    if not math.isfinite(value) or too_low or too_high:
+        raise ParameterError(f"{name}: got {value}, expected {expected}")
+    return float(value)
 
 
 def as_uint8(name: str, array, ndim: int, shape_text: str) -> np.ndarray:

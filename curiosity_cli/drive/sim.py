@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from curiosity_cli.checks import check_float
 from curiosity_cli.errors import ParameterError
 
 
@@ -49,8 +50,7 @@ class Body:
     """
 
     def __init__(self, map_shape: tuple[int, int], metres_per_pixel: float, start: Pose):
-        if not metres_per_pixel > 0:
-            raise ParameterError(f"metres_per_pixel: got {metres_per_pixel}, expected a number > 0")
+        metres_per_pixel = check_float("metres_per_pixel", metres_per_pixel, 0, low_open=True)
         self._height = map_shape[0] * metres_per_pixel
         self._width = map_shape[1] * metres_per_pixel
         if not (0 <= start.x <= self._width and 0 <= start.y <= self._height):

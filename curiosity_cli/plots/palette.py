@@ -19,6 +19,8 @@ import functools
 
 import numpy as np
 
+from curiosity_cli.errors import ParameterError
+
 #: Slots the palette offers: enough for a 127-topic Z_b plus 127 unmatched Z_p topics.
 PALETTE_SIZE = 256
 
@@ -69,7 +71,7 @@ def topic_palette(n: int = PALETTE_SIZE) -> np.ndarray:
         RGB, read-only.
     """
     if not 1 <= n <= PALETTE_SIZE:
-        raise ValueError(f"n: got {n}, expected 1..{PALETTE_SIZE}")
+        raise ParameterError(f"n: got {n}, expected 1..{PALETTE_SIZE}")
     return _palette()[:n]
 
 
@@ -80,9 +82,9 @@ def _sizes(labels: np.ndarray, n: int) -> np.ndarray:
 def _check_labels(labels: np.ndarray, name: str) -> np.ndarray:
     labels = np.asarray(labels)
     if labels.ndim != 2 or labels.dtype.kind not in "iu":
-        raise ValueError(f"{name}: expected an (H, W) integer array, got {labels.dtype} of shape {labels.shape}")
+        raise ParameterError(f"{name}: expected an (H, W) integer array, got {labels.dtype} of shape {labels.shape}")
     if labels.size and labels.min() < 0:
-        raise ValueError(f"{name}: topic ids must be >= 0, got {int(labels.min())}")
+        raise ParameterError(f"{name}: topic ids must be >= 0, got {int(labels.min())}")
     return labels.astype(np.int64, copy=False)
 
 
@@ -134,7 +136,7 @@ def match_topics(z_p: np.ndarray, z_b: np.ndarray) -> tuple[np.ndarray, np.ndarr
     z_p = _check_labels(z_p, "z_p")
     z_b = _check_labels(z_b, "z_b")
     if z_p.shape != z_b.shape:
-        raise ValueError(f"z_p is {z_p.shape} but z_b is {z_b.shape}; expected label maps of the same map")
+        raise ParameterError(f"z_p is {z_p.shape} but z_b is {z_b.shape}; expected label maps of the same map")
     slots_b = rank_topics(z_b)
     n_p, n_b = int(z_p.max()) + 1, slots_b.size
     overlap = np.bincount((z_p * n_b + z_b).ravel(), minlength=n_p * n_b)

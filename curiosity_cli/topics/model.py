@@ -21,14 +21,13 @@ public accessors return ``(V, K)``, topics in columns.
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.checks import check_int
+from curiosity_cli.checks import check_float, check_int
 from curiosity_cli.errors import CuriosityError, ParameterError
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.topics.neighbours import check_neighbours
@@ -113,8 +112,8 @@ class TopicModel:
         self._v = check_int("vocabulary_size", vocabulary_size, 1)
         self._table = check_neighbours(neighbours).copy()  # a copy: the caller's stays writeable
         self._table.flags.writeable = False
-        self._alpha = _check_positive("alpha", alpha)
-        self._beta = _check_positive("beta", beta)
+        self._alpha = check_float("alpha", alpha, 0, low_open=True)
+        self._beta = check_float("beta", beta, 0, low_open=True)
         self._seed = check_int("seed", seed, 0, 2**64 - 1)
         self._hashes = _check_hashes(vocabulary_hashes)
         self._kp = -(-self._k // 8) * 8
@@ -558,7 +557,7 @@ class TopicModel:
         from curiosity_cli.topics._gibbs_kernels import refine_realtime_kernel
 
         word_budget = check_int("word_budget", word_budget, 0)
-        eta = _check_unit("eta", eta)
+        eta = check_float("eta", eta, 0, 1)
         if word_budget == 0 or self._n_observed == 0:
             return 0
         order = self._order[: self._n_observed]
@@ -837,22 +836,6 @@ def _aligned_copy(array: np.ndarray) -> np.ndarray:
     copy = _aligned_zeros(array.shape, array.dtype)
     copy[...] = array
     return copy
-
-
-def _check_positive(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ParameterError(f"{name}: got {value!r}, expected a number > 0")
-    if not math.isfinite(value) or value <= 0:
-        raise ParameterError(f"{name}: got {value}, expected a finite number > 0")
-    return float(value)
-
-
-def _check_unit(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ParameterError(f"{name}: got {value!r}, expected a number between 0 and 1")
-    if not 0 <= value <= 1:
-        raise ParameterError(f"{name}: got {value}, expected a number between 0 and 1")
-    return float(value)
 
 
 def _check_hashes(hashes):

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from curiosity_cli.checks import check_int
+from curiosity_cli.checks import check_float, check_int
 from curiosity_cli.errors import ParameterError
 
 
@@ -91,12 +91,6 @@ class PlantedMap(PlantedCorpus):
     grid_shape: tuple[int, int]
     regions: np.ndarray
     region_theta: np.ndarray
-
-
-def _check_positive(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) or not value > 0:
-        raise ParameterError(f"{name}: got {value!r}, expected a number > 0")
-    return float(value)
 
 
 def _cell_lengths(rng: np.random.Generator, n_cells: int, words_per_cell: int, vary: bool) -> np.ndarray:
@@ -187,8 +181,8 @@ def planted_lda(
     vocabulary_size = check_int("vocabulary_size", vocabulary_size, 2)
     n_topics = check_int("n_topics", n_topics, 1)
     words_per_cell = check_int("words_per_cell", words_per_cell, 1)
-    alpha = _check_positive("alpha", alpha)
-    beta = _check_positive("beta", beta)
+    alpha = check_float("alpha", alpha, 0, low_open=True)
+    beta = check_float("beta", beta, 0, low_open=True)
     rng = np.random.default_rng(seed)
     phi = rng.dirichlet(np.full(vocabulary_size, beta), size=n_topics)
     theta = rng.dirichlet(np.full(n_topics, alpha), size=n_cells)
@@ -273,7 +267,7 @@ def planted_map(
     vocabulary_size = check_int("vocabulary_size", vocabulary_size, 2)
     n_topics = check_int("n_topics", n_topics, 2)
     words_per_cell = check_int("words_per_cell", words_per_cell, 1)
-    beta = _check_positive("beta", beta)
+    beta = check_float("beta", beta, 0, low_open=True)
     low, high = (float(x) for x in main_weight)
     if not 0 < low <= high <= 1:
         raise ParameterError(f"main_weight: got {main_weight!r}, expected 0 < low <= high <= 1")

@@ -33,7 +33,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from curiosity_cli.checks import check_int
+from curiosity_cli.checks import check_float, check_int
+from curiosity_cli.errors import ParameterError
 
 #: ``(sigma_long, sigma_short)`` of the three anisotropic scales, in pixels.
 SCALES: tuple[tuple[float, float], ...] = ((3.0, 1.0), (6.0, 2.0), (12.0, 4.0))
@@ -135,9 +136,9 @@ def mr8_filters(support: int = 49, *, circular: bool = True) -> FilterBank:
     (equal to its L1 norm) and not made zero mean, so its response is a local average.
     """
     if isinstance(support, bool) or not isinstance(support, (int, np.integer)):
-        raise ValueError(f"support: got {support!r}, expected an odd integer >= 3")
+        raise ParameterError(f"support: got {support!r}, expected an odd integer >= 3")
     if support < 3 or support % 2 == 0:
-        raise ValueError(f"support: got {support}, expected an odd integer >= 3")
+        raise ParameterError(f"support: got {support}, expected an odd integer >= 3")
     return _build_filters(int(support), bool(circular))
 
 
@@ -245,7 +246,7 @@ def mr8_responses(
     if filters is None:
         filters = mr8_filters()
     elif not isinstance(filters, FilterBank):
-        raise ValueError(f"filters: got {type(filters).__name__}, expected a FilterBank from mr8_filters()")
+        raise ParameterError(f"filters: got {type(filters).__name__}, expected a FilterBank from mr8_filters()")
     if standardise:
         # in float64: float32 sums over millions of pixels lose digits
         work = image.astype(np.float64)
@@ -307,11 +308,10 @@ def normalise_responses(responses: np.ndarray, *, scale: float = CONTRAST_SCALE)
     """
     responses = np.asarray(responses)
     if responses.ndim < 1 or responses.shape[-1] < 1:
-        raise ValueError(f"responses: got shape {responses.shape}, expected (..., C) with C >= 1")
+        raise ParameterError(f"responses: got shape {responses.shape}, expected (..., C) with C >= 1")
     if not (np.issubdtype(responses.dtype, np.floating) or np.issubdtype(responses.dtype, np.integer)):
-        raise ValueError(f"responses: got dtype {responses.dtype}, expected a real numeric dtype")
-    if isinstance(scale, bool) or not isinstance(scale, (int, float, np.integer, np.floating)) or not scale > 0:
-        raise ValueError(f"scale: got {scale!r}, expected a number > 0")
+        raise ParameterError(f"responses: got dtype {responses.dtype}, expected a real numeric dtype")
+    scale = check_float("scale", scale, 0, low_open=True)
     # norms in float64 so the log factor is accurate; the result is stored as float32
     work = responses.astype(np.float64)
     length = np.sqrt(np.einsum("...c,...c->...", work, work))[..., None]
@@ -337,22 +337,22 @@ def subsample(array: np.ndarray, stride: int) -> np.ndarray:
     stride = check_int("stride", stride, 1)
     array = np.asarray(array)
     if array.ndim < 2:
-        raise ValueError(f"array: got shape {array.shape}, expected at least 2 dimensions (rows, cols, ...)")
+        raise ParameterError(f"array: got shape {array.shape}, expected at least 2 dimensions (rows, cols, ...)")
     return array[::stride, ::stride]
 
 
 def check_image(image: object) -> np.ndarray:
-    """Return ``image`` as an ndarray, or raise ValueError naming it unless it is a finite 2-D real array."""
+    """Return ``image`` as an ndarray, or raise ParameterError naming it unless it is a finite 2-D real array."""
     image = np.asarray(image)
     if image.ndim != 2:
         hint = " (convert colour images to grayscale first)" if image.ndim == 3 else ""
-        raise ValueError(f"image: got shape {image.shape}, expected a 2-D (H, W) grayscale array{hint}")
+        raise ParameterError(f"image: got shape {image.shape}, expected a 2-D (H, W) grayscale array{hint}")
     if image.size == 0:
-        raise ValueError(f"image: got shape {image.shape}, expected a non-empty array")
+        raise ParameterError(f"image: got shape {image.shape}, expected a non-empty array")
     if image.dtype == bool or not (
         np.issubdtype(image.dtype, np.integer) or np.issubdtype(image.dtype, np.floating)
     ):
-        raise ValueError(f"image: got dtype {image.dtype}, expected an integer or floating dtype")
+        raise ParameterError(f"image: got dtype {image.dtype}, expected an integer or floating dtype")
     if np.issubdtype(image.dtype, np.floating) and not np.isfinite(image).all():
-        raise ValueError("image: contains NaN or infinite values")
+        raise ParameterError("image: contains NaN or infinite values")
     return image

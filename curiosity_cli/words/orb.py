@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from curiosity_cli.checks import as_uint8, check_int
+from curiosity_cli.checks import as_uint8, check_float, check_int
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.words.hamming import DESCRIPTOR_BYTES
 
@@ -254,13 +254,7 @@ def detect_orb(
         if fill_threshold == fast_threshold:
             fill_threshold = None
     n_levels = check_int("n_levels", n_levels, 1, 16)
-    if (
-        isinstance(scale_factor, bool)
-        or not isinstance(scale_factor, (int, float, np.integer, np.floating))
-        or not 1.0 < scale_factor <= 2.0
-    ):
-        raise ParameterError(f"scale_factor: got {scale_factor!r}, expected a number in (1, 2]")
-    scale_factor = float(scale_factor)
+    scale_factor = check_float("scale_factor", scale_factor, 1, 2, low_open=True)
     if scale_factor ** (n_levels - 1) > _MAX_LEVEL_SCALE:
         # The padding grows with the coarsest level's scale; past this it dwarfs the map.
         raise ParameterError(

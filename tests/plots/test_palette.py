@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from curiosity_cli.errors import ParameterError
 from curiosity_cli.plots.palette import PALETTE_SIZE, _srgb_to_lab, match_topics, paint_topics, rank_topics, topic_palette
 
 
@@ -18,7 +19,7 @@ def test_palette_is_fixed_distinct_and_readable():
     distances = np.sqrt(((lab[:, None] - lab[None]) ** 2).sum(-1))[np.triu_indices(127, 1)]
     assert distances.min() > 12  # CIELAB ΔE: clearly different side by side
     assert np.sqrt(((lab[0] - lab[1]) ** 2).sum()) > 60  # the first colours are the most distinct
-    with pytest.raises(ValueError):
+    with pytest.raises(ParameterError):
         topic_palette(0)
 
 
@@ -59,7 +60,7 @@ def test_a_split_topic_keeps_its_own_colour():
 
 
 def test_match_refuses_maps_of_different_shapes():
-    with pytest.raises(ValueError, match="same map"):
+    with pytest.raises(ParameterError, match="same map"):
         match_topics(np.zeros((3, 3), int), np.zeros((3, 4), int))
-    with pytest.raises(ValueError, match=">= 0"):
+    with pytest.raises(ParameterError, match=">= 0"):
         rank_topics(np.array([[-1, 0]]))
