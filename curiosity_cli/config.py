@@ -633,4 +633,18 @@ def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:
             f"{_where(raw, ('explore', 'checkpoints'))}: got {checkpoints}, expected increasing "
             f"path lengths no longer than explore.path_length ({explore.path_length})"
         )
+    _check_drive(config.drive, raw)
     return dataclasses.replace(config, datasets=tuple(datasets))
+
+
+def _check_drive(drive: DriveConfig, raw: _Raw) -> None:
+    """Rules that tie ``drive`` keys together: the first broken one, where its key was set."""
+    rules = [
+        (drive.frame_width >= drive.grid_cols, "frame_width", f"at least grid_cols ({drive.grid_cols})"),
+        (drive.carry_frames < drive.window_frames, "carry_frames", f"fewer than window_frames ({drive.window_frames})"),
+        (drive.surge_min <= drive.surge_max, "surge_min", f"at most surge_max ({drive.surge_max})"),
+        (drive.keepalive < drive.watchdog, "keepalive", f"shorter than the robot's watchdog ({drive.watchdog} s)"),
+    ]
+    for ok, key, expected in rules:
+        if not ok:
+            raise ConfigError(f"{_where(raw, ('drive', key))}: got {getattr(drive, key)}, expected {expected}")

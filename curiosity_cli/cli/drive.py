@@ -37,14 +37,6 @@ def _parse_start(text: str | None, map_shape: tuple[int, int]) -> tuple[float, f
     return row, col
 
 
-def _load(config: Path, overrides: list[str]):
-    from curiosity_cli.config import load_config
-    from curiosity_cli.drive.driver import check_drive_config
-    from curiosity_cli.files import display_path
-
-    resolved = load_config(config, overrides)
-    check_drive_config(resolved.drive, display_path(config))
-    return resolved
 
 
 def _default_out() -> Path:
@@ -76,6 +68,7 @@ def drive(
 
     Protocol: curiosity_cli/drive/PROTOCOL.md. Ctrl-C sends STOP, then exits with 130.
     """
+    from curiosity_cli.config import load_config
     from curiosity_cli.drive.driver import StopRequest, stopping_on_signals
 
     if dry_run and serial is not None:
@@ -87,7 +80,7 @@ def drive(
             "only a dry run simulates the robot here; give the start to `curiosity simrobot`",
             param_hint="--start" if start is not None else "--heading-deg",
         )
-    resolved = _load(config, overrides)
+    resolved = load_config(config, overrides)
     port = serial or resolved.drive.port
     if not dry_run and port is None:
         raise typer.BadParameter("give the robot's port with --serial (or drive.port in the config), or --dry-run", param_hint="--serial")
@@ -203,6 +196,7 @@ def simrobot(
     import math
     import os
 
+    from curiosity_cli.config import load_config
     from curiosity_cli.data import load_map
     from curiosity_cli.drive.driver import StopRequest, stopping_on_signals
     from curiosity_cli.drive.jsonlines import JsonLines
@@ -210,7 +204,7 @@ def simrobot(
     from curiosity_cli.drive.simrobot import Noise, SimRobot, open_pty
     from curiosity_cli.files import display_path
 
-    resolved = _load(config, overrides)
+    resolved = load_config(config, overrides)
     rates = Noise.parse(noise)
     map_data = load_map(map_name)
     shape = map_data.image.shape[:2]

@@ -21,31 +21,11 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from curiosity_cli.config import DriveConfig, ExperimentConfig
+from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.drive.jsonlines import JsonLines
 from curiosity_cli.drive.link import LinkError
 from curiosity_cli.drive.overlay import VideoSink, caption_for, draw_overlay, write_png
 from curiosity_cli.drive.pipeline import CuriosityPipeline
-from curiosity_cli.errors import ConfigError
-
-
-def check_drive_config(drive: DriveConfig, where: str) -> None:
-    """Rules that tie ``drive`` keys together.
-
-    Raises
-    ------
-    ConfigError
-        ``<where>: drive.<key>: ...`` naming the first broken rule.
-    """
-    rules = [
-        (drive.frame_width >= drive.grid_cols, "frame_width", f"at least grid_cols ({drive.grid_cols})"),
-        (drive.carry_frames < drive.window_frames, "carry_frames", f"fewer than window_frames ({drive.window_frames})"),
-        (drive.surge_min <= drive.surge_max, "surge_min", f"at most surge_max ({drive.surge_max})"),
-        (drive.keepalive < drive.watchdog, "keepalive", f"shorter than the robot's watchdog ({drive.watchdog} s)"),
-    ]
-    for ok, key, expected in rules:
-        if not ok:
-            raise ConfigError(f"{where}: drive.{key}: got {getattr(drive, key)}, expected {expected}")
 
 
 class StopRequest:

@@ -7,12 +7,13 @@ import math
 
 import numpy as np
 import pytest
+import yaml
 
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.drive.controller import Command, steer, target_offset
 from curiosity_cli.drive.curiosity import CuriosityScores, cell_perplexity
-from curiosity_cli.drive.driver import check_drive_config
 from curiosity_cli.errors import ConfigError, ParameterError
+from curiosity_cli.files import display_path
 
 DRIVE = load_config(CONFIG_DIR / "paper-grid.yaml").drive
 
@@ -91,10 +92,15 @@ def test_steer_turns_towards_the_target_and_limits_apply():
         (dict(carry_frames=150), "drive.carry_frames: got 150, expected fewer than window_frames (150)"),
         (dict(surge_min=1.0), "drive.surge_min: got 1.0, expected at most surge_max (0.5)"),
         (dict(keepalive=1.5), "drive.keepalive: got 1.5, expected shorter than the robot's watchdog (1.0 s)"),
-        (dict(frame_width=4, grid_cols=8), "drive.frame_width: got 4, expected at least grid_cols (8)"),
+        (dict(frame_width=16, grid_cols=32), "drive.frame_width: got 16, expected at least grid_cols (32)"),
     ],
 )
-def test_drive_keys_that_contradict_each_other_are_refused_in_one_line(change, message):
+def test_drive_keys_that_contradict_each_other_are_refused_in_one_line(tmp_path, change, message):
+    # refused by the config loader itself, so `config show` refuses what `drive` would
+    config = tmp_path / "exp.yaml"
+    config.write_text(yaml.safe_dump({"base": str(CONFIG_DIR / "paper-grid.yaml"), "drive": change}))
     with pytest.raises(ConfigError) as info:
-        check_drive_config(dataclasses.replace(DRIVE, **change), "exp.yaml")
-    assert str(info.value) == f"exp.yaml: {message}"
+        load_config(config)
+    assert str(info.value) == f"{display_path(config)}: {message}"
+    with pytest.raises(ConfigError, match=f"--set: {message.split(':')[0]}"):
+        load_config(CONFIG_DIR / "paper-grid.yaml", [f"drive.{key}={value}" for key, value in change.items()])
