@@ -32,7 +32,8 @@ import numpy as np
 
 from curiosity_cli.config import CONFIG_DIR, dataset_names, load_words_config
 from curiosity_cli.data import load_map
-from curiosity_cli.words.extract import extract_words, map_orb_features
+from curiosity_cli.words.extract import extract_words
+from curiosity_cli.words.kinds import OrbSettings, orb_features
 from curiosity_cli.words.filterbank import mr8_responses, normalise_responses
 from curiosity_cli.words.hamming import nearest_binary_words
 from curiosity_cli.words.textons import nearest_centres
@@ -94,9 +95,9 @@ def main() -> None:
         t_brute_sample, brute = median_seconds(lambda: brute_force_nearest(sample, texton_vocab), 1)
         t_brute = t_brute_sample * len(responses) / len(sample)
         agree = np.mean(brute == assigned[: len(sample)])
-        features = map_orb_features(grey, words)
+        features = orb_features(grey, OrbSettings.for_maps(words))
         t_orb, _ = median_seconds(
-            lambda: nearest_binary_words(map_orb_features(grey, words).descriptors, orb_vocab), args.repeats
+            lambda: nearest_binary_words(orb_features(grey, OrbSettings.for_maps(words)).descriptors, orb_vocab), args.repeats
         )
         t_orb_assign, ours = median_seconds(lambda: nearest_binary_words(features.descriptors, orb_vocab), args.repeats)
         t_orb_ref, ref = median_seconds(lambda: opencv_hamming(features.descriptors, orb_vocab), 1)

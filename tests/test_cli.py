@@ -148,7 +148,7 @@ def test_extract_prints_counts_then_reuses_its_cache(own_map, tmp_path):
     first = run("extract", str(own_map), "--cache-dir", str(cache))
     assert first.exit_code == 0, first.output
     assert "wrote " in first.stdout and "12,288  ids 5000..5999 (texton-1000)" in first.stdout
-    assert "words per cell: min" in first.stdout and "seconds: texton" in first.stdout
+    assert "words per cell: min" in first.stdout and "seconds: orb" in first.stdout
     second = run("extract", str(own_map), "--cache-dir", str(cache))
     assert second.exit_code == 0 and "reused " in second.stdout and "seconds" not in second.stdout
 

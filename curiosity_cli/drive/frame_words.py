@@ -1,8 +1,8 @@
 """Visual words of a camera frame, cut into the driver's grid of image cells.
 
-The same extractors and vocabularies as ``curiosity extract`` (texton words from the
-MR8 filter bank, ORB words, optional hue words, one id space), on a frame first resized
-to ``drive.frame_width``: at camera resolution the filter bank alone would take longer
+The same recipe as ``curiosity extract`` (:class:`~curiosity_cli.words.kinds.WordRecipe`:
+the same kinds of words, vocabularies and id space), on a frame first resized to
+``drive.frame_width``: at camera resolution the filter bank alone would take longer
 than a frame. The ORB pyramid depth, the cap per tile and the top-up threshold are the
 driver's own settings (``drive.orb_levels``, ``drive.orb_per_tile``,
 ``drive.orb_fill_threshold``) for the same reason: a frame of 192 px is too small for
@@ -15,7 +15,7 @@ import numpy as np
 
 from curiosity_cli.config import DriveConfig, WordsConfig
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.words.extract import HUE_BINS
+from curiosity_cli.words.kinds import OrbSettings, Picture, WordRecipe
 
 
 class FrameWords:
@@ -35,17 +35,13 @@ class FrameWords:
     """
 
     def __init__(self, words: WordsConfig, drive: DriveConfig):
-        from curiosity_cli.words.vocab import load_vocabulary
-
-        self._words = words
         self._drive = drive
-        self._orb = load_vocabulary(words.vocabulary_dir, "orb", words.orb_vocabulary)
-        self._texton = load_vocabulary(words.vocabulary_dir, "texton", words.texton_vocabulary)
-        self.texton_offset = len(self._orb.centres)
-        self.hue_offset = self.texton_offset + len(self._texton.centres)
-        self.vocabulary_size = self.hue_offset + (HUE_BINS if words.colour_words else 0)
+        self._recipe = WordRecipe(words)
+        self._orb = OrbSettings.for_frames(words, drive)
+        self.vocabulary_size = self._recipe.vocabulary_size
         self.grid = (drive.grid_rows, drive.grid_cols)
-        self.vocabulary_hashes = {"orb": self._orb.sha256, "texton": self._texton.sha256}
+        # every kind's, hue's ("") too: a saved model names what all its ids mean
+        self.vocabulary_hashes = {t.name: t.sha256 for t in self._recipe.types}
 
     def resized(self, frame: np.ndarray) -> np.ndarray:
         """The frame at ``drive.frame_width`` columns, aspect kept.
@@ -96,33 +92,9 @@ class FrameWords:
         """
         import cv2
 
-        from curiosity_cli.words.hamming import nearest_binary_words
-        from curiosity_cli.words.orb import detect_orb
-        from curiosity_cli.words.textons import texton_words
-
-        drive, words = self._drive, self._words
         grey = cv2.cvtColor(small, cv2.COLOR_RGB2GRAY)
-        t_rows, t_cols, t_words = texton_words(grey, self._texton.centres, drive.texton_stride)
-        features = detect_orb(
-            grey,
-            tile=words.orb_tile,
-            per_tile=drive.orb_per_tile,
-            max_features=words.orb_max_features,
-            fast_threshold=words.orb_fast_threshold,
-            n_levels=drive.orb_levels,
-            fill_threshold=drive.orb_fill_threshold,
-        )
-        o_words = nearest_binary_words(features.descriptors, self._orb.centres)
-        rows = [features.rows, t_rows]
-        cols = [features.cols, t_cols]
-        ids = [o_words.astype(np.int32), t_words.astype(np.int32) + self.texton_offset]
-        if words.colour_words:
-            stride = drive.texton_stride
-            hue = cv2.cvtColor(small, cv2.COLOR_RGB2HSV)[::stride, ::stride, 0]
-            rows.append(t_rows)
-            cols.append(t_cols)
-            ids.append(hue.ravel().astype(np.int32) + self.hue_offset)
-        return split_by_cell(np.concatenate(rows), np.concatenate(cols), np.concatenate(ids), small.shape[:2], self.grid)
+        rows, cols, ids, _ = self._recipe.find(Picture(small, grey, self._drive.texton_stride, self._orb))
+        return split_by_cell(rows, cols, ids, small.shape[:2], self.grid)
 
     def __call__(self, frame: np.ndarray) -> list[np.ndarray]:
         """:meth:`cell_words` of :meth:`resized` ``frame``."""

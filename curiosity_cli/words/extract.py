@@ -21,11 +21,8 @@ from curiosity_cli.data import MapData
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import CorruptFileError, note
 from curiosity_cli.layout import DEFAULT_CACHE
+from curiosity_cli.words.kinds import OrbSettings, Picture, WordRecipe
 from curiosity_cli.words.store import STORE_FORMAT, WordStore, WordType, build_store, load_store, save_store
-from curiosity_cli.words.vocab import Vocabulary, load_vocabulary
-
-#: Hue words: OpenCV's 8-bit hue channel has 180 values (2 degrees each).
-HUE_BINS = 180
 
 
 @dataclass(frozen=True)
@@ -44,16 +41,6 @@ class Extraction:
         return self.store.count_by_type()["orb"] / total if total else 0.0
 
 
-def _word_types(orb: Vocabulary, texton: Vocabulary, colour_words: bool) -> tuple[WordType, ...]:
-    types = [
-        WordType("orb", orb.name, 0, len(orb.centres), orb.sha256),
-        WordType("texton", texton.name, len(orb.centres), len(texton.centres), texton.sha256),
-    ]
-    if colour_words:
-        types.append(WordType("hue", f"hue-{HUE_BINS}", types[-1].offset + types[-1].size, HUE_BINS, ""))
-    return tuple(types)
-
-
 def _params(map_data: MapData, words: WordsConfig, stride: int, cell_width: int) -> dict:
     image_hash = hashlib.sha256(map_data.image.tobytes() + str(map_data.image.shape).encode()).hexdigest()
     return {
@@ -69,20 +56,6 @@ def _params(map_data: MapData, words: WordsConfig, stride: int, cell_width: int)
         "orb_fill_threshold": words.orb_fill_threshold,
         "colour_words": words.colour_words,
     }
-
-
-def map_orb_features(grey: np.ndarray, words: WordsConfig):
-    """The ORB keypoints of a map's (H, W) uint8 grey image with the ``words`` settings."""
-    from curiosity_cli.words.orb import detect_orb
-
-    return detect_orb(
-        grey,
-        tile=words.orb_tile,
-        per_tile=words.orb_per_tile,
-        max_features=words.orb_max_features,
-        fast_threshold=words.orb_fast_threshold,
-        fill_threshold=words.orb_fill_threshold,
-    )
 
 
 def store_path(cache_dir: Path, params: dict, types: tuple[WordType, ...]) -> Path:
@@ -140,9 +113,8 @@ def extract_words(
         raise CuriosityError(
             f"{map_data.config.image}: the image is grey; colour words need colour (set words.colour_words: false)"
         )
-    orb = load_vocabulary(words.vocabulary_dir, "orb", words.orb_vocabulary)
-    texton = load_vocabulary(words.vocabulary_dir, "texton", words.texton_vocabulary)
-    types = _word_types(orb, texton, words.colour_words)
+    recipe = WordRecipe(words)
+    types = recipe.types
     params = _params(map_data, words, stride, cell_width)
     path = store_path(cache_dir, params, types)
     if path.is_file() and not force:
@@ -151,34 +123,13 @@ def extract_words(
         except CorruptFileError as exc:  # a cache: make it again
             note(f"{exc}; extracting the words again")
 
-    from curiosity_cli.words.hamming import nearest_binary_words
-    from curiosity_cli.words.textons import texton_words
-
-    seconds = {}
     start = time.perf_counter()
     grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
-    t_rows, t_cols, t_words = texton_words(grey, texton.centres, stride)
-    seconds["texton"] = time.perf_counter() - start
-
-    mark = time.perf_counter()
-    features = map_orb_features(grey, words)
-    o_words = nearest_binary_words(features.descriptors, orb.centres)
-    seconds["orb"] = time.perf_counter() - mark
-
-    rows, cols = [features.rows, t_rows], [features.cols, t_cols]
-    ids = [o_words.astype(np.int64) + types[0].offset, t_words.astype(np.int64) + types[1].offset]
-    if words.colour_words:
-        mark = time.perf_counter()
-        hue = cv2.cvtColor(image, cv2.COLOR_RGB2HSV)[::stride, ::stride, 0]
-        rows.append(t_rows)
-        cols.append(t_cols)
-        ids.append(hue.ravel().astype(np.int64) + types[2].offset)
-        seconds["hue"] = time.perf_counter() - mark
-
+    rows, cols, ids, seconds = recipe.find(Picture(image, grey, stride, OrbSettings.for_maps(words)))
     store = build_store(
-        np.concatenate(rows),
-        np.concatenate(cols),
-        np.concatenate(ids),
+        rows,
+        cols,
+        ids,
         image.shape[:2],
         cell_width,
         types,

@@ -1,0 +1,184 @@
+"""The kinds of visual words: one recipe for a map (``curiosity extract``) and a camera frame (``drive``).
+
+A kind is a registry entry (:data:`KINDS`): whether a config uses it, its vocabulary
+(name, size and content hash) and how it finds its words in an image. The kinds' word
+ids follow one another in registry order in one id space (ORB ``0 ..``, textons next,
+hue last when ``words.colour_words``), and :class:`WordRecipe` is the one place that
+says where each kind's ids start. A new kind of word is a function that finds it, one
+entry here and its tests.
+
+Maps and frames differ only in what :class:`Picture` holds: a frame is small, so the
+driver has its own texton stride and ORB pyramid (``drive.*``).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from curiosity_cli.config import DriveConfig, WordsConfig
+from curiosity_cli.words.store import WordType
+
+#: Hue words: OpenCV's 8-bit hue, 0..179.
+HUE_BINS = 180
+
+
+@dataclass(frozen=True)
+class OrbSettings:
+    """How ORB keypoints are found: :func:`~curiosity_cli.words.orb.detect_orb`'s keywords."""
+
+    tile: int
+    per_tile: int | None
+    max_features: int | None
+    fast_threshold: int
+    fill_threshold: int | None
+    n_levels: int = 8
+
+    @classmethod
+    def for_maps(cls, words: WordsConfig) -> OrbSettings:
+        return cls(words.orb_tile, words.orb_per_tile, words.orb_max_features, words.orb_fast_threshold,
+                   words.orb_fill_threshold)
+
+    @classmethod
+    def for_frames(cls, words: WordsConfig, drive: DriveConfig) -> OrbSettings:
+        """A frame of ``drive.frame_width`` px: the driver's cap per tile, top-up and pyramid depth."""
+        return cls(words.orb_tile, drive.orb_per_tile, words.orb_max_features, words.orb_fast_threshold,
+                   drive.orb_fill_threshold, drive.orb_levels)
+
+
+def orb_features(grey: np.ndarray, settings: OrbSettings):
+    """The ORB keypoints and descriptors of an (H, W) uint8 grey image."""
+    from curiosity_cli.words.orb import detect_orb
+
+    return detect_orb(
+        grey, tile=settings.tile, per_tile=settings.per_tile, max_features=settings.max_features,
+        fast_threshold=settings.fast_threshold, fill_threshold=settings.fill_threshold, n_levels=settings.n_levels,
+    )
+
+
+@dataclass(frozen=True)
+class Picture:
+    """What the kinds read of an image.
+
+    Attributes
+    ----------
+    rgb : (H, W, 3) uint8 ndarray
+    grey : (H, W) uint8 ndarray
+    stride : int
+        Texton and hue words are taken at every ``stride``-th pixel.
+    orb : OrbSettings
+    """
+
+    rgb: np.ndarray
+    grey: np.ndarray
+    stride: int
+    orb: OrbSettings
+
+
+@dataclass(frozen=True)
+class Lexicon:
+    """A kind's vocabulary: name, number of words, content hash ("" for a fixed one) and centres if learned."""
+
+    name: str
+    size: int
+    sha256: str
+    centres: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class WordKind:
+    """One kind of word: whether ``words`` uses it, its vocabulary, and ``find(picture, lexicon) -> (rows, cols, ids)``."""
+
+    name: str
+    used: Callable[[WordsConfig], bool]
+    lexicon: Callable[[WordsConfig], Lexicon]
+    find: Callable[[Picture, Lexicon], tuple[np.ndarray, np.ndarray, np.ndarray]]
+
+
+def _learned(kind: str, size: Callable[[WordsConfig], int]) -> Callable[[WordsConfig], Lexicon]:
+    def load(words: WordsConfig) -> Lexicon:
+        from curiosity_cli.words.vocab import load_vocabulary
+
+        vocabulary = load_vocabulary(words.vocabulary_dir, kind, size(words))
+        return Lexicon(vocabulary.name, len(vocabulary.centres), vocabulary.sha256, vocabulary.centres)
+
+    return load
+
+
+def _find_orb(picture: Picture, lexicon: Lexicon):
+    from curiosity_cli.words.hamming import nearest_binary_words
+
+    features = orb_features(picture.grey, picture.orb)
+    return features.rows, features.cols, nearest_binary_words(features.descriptors, lexicon.centres)
+
+
+def _find_textons(picture: Picture, lexicon: Lexicon):
+    from curiosity_cli.words.textons import texton_words
+
+    return texton_words(picture.grey, lexicon.centres, picture.stride)
+
+
+def _find_hues(picture: Picture, lexicon: Lexicon):
+    import cv2
+
+    # the texton grid: every stride-th pixel, row by row
+    s = picture.stride
+    sample_rows = np.arange(0, picture.grey.shape[0], s, dtype=np.int32)
+    sample_cols = np.arange(0, picture.grey.shape[1], s, dtype=np.int32)
+    hue = cv2.cvtColor(picture.rgb, cv2.COLOR_RGB2HSV)[::s, ::s, 0]
+    return np.repeat(sample_rows, sample_cols.size), np.tile(sample_cols, sample_rows.size), hue.ravel()
+
+
+#: Every kind of word, in the order their ids follow each other.
+KINDS = (
+    WordKind("orb", lambda words: True, _learned("orb", lambda words: words.orb_vocabulary), _find_orb),
+    WordKind("texton", lambda words: True, _learned("texton", lambda words: words.texton_vocabulary), _find_textons),
+    WordKind("hue", lambda words: words.colour_words, lambda words: Lexicon(f"hue-{HUE_BINS}", HUE_BINS, ""), _find_hues),
+)
+
+
+class WordRecipe:
+    """The kinds ``words`` uses, their vocabularies (loaded once) and where each kind's ids start.
+
+    Attributes
+    ----------
+    types : tuple of WordType
+        Each kind's name, vocabulary name, first id, number of ids and vocabulary hash.
+    vocabulary_size : int
+        Ids of all kinds together.
+
+    Raises
+    ------
+    CuriosityError
+        A missing or malformed vocabulary.
+    """
+
+    def __init__(self, words: WordsConfig):
+        self._kinds = []
+        types, offset = [], 0
+        for kind in KINDS:
+            if kind.used(words):
+                lexicon = kind.lexicon(words)
+                types.append(WordType(kind.name, lexicon.name, offset, lexicon.size, lexicon.sha256))
+                self._kinds.append((kind, lexicon, offset))
+                offset += lexicon.size
+        self.types = tuple(types)
+        self.vocabulary_size = offset
+
+    def find(self, picture: Picture) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
+        """Every word of ``picture``: ``(rows, cols, ids, seconds)``, kinds in registry order.
+
+        ``ids`` (N,) int64 are in the one id space; ``seconds`` is the time each kind took.
+        """
+        rows, cols, ids, seconds = [], [], [], {}
+        for kind, lexicon, offset in self._kinds:
+            began = time.perf_counter()
+            r, c, w = kind.find(picture, lexicon)
+            rows.append(r)
+            cols.append(c)
+            ids.append(np.asarray(w).astype(np.int64) + offset)
+            seconds[kind.name] = time.perf_counter() - began
+        return np.concatenate(rows), np.concatenate(cols), np.concatenate(ids), seconds
