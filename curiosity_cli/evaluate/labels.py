@@ -53,7 +53,7 @@ from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_d
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz
 from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
-from curiosity_cli.recipes import Recipe, differences, first_of, recorded_digest
+from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of, recorded_digest
 
 if TYPE_CHECKING:
     from curiosity_cli.evaluate.labeling import PathLabeller
@@ -215,7 +215,7 @@ def _compute_batch(
 
 
 def _write_batch(path: Path, recipe: Recipe, labels, word_labels, trace, seconds: float) -> None:
-    meta = {"recipe": recipe.record(), "seconds": round(seconds, 2)}
+    meta = {RECIPE_KEY: recipe.record(), "seconds": round(seconds, 2)}
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as handle:
@@ -490,7 +490,7 @@ def label_experiment(
                     problems.append("{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome)
                 else:
                     arrays, examples, meta = outcome
-                    write_labels(folder, arrays, examples, {**meta, "recipe": recipes[run.folder].record()})
+                    write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
                     labelled += 1
                 if on_done is not None:
                     on_done()

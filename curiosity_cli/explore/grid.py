@@ -47,7 +47,7 @@ from curiosity_cli.files import atomic_path, check_inside, display_path
 from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder
 from curiosity_cli.map_stores import StoreInfo, prepare_stores
 from curiosity_cli.parallel import Workers
-from curiosity_cli.recipes import Recipe, differences, first_of
+from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of
 from curiosity_cli.seeds import name_key
 
 #: The config sections a run's numbers depend on ...
@@ -340,7 +340,7 @@ def _write(
         "words_sampled": int(exploration.words_sampled.sum()),
         "seconds": round(seconds, 3),
         "curiosity": __version__,
-        "recipe": recipe.record(),
+        RECIPE_KEY: recipe.record(),
     }
     return write_run(ExperimentFolder(folder).run(task.dataset, task.weight_function, task.restart), exploration, meta, grid_shape[1])
 
