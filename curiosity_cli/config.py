@@ -324,6 +324,22 @@ def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> Exper
     return _check_experiment(_build(ExperimentConfig, raw.data, (), raw), raw)
 
 
+def load_saved_config(folder: str | Path, overrides: typing.Iterable[str] = ()) -> ExperimentConfig:
+    """The config an experiment folder was explored with (its ``config.yaml``), plus ``overrides``.
+
+    Raises
+    ------
+    ConfigError
+        The folder has no ``config.yaml``, or it does not validate, naming it.
+    """
+    from curiosity_cli.layout import ExperimentFolder
+
+    saved = ExperimentFolder(folder).config
+    if not saved.is_file():
+        raise ConfigError(f"{display_path(saved)}: not found; run `curiosity explore` to make the experiment first")
+    return load_config(saved, overrides)
+
+
 def load_words_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> WordsConfig:
     """Load only the ``words`` section of a config (and its base chain), for ``extract``.
 

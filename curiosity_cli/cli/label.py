@@ -17,18 +17,6 @@ _SHOWN = 3
 EXPERIMENT = typer.Argument(DEFAULT_RESULTS / "quick", help="Experiment folder written by `curiosity explore`.")
 
 
-def experiment_config(folder: Path, overrides: list[str]):
-    """The config an experiment folder was explored with, plus ``--set`` overrides."""
-    from curiosity_cli.config import load_config
-    from curiosity_cli.errors import CuriosityError
-    from curiosity_cli.files import display_path
-
-    saved = ExperimentFolder(folder).config
-    if not saved.is_file():
-        raise CuriosityError(f"{display_path(saved)}: not found; run `curiosity explore` to make the experiment first")
-    return load_config(saved, overrides)
-
-
 @app.command("label")
 def label(
     folder: Path = EXPERIMENT,
@@ -40,11 +28,12 @@ def label(
     scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler, e.g. tcp://10.0.0.5:8786; default a local cluster of --jobs workers."),
 ) -> None:
     """Label each map with every run's checkpoint models (Z_p) and in batch mode (Z_b)."""
+    from curiosity_cli.config import load_saved_config
     from curiosity_cli.evaluate.labels import label_experiment
 
     if scheduler is not None and backend is not Backend.dask:
         raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")
-    config = experiment_config(folder, overrides)
+    config = load_saved_config(folder, overrides)
     with StagedProgress() as progress:
         done = label_experiment(
             config, folder, cache_dir=cache_dir, jobs=jobs, force=force,

@@ -444,7 +444,10 @@ def label_experiment(
     finished, problems = _runs_as_configured(folder, runs, config, by_name)
 
     with owned or contextlib.nullcontext():  # new workers (a local cluster) stop with the labelling
-        batch_files, reused, batch_problems = _batch_references(folder, config, stores, workers, force, on_stage, on_done)
+        batch_recipes = {info.name: batch_recipe(config, info) for info in stores.values()}
+        batch_files, reused, batch_problems = _batch_references(
+            folder, config, stores, batch_recipes, workers, force, on_stage, on_done,
+        )
         problems += batch_problems
         inputs = {
             info.name: MapInputs(info.name, entry, str(info.path), str(batch_files[info.name]))
@@ -453,7 +456,7 @@ def label_experiment(
         skipped, tasks, recipes, relabelled = 0, [], {}, []
         for run in finished:
             info = by_name[run.meta["dataset"]]
-            recipe = label_recipe(recorded_digest(run.meta), batch_recipe(config, info).digest, config, info.labels_digest)
+            recipe = label_recipe(recorded_digest(run.meta), batch_recipes[info.name].digest, config, info.labels_digest)
             path = layout.label_file(info.name, run.meta["weight_function"], run.meta["restart"])
             change = None if force else label_changes(path, recipe)
             if not force and change is None:
@@ -573,10 +576,11 @@ def _runs_as_configured(folder: Path, runs: list[Path], config: ExperimentConfig
 
 
 def _batch_references(
-    folder: Path, config: ExperimentConfig, stores: dict[str, StoreInfo], workers: Workers, force: bool,
-    on_stage: Callable[[str, int], None] | None, on_done: Callable[[], None] | None,
+    folder: Path, config: ExperimentConfig, stores: dict[str, StoreInfo], recipes: dict[str, Recipe], workers: Workers,
+    force: bool, on_stage: Callable[[str, int], None] | None, on_done: Callable[[], None] | None,
 ) -> tuple[dict[str, Path], int, list[str]]:
-    """Each map's batch reference, computed where missing or out of date; ``(files by map, how many reused, problems)``.
+    """Each map's batch reference, computed where missing or not made from its recipe (``recipes`` by map name);
+    ``(files by map, how many reused, problems)``.
 
     With loky, in this process, one map after the other on ``jobs`` threads with a
     progress unit per sweep; an error stops the command. On a Dask cluster, as tasks, a
@@ -588,7 +592,6 @@ def _batch_references(
 
     sweeps = config.label.batch_sweeps
     files = {info.name: ExperimentFolder(folder).batch(info.name) for info in stores.values()}
-    recipes = {info.name: batch_recipe(config, info) for info in stores.values()}
     stale = {
         entry: info for entry, info in stores.items() if force or not _batch_is_current(files[info.name], recipes[info.name])
     }

@@ -51,6 +51,8 @@ from curiosity_cli.recipes import first_of, recorded_digest, recorded_inputs
 if TYPE_CHECKING:
     import pandas as pd
 
+    from curiosity_cli.config import ExperimentConfig
+
 HEADLINE_LENGTH = 80
 HEADLINE_WEIGHT = "topic-perplexity"
 #: Significance level of "beats": a higher mean and a paired Wilcoxon p below it.
@@ -162,7 +164,7 @@ def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None
     return rows, class_rows
 
 
-def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = None) -> LabelRows:
+def label_rows(folder: Path) -> LabelRows:
     """The table rows of every label file of an experiment, and the files left out, with why.
 
     Every label file must have been made from its run and its map's batch reference as
@@ -174,15 +176,16 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
     ----------
     folder : Path
         The experiment folder.
-    class_names : dict, optional
-        Per dataset, the legend's class names by id.
 
     Raises
     ------
+    ConfigError
+        No ``config.yaml``, or one that does not validate.
     EvaluationError
-        No label files at all, no readable ``config.yaml``, a missing or corrupt batch
-        reference, or label files or runs made otherwise (naming them and what changed).
+        No label files at all, a missing or corrupt batch reference, or label files or
+        runs made otherwise (naming them and what changed).
     """
+    from curiosity_cli.config import load_saved_config
     from curiosity_cli.evaluate.labels import label_recipe
     from curiosity_cli.explore.grid import run_recipe
     from curiosity_cli.explore.runs import RunError, read_run
@@ -192,7 +195,8 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
     files = layout.label_files()
     if not files:
         raise EvaluationError(f"{display_path(layout.labels)}: no label files; run `curiosity label` first")
-    config = _saved_config(folder)
+    config = load_saved_config(folder)
+    class_names = read_class_names(config)
     rows, class_rows, skipped, otherwise = [], [], [], []
     batch_digests = {}
     for path in files:
@@ -221,7 +225,7 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
         if change is not None:
             otherwise.append(f"{display_path(path)}: {change}")
             continue
-        mi, classes = run_rows(meta, arrays, (class_names or {}).get(meta["dataset"]))
+        mi, classes = run_rows(meta, arrays, class_names.get(meta["dataset"]))
         rows += mi
         class_rows += classes
     if otherwise:
@@ -232,22 +236,6 @@ def label_rows(folder: Path, class_names: dict[str, dict[int, str]] | None = Non
         )
     skipped += _unlabelled_runs(folder, files)
     return LabelRows(rows, class_rows, skipped)
-
-
-def _saved_config(folder: Path):
-    """The experiment's ``config.yaml``, which says with what settings its files must have been made.
-
-    Raises
-    ------
-    EvaluationError
-        It is missing or does not validate.
-    """
-    from curiosity_cli.config import load_config
-
-    path = ExperimentFolder(folder).config
-    if not path.is_file():
-        raise EvaluationError(f"{display_path(path)}: not found; an experiment folder written by `curiosity explore` has it")
-    return load_config(path)
 
 
 def _batch_digest(path: Path) -> str | None:
@@ -488,21 +476,17 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
     return pd.DataFrame(rows, columns=HEADLINE_COLUMNS)
 
 
-def read_class_names(folder: Path) -> dict[str, dict[int, str]]:
-    """Per dataset of an experiment, its legend's class names by id; {} for what cannot be read.
+def read_class_names(config: ExperimentConfig) -> dict[str, dict[int, str]]:
+    """Per dataset of an experiment, its legend's class names by id; none for a map whose legend cannot be read.
 
-    Best effort from ``config.yaml`` and the datasets' YAML and legend files (no images):
-    the names only label ``classes.csv`` rows.
+    Best effort from the datasets' YAML and legend files (no images): the names only
+    label ``classes.csv`` rows.
     """
-    from curiosity_cli.config import dataset_path, load_config, load_dataset_config
+    from curiosity_cli.config import dataset_path, load_dataset_config
     from curiosity_cli.data import load_legend
 
     names = {}
-    try:
-        entries = load_config(ExperimentFolder(folder).config).datasets
-    except (CuriosityError, OSError):
-        return names
-    for entry in entries:
+    for entry in config.datasets:
         try:
             dataset = load_dataset_config(dataset_path(entry))
             if dataset.legend is not None:
@@ -537,7 +521,7 @@ def evaluate_experiment(folder: Path) -> Evaluation:
     import pandas as pd
 
     folder = Path(folder)
-    found = label_rows(folder, read_class_names(folder))
+    found = label_rows(folder)
     skipped = found.skipped
     if not found.mi:
         raise EvaluationError(f"{display_path(ExperimentFolder(folder).labels)}: every label file was left out: " + "; ".join(skipped))

@@ -124,12 +124,12 @@ def _find_textons(picture: Picture, lexicon: Lexicon):
 def _find_hues(picture: Picture, lexicon: Lexicon):
     import cv2
 
-    # the texton grid: every stride-th pixel, row by row
+    from curiosity_cli.words.textons import sample_grid
+
+    # at the texton words' pixels
     s = picture.stride
-    sample_rows = np.arange(0, picture.grey.shape[0], s, dtype=np.int32)
-    sample_cols = np.arange(0, picture.grey.shape[1], s, dtype=np.int32)
     hue = cv2.cvtColor(picture.rgb, cv2.COLOR_RGB2HSV)[::s, ::s, 0]
-    return np.repeat(sample_rows, sample_cols.size), np.tile(sample_cols, sample_rows.size), hue.ravel()
+    return *sample_grid(picture.grey.shape, s), hue.ravel()
 
 
 #: Every kind of word, in the order their ids follow each other.

@@ -104,12 +104,16 @@ def texton_words(
             "centres in the space of MR8 responses"
         )
     responses = normalise_responses(mr8_responses(image)[::stride, ::stride])
-    sample_rows = np.arange(0, image.shape[0], stride, dtype=np.int32)
-    sample_cols = np.arange(0, image.shape[1], stride, dtype=np.int32)
-    rows = np.repeat(sample_rows, sample_cols.size)
-    cols = np.tile(sample_cols, sample_rows.size)
+    rows, cols = sample_grid(image.shape[:2], stride)
     words = nearest_centres(responses.reshape(-1, len(MR8_CHANNELS)), centres)
     return rows, cols, words
+
+
+def sample_grid(shape: tuple[int, int], stride: int) -> tuple[np.ndarray, np.ndarray]:
+    """The pixels ``image[::stride, ::stride]`` takes, row by row: ``(rows, cols)``, each (M,) int32."""
+    sample_rows = np.arange(0, shape[0], stride, dtype=np.int32)
+    sample_cols = np.arange(0, shape[1], stride, dtype=np.int32)
+    return np.repeat(sample_rows, sample_cols.size), np.tile(sample_cols, sample_rows.size)
 
 
 def _check_centres(centres: object) -> np.ndarray:
