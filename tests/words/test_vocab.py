@@ -12,7 +12,7 @@ from curiosity_cli.words.vocab import (
 )
 
 WORDS = load_words_config(CONFIG_DIR / "paper.yaml")
-MAP_SOURCES = {"grass", "gravel", "brick", "immunohistochemistry"}  # what scripts/make_maps.py cuts from
+MAP_SOURCES = {"grass", "gravel", "brick", "immunohistochemistry"}  # SKIMAGE_PHOTOS in scripts/embedded_maps/sources.py
 
 
 def test_shipped_vocabularies_load_with_their_recipes():

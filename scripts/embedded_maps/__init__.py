@@ -1,0 +1,18 @@
+"""The recipes of the three embedded maps in ``data/maps/``; ``scripts/make_maps.py`` runs them.
+
+Modules, from the shared pieces up:
+
+``seeding``
+    The one seed and the random stream of every stage of every map.
+``texture``, ``quilting``
+    Smooth noise, tone and colour helpers, random crops, and image quilting.
+``sources``
+    The Sentinel-2 scene (from a pinned PyPI sdist) and the scikit-image photos.
+``label_cleanup``, ``legend``
+    Label-map clean-up shared by two maps; legend classes and their YAML text.
+``sentinel_coast``, ``aerial_mosaic`` (with ``aerial_trail``), ``reef_mosaic``
+    One builder per map.
+``build``, ``map_files``
+    Building a map by name and checking it; writing its three files and comparing them
+    with the committed ones.
+"""
