@@ -2,15 +2,56 @@
 
 The CLI turns every :class:`CuriosityError` into a one-line ``Error: …`` message and exit
 code 1; anything else is a bug and keeps its traceback.
+
+Library messages name the library's own arguments, never command-line options: the
+command line knows which option gave an argument, and says so (:meth:`CuriosityError.render`).
 """
+
+#: Where a message says which stage to run again, with its ``force`` argument.
+RERUN = "{rerun}"
 
 
 class CuriosityError(Exception):
-    """A problem with the user's input that one line can explain."""
+    """A problem with the user's input that one line can explain.
+
+    Parameters
+    ----------
+    message : str
+        The line. With ``parameter``, it begins with that argument's name; with
+        ``rerun``, it holds :data:`RERUN` where the remedy goes.
+    parameter : str, optional
+        The argument at fault, e.g. ``"out"`` for ``out: expected a .png file name``.
+    rerun : str, optional
+        The stage (``"extract"``, ``"explore"``) whose ``force`` argument makes the
+        files at fault anew.
+    """
+
+    def __init__(self, message: str, *, parameter: str | None = None, rerun: str | None = None):
+        if parameter is not None and not message.startswith(parameter):
+            raise ValueError(f"the message must begin with {parameter!r}: {message!r}")
+        super().__init__(message)
+        self.parameter = parameter
+        self.rerun = rerun
+
+    def render(self, option: str | None = None, rerun: str | None = None) -> str:
+        """The message with ``option`` for the parameter's name and ``rerun`` for the remedy.
+
+        Without them, the library's own words: the parameter's name, and e.g.
+        ``explore with force=True``.
+        """
+        message = str(self.args[0]) if self.args else ""
+        if self.parameter is not None and option is not None:
+            message = option + message[len(self.parameter):]
+        if self.rerun is not None:
+            message = message.replace(RERUN, rerun if rerun is not None else f"{self.rerun} with force=True")
+        return message
+
+    def __str__(self) -> str:
+        return self.render()
 
 
 class ConfigError(CuriosityError):
-    """A YAML config (or a ``--set`` override) that does not validate."""
+    """A YAML config (or an override of one of its keys) that does not validate."""
 
 
 class DatasetError(CuriosityError):

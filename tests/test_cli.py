@@ -122,7 +122,7 @@ def test_unknown_dataset_is_one_line_error():
 
 
 def test_bad_preview_suffix_is_one_line_error(own_map, tmp_path):
-    _assert_one_line_error(run("datasets", "show", str(own_map), "--out", str(tmp_path / "p.gif")), "expected a .png or .pdf")
+    _assert_one_line_error(run("datasets", "show", str(own_map), "--out", str(tmp_path / "p.gif")), "Error: --out: got", "expected a .png or .pdf")
 
 
 @pytest.mark.parametrize(

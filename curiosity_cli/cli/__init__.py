@@ -28,13 +28,37 @@ class _ErrorMappingGroup(TyperGroup):
         try:
             return super().invoke(ctx)
         except CuriosityError as exc:
-            typer.echo(f"Error: {exc}", err=True)
+            typer.echo(f"Error: {_command_line_message(exc, self.get_command(ctx, ctx.invoked_subcommand or ''))}", err=True)
             raise typer.Exit(1) from None
         except BrokenPipeError:
             raise
         except OSError as exc:
             typer.echo(f"Error: {os_error_message(exc)}", err=True)
             raise typer.Exit(1) from None
+
+
+def _command_line_message(exc: CuriosityError, command) -> str:
+    """``exc`` in the command line's words: the option that gave the argument at fault, and
+    the command that makes the files at fault anew (every stage spells ``force`` ``--force``).
+
+    ``command`` is the command (or group of commands) the user ran; the argument is
+    looked up by name among its options and, for a group, its commands' options.
+    """
+    option = None
+    if exc.parameter is not None:
+        option = next((flag for name, flag in _options(command) if name == exc.parameter), None)
+    return exc.render(option=option, rerun=f"`curiosity {exc.rerun} --force`" if exc.rerun else None)
+
+
+def _options(command):
+    """(parameter name, first flag) of every option of ``command`` and of the commands below it."""
+    if command is None:
+        return
+    for param in command.params:
+        if param.opts and param.opts[0].startswith("-"):
+            yield param.name, param.opts[0]
+    for sub in getattr(command, "commands", {}).values():
+        yield from _options(sub)
 
 
 app = typer.Typer(

@@ -127,7 +127,8 @@ class SimCamera:
             raise LinkError(f"{self._robot.error}; STOP attempted")
         if state is None:
             raise CameraError(
-                f"--camera sim: no STATE from the robot within {self._timeout:g} s; the view is rendered at its pose"
+                f"camera sim: no STATE from the robot within {self._timeout:g} s; the view is rendered at its pose",
+                parameter="camera",
             )
         frame = render_view(self._image, pose_of(state), self._mpp, self._view)
         return frame, time.monotonic()

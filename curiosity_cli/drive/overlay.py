@@ -104,7 +104,7 @@ class VideoSink:
         self.path = Path(path)
         if self.path.suffix.lower() not in self._CODECS:
             raise CuriosityError(
-                f"--video-out {display_path(self.path)}: expected a .mp4, .avi or .mkv file name"
+                f"video_out {display_path(self.path)}: expected a .mp4, .avi or .mkv file name", parameter="video_out"
             )
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._tmp = self.path.with_name(f".{self.path.stem}.tmp{self.path.suffix}")
@@ -122,7 +122,9 @@ class VideoSink:
             fourcc = cv2.VideoWriter_fourcc(*self._CODECS[self.path.suffix.lower()])
             self._writer = cv2.VideoWriter(str(self._tmp), fourcc, self._fps, self._size)
             if not self._writer.isOpened():
-                raise CuriosityError(f"--video-out {display_path(self.path)}: OpenCV cannot write this video")
+                raise CuriosityError(
+                    f"video_out {display_path(self.path)}: OpenCV cannot write this video", parameter="video_out"
+                )
         if (image.shape[1], image.shape[0]) != self._size:
             image = cv2.resize(image, self._size, interpolation=cv2.INTER_AREA)
         self._writer.write(np.ascontiguousarray(image[:, :, ::-1]))

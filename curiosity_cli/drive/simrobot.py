@@ -73,13 +73,15 @@ class Noise:
         for entry in filter(None, (part.strip() for part in text.split(","))):
             key, sep, value = entry.partition("=")
             if not sep or key.strip() not in names:
-                raise CuriosityError(f"--noise {entry!r}: expected KIND=RATE with KIND one of {', '.join(names)}")
+                raise CuriosityError(
+                    f"noise {entry!r}: expected KIND=RATE with KIND one of {', '.join(names)}", parameter="noise"
+                )
             try:
                 rate = float(value)
             except ValueError:
                 rate = -1.0
             if not 0 <= rate <= 1:
-                raise CuriosityError(f"--noise {entry!r}: expected a rate between 0 and 1")
+                raise CuriosityError(f"noise {entry!r}: expected a rate between 0 and 1", parameter="noise")
             rates[names[key.strip()]] = rate
         return cls(**rates)
 

@@ -50,7 +50,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
-from curiosity_cli.errors import ConfigError, CuriosityError
+from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz
 from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
 from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of, recorded_digest
@@ -569,8 +569,8 @@ def _runs_as_configured(folder: Path, runs: list[Path], config: ExperimentConfig
     if otherwise:
         raise LabelError(
             f"{len(otherwise)} runs were made otherwise than {display_path(ExperimentFolder(folder).config)} and the maps' "
-            f"words make them now ({first_of(otherwise)}); restore the config, or run `curiosity explore --force` "
-            "to redo the runs"
+            f"words make them now ({first_of(otherwise)}); restore the config, or run {RERUN} to redo the runs",
+            rerun="explore",
         )
     return finished, problems
 

@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, open_npz
 from curiosity_cli.layout import ExperimentFolder
@@ -232,7 +232,8 @@ def label_rows(folder: Path) -> LabelRows:
         raise EvaluationError(
             f"{len(otherwise)} label files or runs were made otherwise than {display_path(layout.config)} "
             f"and the files they come from say ({first_of(otherwise)}); run `curiosity label` to label them again "
-            "(`curiosity explore --force` first for runs)"
+            f"({RERUN} first for runs)",
+            rerun="explore",
         )
     skipped += _unlabelled_runs(folder, files)
     return LabelRows(rows, class_rows, skipped)

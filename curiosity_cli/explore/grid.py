@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
-from curiosity_cli.errors import ConfigError, CuriosityError
+from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, check_inside, display_path
 from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder
 from curiosity_cli.map_stores import StoreInfo, prepare_stores
@@ -254,7 +254,8 @@ def run_grid(
     if stale:
         raise ConfigError(
             f"{len(stale)} finished runs were made otherwise than this config makes them ({first_of(stale)}); "
-            "use another experiment name or results folder, or --force to redo them"
+            f"use another experiment name or results folder, or run {RERUN} to redo them",
+            rerun="explore",
         )
     _write_experiment_files(folder, config, tasks, by_name)
     remove_partial_runs(folder)

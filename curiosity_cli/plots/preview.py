@@ -31,20 +31,20 @@ def colour_labels(labels: np.ndarray, legend: tuple[MapClass, ...]) -> np.ndarra
     return palette[labels]
 
 
-def write_preview(maps: list[MapData], path: Path) -> None:
+def write_preview(maps: list[MapData], out: Path) -> None:
     """Write one row per map, image left and labels right, with a legend, to PNG or PDF.
 
     Raises
     ------
     CuriosityError
-        ``path`` has a suffix matplotlib cannot write.
+        ``out`` has a suffix matplotlib cannot write.
     """
     from matplotlib.figure import Figure
     from matplotlib.patches import Patch
 
-    path = Path(path)
-    if path.suffix.lower() not in (".png", ".pdf"):
-        raise CuriosityError(f"--out: got {str(path)!r}, expected a .png or .pdf file name")
+    out = Path(out)
+    if out.suffix.lower() not in (".png", ".pdf"):
+        raise CuriosityError(f"out: got {str(out)!r}, expected a .png or .pdf file name", parameter="out")
     fig = Figure(figsize=(11, 5.2 * len(maps)), layout="constrained")
     axes = fig.subplots(len(maps), 2, squeeze=False)
     for (ax_image, ax_labels), m in zip(axes, maps):
@@ -65,5 +65,5 @@ def write_preview(maps: list[MapData], path: Path) -> None:
         for ax in (ax_image, ax_labels):
             ax.set_xticks([])
             ax.set_yticks([])
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format=path.suffix.lower()[1:])
+    with atomic_path(out) as tmp:
+        fig.savefig(tmp, dpi=110, format=out.suffix.lower()[1:])

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.files import atomic_path, display_path, open_npz
 
 STORE_FORMAT = 1
@@ -189,7 +189,8 @@ def load_store(path: Path) -> WordStore:
     if meta.get("format") != STORE_FORMAT:
         raise CuriosityError(
             f"{display_path(path)}: format: got {meta.get('format')!r}, expected {STORE_FORMAT}; "
-            "run `curiosity extract --force` to rebuild it"
+            f"run {RERUN} to rebuild it",
+            rerun="extract",
         )
     return WordStore(
         **arrays,

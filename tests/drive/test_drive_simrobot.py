@@ -151,7 +151,7 @@ def test_estop_after_the_first_vel_refuses_later_vel(sim):
 @pytest.mark.parametrize(
     "text, message",
     [
-        ("garbage=2", "--noise 'garbage=2': expected a rate between 0 and 1"),
+        ("garbage=2", "^noise 'garbage=2': expected a rate between 0 and 1"),
         ("static=0.1", "expected KIND=RATE with KIND one of garbage, checksum, truncate, drop-ack"),
         ("checksum", "expected KIND=RATE"),
         ("truncate=x", "expected a rate between 0 and 1"),

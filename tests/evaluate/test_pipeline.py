@@ -120,7 +120,7 @@ def test_labels_of_a_run_made_again_from_other_words_are_refused_naming_what_cha
                                               r"its run changed\); run `curiosity label`"):
         evaluate_experiment(folder)
     with pytest.raises(LabelError, match=f"1 runs were made otherwise .*restart-000/run.json: store was '{other}', "
-                                         f"now '{real}'\\); restore the config, or run `curiosity explore --force`"):
+                                         f"now '{real}'\\); restore the config, or run explore with force=True to redo the runs"):
         label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1, force=True)
 
 

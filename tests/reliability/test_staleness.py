@@ -81,7 +81,7 @@ def test_without_its_config_a_folder_does_not_adopt_runs_made_with_another_seed(
     assert_clean_error(
         run_cli([*EXPLORE, "--set", "seed=5"], cwd=work),
         "8 finished runs were made otherwise than this config makes them", "run.json: seed was 0, now 5",
-        "--force to redo them",
+        "or run `curiosity explore --force` to redo them",
     )
     assert not (folder / "config.yaml").exists() and (folder / "runs.csv").read_text() == runs_csv
 
