@@ -13,9 +13,9 @@ The recipes, each built by the module that writes the file:
   store (named by a hash of the image's pixels, the word settings and the vocabularies),
   weight function, restart and the experiment seed, and the model and exploration
   settings except those that only choose which runs a grid holds;
-- a map's batch reference (:func:`curiosity_cli.evaluate.labels.batch_recipe`): the word
+- a map's batch reference (:func:`curiosity_cli.evaluate.label_stage.batch_recipe`): the word
   store, the experiment seed, the model settings and the batch sweeps;
-- a run's label file (:func:`curiosity_cli.evaluate.labels.label_recipe`): the digests of
+- a run's label file (:func:`curiosity_cli.evaluate.label_stage.label_recipe`): the digests of
   its run and of the batch reference it is compared with, the label settings, the share
   that makes a class found and a digest of the map's human labels.
 """

@@ -34,7 +34,7 @@ def reproduce(
     ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
     of it done, for a progress display.
     """
-    from curiosity_cli.evaluate.labels import label_experiment
+    from curiosity_cli.evaluate.label_stage import label_experiment
     from curiosity_cli.evaluate.report import write_report
     from curiosity_cli.evaluate.tables import evaluate_experiment
     from curiosity_cli.explore.grid import run_grid

@@ -35,7 +35,7 @@ from pathlib import Path
 from curiosity_cli.config import CONFIG_DIR, dataset_path, load_config, load_dataset_config
 from curiosity_cli.data import load_map
 from curiosity_cli.evaluate.information import contingency
-from curiosity_cli.evaluate.labeling import PathLabeller, _whole_map_model, batch_labels, pixel_labels
+from curiosity_cli.evaluate.label_sampling import PathLabeller, batch_labels, pixel_labels, whole_map_model
 from curiosity_cli.explore.walker import explore
 from curiosity_cli.words.extract import extract_words
 
@@ -79,11 +79,11 @@ def main() -> None:
         ours.append(time.perf_counter() - began)
         began = time.perf_counter()
         for j, phi in enumerate(phis):
-            model = _whole_map_model(store, config.model, repeat + j, frozen_counts=phi)
+            model = whole_map_model(store, config.model, repeat + j, frozen_counts=phi)
             model.refine_batch(label.sweeps, threads=1)
             tables(model.ml_topics())
         rebuilt.append(time.perf_counter() - began)
-        model = _whole_map_model(store, config.model, repeat, frozen_counts=phis[-1])
+        model = whole_map_model(store, config.model, repeat, frozen_counts=phis[-1])
         began = time.perf_counter()
         model.refine_batch(label.sweeps, threads=1)
         alone.append(time.perf_counter() - began)

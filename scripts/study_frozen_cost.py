@@ -24,7 +24,7 @@ import numpy as np
 
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.data import load_map
-from curiosity_cli.evaluate.labeling import _whole_map_model
+from curiosity_cli.evaluate.label_sampling import whole_map_model
 from curiosity_cli.words.extract import extract_words
 
 TOPICS = (8, 16, 32, 64, 128)
@@ -44,7 +44,7 @@ def main() -> None:
     print(f"{args.map}: {n:,} words, frozen-Φ sweeps on one thread, median of {args.repeats} x {args.sweeps} sweeps")
     per_word = []
     for k in TOPICS:
-        model = _whole_map_model(store, dataclasses.replace(config.model, topics=k), 0,
+        model = whole_map_model(store, dataclasses.replace(config.model, topics=k), 0,
                                  frozen_counts=rng.integers(0, 50, (store.vocabulary_size, k)))
         model.refine_batch(2, threads=1)  # compiled, and past the random start
         times = []

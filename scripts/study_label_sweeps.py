@@ -34,8 +34,8 @@ import pandas as pd
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.data import load_map
 from curiosity_cli.evaluate.information import contingency, mutual_information
-from curiosity_cli.evaluate.labeling import PathLabeller, pixel_labels
-from curiosity_cli.evaluate.labels import path_seed
+from curiosity_cli.evaluate.label_sampling import PathLabeller, pixel_labels
+from curiosity_cli.evaluate.label_stage import path_seed
 from curiosity_cli.explore.runs import read_run
 from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
 from curiosity_cli.words.store import load_store

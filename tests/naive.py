@@ -244,7 +244,7 @@ class NaiveModel:
             alpha=model.alpha,
             beta=model.beta,
             key=mix(model.seed),
-            counter=model.snapshot().counter,
+            counter=model.full_state()["counter"],
             words={c: model.cell_words(c).astype(np.int64) for c in cells},
             topics={c: model.topics([c]).astype(np.int64) for c in cells},
             order=cells,

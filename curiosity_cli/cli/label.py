@@ -29,7 +29,7 @@ def label(
 ) -> None:
     """Label each map with every run's checkpoint models (Z_p) and in batch mode (Z_b)."""
     from curiosity_cli.config import load_saved_config
-    from curiosity_cli.evaluate.labels import label_experiment
+    from curiosity_cli.evaluate.label_stage import label_experiment
 
     if scheduler is not None and backend is not Backend.dask:
         raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")

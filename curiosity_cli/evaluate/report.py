@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, to_yaml
-from curiosity_cli.evaluate.labels import CLASS_SHARE_PERCENT
+from curiosity_cli.evaluate.label_stage import CLASS_SHARE_PERCENT
 from curiosity_cli.evaluate.tables import ALPHA, CONFIDENCE, HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation
 from curiosity_cli.explore.weights import CEILINGS, WEIGHT_FUNCTIONS
 from curiosity_cli.files import atomic_path

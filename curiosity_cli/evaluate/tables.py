@@ -5,7 +5,7 @@ Written under ``results/<experiment>/``:
 - ``mi.csv`` and ``mi.parquet``: one row per (dataset, weight function, restart, path
   length): ``mi_human``, ``mi_batch`` (bits), ``nmi_human``, ``nmi_batch``;
   ``classes_found`` (human classes the path's cells reached within the length, see
-  :data:`~curiosity_cli.evaluate.labels.CLASS_SHARE_PERCENT`) of ``classes`` (the map's
+  :data:`~curiosity_cli.evaluate.label_stage.CLASS_SHARE_PERCENT`) of ``classes`` (the map's
   classes with pixels); ``mean_recall`` (mean per-class recall of Z_p under the best
   one-to-one topic-to-class matching, :func:`~curiosity_cli.evaluate.information.matched_recall`);
   and the run's ``seed``. The human columns are NaN for a map without labels.
@@ -97,7 +97,7 @@ def _read_label_file(path: Path) -> tuple[dict, dict]:
     CorruptFileError
         The file cannot be read, or lacks an array a label file has.
     """
-    from curiosity_cli.evaluate.labels import LABEL_META_KEYS, read_meta
+    from curiosity_cli.evaluate.label_stage import LABEL_META_KEYS, read_meta
 
     with open_npz(path) as npz:
         meta = read_meta(npz, LABEL_META_KEYS)
@@ -115,7 +115,7 @@ def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None
         The label file's ``meta``.
     arrays : dict of str to ndarray
         ``lengths`` (n,), ``batch`` (n, K, K), optionally ``human`` (n, K, C) and
-        ``class_first_step`` (C,), as :func:`~curiosity_cli.evaluate.labels.label_run` writes them.
+        ``class_first_step`` (C,), as :func:`~curiosity_cli.evaluate.label_stage.label_run` writes them.
     class_names : dict of int to str, optional
         The map's legend.
 
@@ -186,7 +186,7 @@ def label_rows(folder: Path) -> LabelRows:
         runs made otherwise (naming them and what changed).
     """
     from curiosity_cli.config import load_saved_config
-    from curiosity_cli.evaluate.labels import label_recipe
+    from curiosity_cli.evaluate.label_stage import label_recipe
     from curiosity_cli.explore.grid import run_recipe
     from curiosity_cli.explore.runs import RunError, read_run
 
@@ -247,7 +247,7 @@ def _batch_digest(path: Path) -> str | None:
     EvaluationError
         The batch reference is missing or corrupt: every label file of the map needs it.
     """
-    from curiosity_cli.evaluate.labels import read_meta
+    from curiosity_cli.evaluate.label_stage import read_meta
 
     try:
         with open_npz(path) as npz:

@@ -3,10 +3,11 @@
 Topic ids are arbitrary: topic 3 of a path's model Z_p has nothing to do with topic 3 of
 the batch model Z_b. To make two label maps comparable by eye, Z_b's topics take palette
 slots in order of size (the largest topic gets the first, most distinct colour), and each
-Z_p topic takes the slot of the Z_b topic it is matched to: pairs are matched one to one,
-greedily by pixel overlap, largest overlap first. A Z_p topic left without a partner (the
-path's model split a batch topic in two, or found one the batch model did not) gets a
-slot no Z_b topic uses, so splits and merges stay visible instead of being painted over.
+Z_p topic takes the slot of the Z_b topic it is matched to: pairs are matched one to one
+so that the matched pairs share as many pixels as can be (the optimal assignment, not a
+greedy one). A Z_p topic left without a partner (the path's model split a batch topic in
+two, or found one the batch model did not) gets a slot no Z_b topic uses, so splits and
+merges stay visible instead of being painted over.
 
 The palette is glasbey-like: colours picked one at a time from a grid of sRGB colours,
 each the farthest (in CIELAB) from all colours picked before, so the first colours are the
@@ -115,9 +116,13 @@ def match_topics(z_p: np.ndarray, z_b: np.ndarray) -> tuple[np.ndarray, np.ndarr
     """Palette slots that make a path labelling Z_p comparable with the batch labelling Z_b.
 
     Z_b's topics are ranked by size (:func:`rank_topics`). Z_p's topics are matched one to
-    one with Z_b's, greedily by overlap (the pair sharing most pixels first; ties by the
-    lower Z_p id, then the lower Z_b id); a matched Z_p topic takes its partner's slot, an
-    unmatched one the next slot no Z_b topic uses, larger unmatched topics first.
+    one with Z_b's so that the matched pairs share the most pixels in total: the optimal
+    assignment (:func:`scipy.optimize.linear_sum_assignment`) on the contingency table of
+    the topics present in each map. Among matchings that share equally many pixels,
+    lower ids win: each pair ``(p, b)`` adds a penalty that grows with ``p``, then with
+    ``b``, and all penalties together weigh less than one pixel. A pair that shares no
+    pixel is no match. A matched Z_p topic takes its partner's slot, an unmatched one the
+    next slot no Z_b topic uses, larger unmatched topics first.
 
     Parameters
     ----------
@@ -133,25 +138,32 @@ def match_topics(z_p: np.ndarray, z_b: np.ndarray) -> tuple[np.ndarray, np.ndarr
     agreement : float
         Fraction of pixels painted the same colour in both maps, 0..1.
     """
+    from scipy.optimize import linear_sum_assignment
+
+    from curiosity_cli.evaluate.information import contingency
+
     z_p = _check_labels(z_p, "z_p")
     z_b = _check_labels(z_b, "z_b")
     if z_p.shape != z_b.shape:
         raise ParameterError(f"z_p is {z_p.shape} but z_b is {z_b.shape}; expected label maps of the same map")
     slots_b = rank_topics(z_b)
-    n_p, n_b = int(z_p.max()) + 1, slots_b.size
-    overlap = np.bincount((z_p * n_b + z_b).ravel(), minlength=n_p * n_b)
-    slots_p = np.full(n_p, -1, np.int64)
-    taken = np.zeros(n_b, bool)
-    for pair in np.argsort(-overlap, kind="stable"):
-        if overlap[pair] == 0:
-            break
-        p, b = divmod(int(pair), n_b)
-        if slots_p[p] < 0 and not taken[b]:
-            slots_p[p] = slots_b[b]
-            taken[b] = True
+    n_p = int(z_p.max()) + 1 if z_p.size else 0
     sizes_p = _sizes(z_p, n_p)
+    present_p, present_b = np.flatnonzero(sizes_p), np.flatnonzero(slots_b >= 0)
+    overlap = contingency(z_p, z_b, n_p, slots_b.size)[np.ix_(present_p, present_b)]
+    # pair (i, j) of the present topics costs -overlap * scale + (i * n + j): a matching's
+    # penalties (at most min(r, n) pairs, each below r * n) add up to less than scale, the
+    # cost of one pixel. All integers, so exact in float64 while pixels * scale is well
+    # below 2**53: with 127 topics a side, for maps up to a gigapixel.
+    r, n = overlap.shape
+    scale = r * n * min(r, n)
+    cost = -overlap.astype(np.float64) * scale + np.arange(r * n).reshape(r, n)
+    rows, cols = linear_sum_assignment(cost)
+    shared = overlap[rows, cols] > 0
+    slots_p = np.full(n_p, -1, np.int64)
+    slots_p[present_p[rows[shared]]] = slots_b[present_b[cols[shared]]]
     unmatched = [p for p in np.argsort(-sizes_p, kind="stable") if sizes_p[p] > 0 and slots_p[p] < 0]
-    first_free = int(slots_b.max()) + 1
+    first_free = int(slots_b.max()) + 1 if slots_b.size else 0
     slots_p[unmatched] = first_free + np.arange(len(unmatched))
     agreement = float(np.mean(slots_p[z_p] == slots_b[z_b])) if z_p.size else 1.0
     return slots_p, slots_b, agreement

@@ -2,22 +2,28 @@
 
 - :mod:`~curiosity_cli.topics.neighbours`: neighbour tables of grids and frame streams.
 - :mod:`~curiosity_cli.topics.model`: :class:`TopicModel`, its Gibbs refinement
-  (batch, realtime, frozen Φ), ML topics, snapshots and files.
+  (batch, realtime, frozen Φ), ML topics.
+- :mod:`~curiosity_cli.topics.persistence`: snapshots of a model's state, and model files.
 - :mod:`~curiosity_cli.topics.perplexity`: word and topic perplexity of a candidate cell.
 
 Numba kernels live in the private ``_*_kernels.py`` modules and are imported only when a
 model computes, so importing this package stays cheap.
 """
 
-from curiosity_cli.topics.model import ModelSnapshot, TopicModel
+from curiosity_cli.topics.model import TopicModel
 from curiosity_cli.topics.neighbours import grid_neighbours, stream_neighbours
 from curiosity_cli.topics.perplexity import topic_perplexity, word_perplexity
+from curiosity_cli.topics.persistence import ModelSnapshot, load_model, restore_snapshot, save_model, take_snapshot
 
 __all__ = [
     "ModelSnapshot",
     "TopicModel",
     "grid_neighbours",
+    "load_model",
+    "restore_snapshot",
+    "save_model",
     "stream_neighbours",
+    "take_snapshot",
     "topic_perplexity",
     "word_perplexity",
 ]

@@ -1,4 +1,4 @@
-"""The ROST spatial topic model (paper section 3): state, refinement, Φ, save and load.
+"""The ROST spatial topic model (paper section 3): state, refinement, Φ.
 
 A :class:`TopicModel` holds the words of the cells observed so far, one topic label per
 word, and the counts the Gibbs sampler needs. A word's topic is resampled from eq. 5::
@@ -16,52 +16,26 @@ Randomness: the model's seed and a 64-bit event counter determine every draw (se
 Layouts: word-topic counts are stored ``(V, Kp)`` (``Kp`` = K rounded up to a multiple
 of 8), so one word's counts over topics are contiguous for the sampler's dense loop;
 public accessors return ``(V, K)``, topics in columns.
+
+Snapshots and files (:mod:`~curiosity_cli.topics.persistence`) read and restore the state
+through :meth:`TopicModel.full_state` and :meth:`TopicModel.compact_state` and their
+setters.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from curiosity_cli.checks import check_float, check_int
-from curiosity_cli.errors import CuriosityError, ParameterError
-from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics.neighbours import check_neighbours
 
-MODEL_FORMAT = 1
 _MIN_CAPACITY = 1024
 _CACHE_LINE = 64
 # a batch phase holds at most 1/_PHASES of the observed cells (TopicModel.refine_batch)
 _PHASES = 16
-
-
-@dataclass(frozen=True)
-class ModelSnapshot:
-    """A copy of a model's whole mutable state, for :meth:`TopicModel.restore`.
-
-    Every field is the model's own array (copied), trimmed to the words and cells in use;
-    ``counter`` is the random state (with the model's fixed seed).
-    """
-
-    n_topics: int
-    vocabulary_size: int
-    neighbours: np.ndarray  # the model's (read-only) table, to check a restore
-    frozen: bool
-    words: np.ndarray
-    topics: np.ndarray
-    cell_first: np.ndarray
-    cell_count: np.ndarray
-    order: np.ndarray
-    times: np.ndarray
-    nwk: np.ndarray
-    nk: np.ndarray
-    ncz: np.ndarray
-    ng: np.ndarray
-    counter: int
 
 
 class TopicModel:
@@ -569,132 +543,140 @@ class TopicModel:
         self._counter += 1 + int(picks)
         return int(done)
 
-    # ------------------------------------------------------------------ snapshots and files
+    # ------------------------------------------------------------------ the whole state (topics/persistence.py)
 
-    def snapshot(self) -> ModelSnapshot:
-        """A copy of the whole state, random state included."""
-        n = self._n_observed
-        return ModelSnapshot(
-            n_topics=self._k,
-            vocabulary_size=self._v,
-            neighbours=self._table,
-            frozen=self._frozen,
-            words=self._words[: self._n_words].copy(),
-            topics=self._topics[: self._n_words].copy(),
-            cell_first=self._cell_first.copy(),
-            cell_count=self._cell_count.copy(),
-            order=self._order[:n].copy(),
-            times=self._times[:n].copy(),
-            nwk=self._nwk.copy(),
-            nk=self._nk.copy(),
-            ncz=self._ncz.copy(),
-            ng=self._ng.copy(),
-            counter=self._counter,
-        )
+    def full_state(self) -> dict:
+        """A copy of the whole mutable state in the model's own layout, random state included.
 
-    def restore(self, snapshot: ModelSnapshot) -> None:
-        """Return to the state of ``snapshot``, random state included.
+        What a snapshot (:func:`~curiosity_cli.topics.persistence.take_snapshot`) keeps;
+        :meth:`set_full_state` puts it back.
 
-        The snapshot may come from this model or another with the same K, V, neighbour
-        table and frozenness; α, β and the seed stay this model's.
+        Returns
+        -------
+        dict
+            ``words``, ``topics``: (n_words,) int32 and :attr:`topic_dtype`, in storage
+            order; ``cell_first``, ``cell_count``: (n_cells,) int64, where each cell's
+            words sit; ``order``: (n_observed,) int32, the cells in the order added;
+            ``times``: (n_observed,) int64; ``nwk``: (V, Kp), ``nk``: (Kp,), ``ncz`` and
+            ``ng``: (n_cells, Kp), the int32 counts (``Kp`` = K rounded up to a multiple
+            of 8); ``counter``: int, the random state.
         """
-        if not isinstance(snapshot, ModelSnapshot):
-            raise ParameterError(f"snapshot: got {type(snapshot).__name__}, expected a ModelSnapshot")
-        mine = (self._k, self._v, self._frozen)
-        theirs = (snapshot.n_topics, snapshot.vocabulary_size, snapshot.frozen)
-        if mine != theirs:
-            raise ParameterError(f"snapshot: taken from a model with (K, V, frozen) = {theirs}, this one has {mine}")
-        if not np.array_equal(snapshot.neighbours, self._table):
-            raise ParameterError("snapshot: taken from a model with another neighbour table")
-        n_words = snapshot.words.size
-        self._words = snapshot.words.copy()
-        self._topics = snapshot.topics.copy()
-        self._n_words = n_words
-        self._cell_first[:] = snapshot.cell_first
-        self._cell_count[:] = snapshot.cell_count
-        self._n_observed = snapshot.order.size
-        self._order[: self._n_observed] = snapshot.order
-        self._times[: self._n_observed] = snapshot.times
-        self._nwk[:] = snapshot.nwk
-        self._nk[:] = snapshot.nk
-        self._ncz[:] = snapshot.ncz
-        self._ng[:] = snapshot.ng
-        self._counter = snapshot.counter
+        n = self._n_observed
+        return {
+            "words": self._words[: self._n_words].copy(),
+            "topics": self._topics[: self._n_words].copy(),
+            "cell_first": self._cell_first.copy(),
+            "cell_count": self._cell_count.copy(),
+            "order": self._order[:n].copy(),
+            "times": self._times[:n].copy(),
+            "nwk": self._nwk.copy(),
+            "nk": self._nk.copy(),
+            "ncz": self._ncz.copy(),
+            "ng": self._ng.copy(),
+            "counter": self._counter,
+        }
+
+    def set_full_state(self, *, words, topics, cell_first, cell_count, order, times, nwk, nk, ncz, ng, counter) -> None:
+        """Return to a state :meth:`full_state` gave, random state included.
+
+        The state must come from a model with the same K, V, neighbour table and
+        frozenness; that is not checked here (the caller knows where it came from). The
+        arrays are copied.
+        """
+        self._words = words.copy()
+        self._topics = topics.copy()
+        self._n_words = words.size
+        self._cell_first[:] = cell_first
+        self._cell_count[:] = cell_count
+        self._n_observed = order.size
+        self._order[: self._n_observed] = order
+        self._times[: self._n_observed] = times
+        self._nwk[:] = nwk
+        self._nk[:] = nk
+        self._ncz[:] = ncz
+        self._ng[:] = ng
+        self._counter = counter
         self._refresh_inverse()
 
-    def save(self, path: Path) -> None:
-        """Write the model to an ``.npz`` file, atomically.
+    def compact_state(self) -> dict:
+        """The observed cells with their words and topics, random state included.
 
-        The file holds the parameters (K, V, α, β, seed, vocabulary hashes, format
-        version), the neighbour table, the words and topics of the observed cells in the
-        order added, their times, the random state and, for a frozen model, the frozen
-        counts. Counts are recomputed from the topics on load.
+        What a model file keeps (:func:`~curiosity_cli.topics.persistence.save_model`):
+        every count follows from it (and, for a frozen model, the frozen counts), and
+        :meth:`set_compact_state` recounts them.
+
+        Returns
+        -------
+        dict
+            ``order``: (n_observed,) int32, the cells in the order added; ``times``:
+            (n_observed,) int64, their times; ``sizes``: (n_observed,) int64, their word
+            counts; ``words``, ``topics``: (n_words,) int32 and :attr:`topic_dtype`, cell
+            after cell in that order; ``counter``: int, the random state.
         """
-        n = self._n_observed
-        order = self._order[:n]
-        meta = {
-            "format": MODEL_FORMAT,
-            "n_topics": self._k,
-            "vocabulary_size": self._v,
-            "alpha": self._alpha,
-            "beta": self._beta,
-            "seed": self._seed,
-            "counter": self._counter,
-            "vocabulary_hashes": self._hashes,
-            "frozen": self._frozen,
-        }
-        arrays = {
-            "neighbours": self._table,
+        order = self._order[: self._n_observed].copy()
+        return {
             "order": order,
-            "times": self._times[:n],
+            "times": self._times[: self._n_observed].copy(),
             "sizes": self._cell_count[order],
             "words": self._in_order(self._words, order),
             "topics": self._in_order(self._topics, order),
-            "meta": np.array(json.dumps(meta, sort_keys=True)),
+            "counter": self._counter,
         }
-        if self._frozen:
-            arrays["frozen_counts"] = self.topic_word_counts()
-        with atomic_path(path) as tmp, open(tmp, "wb") as handle:
-            np.savez_compressed(handle, **arrays)
 
-    @classmethod
-    def load(cls, path: Path) -> TopicModel:
-        """Read a model written by :meth:`save`; the loaded model equals the saved one.
+    def set_compact_state(self, *, order, times, sizes, words, topics, counter) -> None:
+        """Replace the observed cells, words, topics and random state by a :meth:`compact_state`.
+
+        Every count is recomputed from the topics (the frozen counts of a frozen model
+        stay). The arrays may come from a file, so they are checked first.
 
         Raises
         ------
-        CuriosityError
-            One line naming the file: missing, not a topic model, another format version,
-            or inconsistent contents.
+        ParameterError
+            ``counter`` is not an int >= 0.
+        ValueError
+            The arrays are not 1-D integer arrays, or disagree with each other or with
+            the model (cells, word ids or topics out of range, times decreasing).
         """
-        path = Path(path)
-        where = display_path(path)
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                meta = json.loads(str(data["meta"]))
-                if not isinstance(meta, dict):
-                    raise ValueError("meta is not a mapping")
-                arrays = {k: data[k] for k in ("neighbours", "order", "times", "sizes", "words", "topics")}
-                frozen_counts = data["frozen_counts"] if meta.get("frozen") else None
-        except (OSError, KeyError, ValueError, TypeError) as exc:
-            raise CuriosityError(f"{where}: not a topic model ({_one_line(exc)})") from None
-        if meta.get("format") != MODEL_FORMAT:
-            raise CuriosityError(f"{where}: format: got {meta.get('format')!r}, expected {MODEL_FORMAT}")
-        try:
-            model = cls(
-                meta["n_topics"],
-                meta["vocabulary_size"],
-                arrays["neighbours"],
-                alpha=meta["alpha"],
-                beta=meta["beta"],
-                seed=meta["seed"],
-                vocabulary_hashes=meta["vocabulary_hashes"],
-                frozen_counts=frozen_counts,
-            )
-            model._fill(arrays, check_int("counter", meta["counter"], 0))
-        except (KeyError, ParameterError, ValueError, TypeError) as exc:
-            raise CuriosityError(f"{where}: not a valid topic model ({_one_line(exc)})") from None
-        return model
+        counter = check_int("counter", counter, 0)
+        n = order.size
+        for name, a in (("order", order), ("times", times), ("sizes", sizes), ("words", words), ("topics", topics)):
+            if a.ndim != 1 or (a.size and not np.issubdtype(a.dtype, np.integer)):
+                raise ValueError(f"{name}: expected a 1-D integer array")
+        if times.size != n or sizes.size != n:
+            raise ValueError("order, times and sizes differ in length")
+        if n and (order.min() < 0 or order.max() >= self.n_cells or np.unique(order).size != n):
+            raise ValueError("order: cells out of range or repeated")
+        if n and (np.any(np.diff(times) < 0) or times[0] < 0):
+            raise ValueError("times: negative or decreasing")
+        if (n and sizes.min() < 0) or sizes.sum() != words.size or topics.size != words.size:
+            raise ValueError("sizes, words and topics disagree")
+        if words.size and (words.min() < 0 or words.max() >= self._v):
+            raise ValueError(f"words: ids outside 0..{self._v - 1}")
+        if topics.size and (topics.min() < 0 or topics.max() >= self._k):
+            raise ValueError(f"topics: labels outside 0..{self._k - 1}")
+
+        self._words = words.astype(np.int32)
+        self._topics = topics.astype(self._topic_dtype)
+        self._n_words = words.size
+        firsts = np.concatenate([[0], np.cumsum(sizes)[:-1]]) if n else np.zeros(0, np.int64)
+        self._cell_first[order] = firsts
+        self._cell_count[order] = sizes
+        self._order[:n] = order
+        self._times[:n] = times
+        self._n_observed = n
+        self._counter = counter
+        word_cells = np.repeat(order.astype(np.int64), sizes)
+        kp = self._kp
+        self._ncz[:] = np.bincount(word_cells * kp + self._topics, minlength=self.n_cells * kp).reshape(-1, kp)
+        self._ng[:] = self._ncz
+        for column in self._table.T:
+            present = column >= 0
+            self._ng[present] += self._ncz[column[present]]
+        if not self._frozen:
+            pairs = self._words.astype(np.int64) * kp + self._topics
+            self._nwk[:] = np.bincount(pairs, minlength=self._v * kp).reshape(-1, kp)
+            self._nk[:] = self._nwk.sum(axis=0)
+            self._refresh_inverse()
 
     # ------------------------------------------------------------------ internals
 
@@ -772,50 +754,6 @@ class TopicModel:
         first, count = self._cell_first, self._cell_count
         return np.concatenate([per_word[first[c] : first[c] + count[c]] for c in cells])
 
-    def _fill(self, arrays: dict, counter: int) -> None:
-        """Install words and topics read from a file, recounting everything from them."""
-        order, times, sizes = arrays["order"], arrays["times"], arrays["sizes"]
-        words, topics = arrays["words"], arrays["topics"]
-        n = order.size
-        for name, a in (("order", order), ("times", times), ("sizes", sizes), ("words", words), ("topics", topics)):
-            if a.ndim != 1 or (a.size and not np.issubdtype(a.dtype, np.integer)):
-                raise ValueError(f"{name}: expected a 1-D integer array")
-        if times.size != n or sizes.size != n:
-            raise ValueError("order, times and sizes differ in length")
-        if n and (order.min() < 0 or order.max() >= self.n_cells or np.unique(order).size != n):
-            raise ValueError("order: cells out of range or repeated")
-        if n and (np.any(np.diff(times) < 0) or times[0] < 0):
-            raise ValueError("times: negative or decreasing")
-        if (n and sizes.min() < 0) or sizes.sum() != words.size or topics.size != words.size:
-            raise ValueError("sizes, words and topics disagree")
-        if words.size and (words.min() < 0 or words.max() >= self._v):
-            raise ValueError(f"words: ids outside 0..{self._v - 1}")
-        if topics.size and (topics.min() < 0 or topics.max() >= self._k):
-            raise ValueError(f"topics: labels outside 0..{self._k - 1}")
-
-        self._words = words.astype(np.int32)
-        self._topics = topics.astype(self._topic_dtype)
-        self._n_words = words.size
-        firsts = np.concatenate([[0], np.cumsum(sizes)[:-1]]) if n else np.zeros(0, np.int64)
-        self._cell_first[order] = firsts
-        self._cell_count[order] = sizes
-        self._order[:n] = order
-        self._times[:n] = times
-        self._n_observed = n
-        self._counter = counter
-        word_cells = np.repeat(order.astype(np.int64), sizes)
-        kp = self._kp
-        self._ncz[:] = np.bincount(word_cells * kp + self._topics, minlength=self.n_cells * kp).reshape(-1, kp)
-        self._ng[:] = self._ncz
-        for column in self._table.T:
-            present = column >= 0
-            self._ng[present] += self._ncz[column[present]]
-        if not self._frozen:
-            pairs = self._words.astype(np.int64) * kp + self._topics
-            self._nwk[:] = np.bincount(pairs, minlength=self._v * kp).reshape(-1, kp)
-            self._nk[:] = self._nwk.sum(axis=0)
-            self._refresh_inverse()
-
 
 def _aligned_zeros(shape, dtype) -> np.ndarray:
     """Zeros starting on a 64-byte cache line (numpy only promises 16 bytes).
@@ -861,7 +799,3 @@ def _check_frozen(counts, n_words: int, n_topics: int) -> np.ndarray:
     if counts.size and (counts.min() < 0 or counts.sum(axis=0, dtype=np.int64).max() > np.iinfo(np.int32).max):
         raise ParameterError("frozen_counts: counts must be >= 0 and each topic's total fit in int32")
     return counts.astype(np.int32)
-
-
-def _one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split()) or type(exc).__name__

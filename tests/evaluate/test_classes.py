@@ -18,7 +18,7 @@ from curiosity_cli.evaluate.information import (
     matched_recall,
     mean_recall,
 )
-from curiosity_cli.evaluate.labels import (
+from curiosity_cli.evaluate.label_stage import (
     CLASS_SHARE_PERCENT,
     NOT_LABELLED,
     label_changes,

@@ -15,7 +15,7 @@ from test_pipeline import small_experiment
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.evaluate.labels import LabelError, label_experiment
+from curiosity_cli.evaluate.label_stage import LabelError, label_experiment
 from curiosity_cli.layout import ExperimentFolder
 from curiosity_cli.parallel import dask_client
 

@@ -12,7 +12,7 @@ from small_maps import grid_config, grid_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.evaluate.labels import LabelError, label_experiment
+from curiosity_cli.evaluate.label_stage import LabelError, label_experiment
 from curiosity_cli.evaluate.tables import EvaluationError, evaluate_experiment
 from curiosity_cli.explore.grid import run_grid
 from curiosity_cli.explore.runs import read_run

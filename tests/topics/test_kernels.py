@@ -47,7 +47,7 @@ def assert_matches(model: TopicModel, twin: NaiveModel):
     assert [int(c) for c in model.observed_cells()] == twin.order
     for cell in twin.order:
         np.testing.assert_array_equal(model.topics([cell]), twin.topics[cell], err_msg=f"cell {cell}")
-    assert model.snapshot().counter == twin.counter
+    assert model.full_state()["counter"] == twin.counter
     counts = recount(model)
     np.testing.assert_array_equal(model.topic_word_counts(), counts["nwk"])
     np.testing.assert_array_equal(model.topic_totals(), counts["nk"])

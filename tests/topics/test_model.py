@@ -1,4 +1,4 @@
-"""TopicModel: count invariants, realtime picking, frozen Φ, snapshots, files, validation."""
+"""TopicModel: count invariants, realtime picking, frozen Φ, randomness, validation."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from naive import recount
 
-from curiosity_cli.errors import CuriosityError, ParameterError
-from curiosity_cli.topics import TopicModel, grid_neighbours, stream_neighbours
+from curiosity_cli.errors import ParameterError
+from curiosity_cli.topics import TopicModel, grid_neighbours, stream_neighbours, take_snapshot
 from curiosity_cli.topics.neighbours import check_neighbours
 
 
@@ -45,7 +45,7 @@ def assert_consistent(model: TopicModel):
 
 
 def assert_same_state(a: TopicModel, b: TopicModel):
-    sa, sb = a.snapshot(), b.snapshot()
+    sa, sb = take_snapshot(a), take_snapshot(b)
     for field in dataclasses.fields(sa):
         x, y = getattr(sa, field.name), getattr(sb, field.name)
         if isinstance(x, np.ndarray):
@@ -177,9 +177,9 @@ def test_realtime_refines_the_newest_observation_with_probability_eta(eta):
     for cell in range(49):
         model.add_cell(cell, [cell % 5])
     model.add_cell(49, [])
-    before = model.snapshot().counter
+    before = model.full_state()["counter"]
     done = model.refine_realtime(20_000, eta=eta)
-    picks = model.snapshot().counter - before - 1
+    picks = model.full_state()["counter"] - before - 1
     assert picks == 20_000
     # binomial standard error with 20,000 picks is at most 0.0036
     assert (picks - done) / picks == pytest.approx(eta, abs=0.02)
@@ -214,9 +214,9 @@ def test_realtime_ends_even_when_no_reachable_cell_has_words():
     assert model.refine_realtime(10, eta=0.5) == 0
     model.add_cell(0, [1, 2])
     model.add_cell(1, [])
-    counter = model.snapshot().counter
+    counter = model.full_state()["counter"]
     assert model.refine_realtime(10, eta=1.0) == 0  # only the empty newest cell is picked
-    assert model.snapshot().counter == counter + 11  # ten empty picks spent the budget
+    assert model.full_state()["counter"] == counter + 11  # ten empty picks spent the budget
     assert model.refine_realtime(10, eta=0.0) >= 10
     # a vanishing chance of picking the only cell with words still ends
     model = TopicModel(3, 5, grid_neighbours(1, 3), alpha=0.1, beta=0.1, seed=0)
@@ -258,7 +258,7 @@ def test_frozen_refinement_leaves_word_topic_counts_unchanged_and_labels_a_map()
     assert_consistent(whole)
 
 
-# --- randomness, snapshots and files --------------------------------------------------
+# --- randomness -----------------------------------------------------------------------
 
 
 def run(seed, threads=1, model_seed=None):
@@ -319,108 +319,6 @@ def test_batch_on_a_single_observed_cell_is_the_same_on_two_threads():
         assert_consistent(model)
         models.append(model)
     assert_same_state(*models)
-
-
-def test_snapshot_and_restore_round_trip_bit_identically():
-    model = build(10)
-    model.refine_batch(1)
-    snap = model.snapshot()
-    model.refine_batch(2)
-    model.refine_realtime(50, eta=0.3)
-    after = model.snapshot()
-    model.restore(snap)
-    assert_same_state(model, build_restored(snap))
-    model.refine_batch(2)
-    model.refine_realtime(50, eta=0.3)
-    assert_same_state(model, model_from(after, model))
-    assert_consistent(model)
-
-
-def build_restored(snap):
-    model = build(10)
-    model.restore(snap)
-    return model
-
-
-def model_from(snap, like):
-    twin = TopicModel(
-        like.n_topics, like.vocabulary_size, like.neighbours, alpha=like.alpha, beta=like.beta, seed=like.seed
-    )
-    twin.restore(snap)
-    return twin
-
-
-def test_restore_rejects_a_snapshot_of_another_shape():
-    snap = build(11, n_topics=6).snapshot()
-    other = build(11, n_topics=7)
-    with pytest.raises(ParameterError, match="snapshot"):
-        other.restore(snap)
-    with pytest.raises(ParameterError, match="snapshot"):
-        other.restore("not a snapshot")
-    with pytest.raises(ParameterError, match="neighbour table"):
-        build(11, spatial=0).restore(build(11).snapshot())
-
-
-def test_restore_also_undoes_added_cells():
-    model = TopicModel(3, 5, grid_neighbours(2, 2), alpha=0.1, beta=0.1, seed=0)
-    model.add_cell(0, [1, 2])
-    snap = model.snapshot()
-    model.add_cell(1, [3] * 2000)  # grows the word arrays
-    model.restore(snap)
-    assert model.n_words == 2 and not model.is_observed(1)
-    model.add_cell(1, [3])
-    assert_consistent(model)
-
-
-@pytest.mark.parametrize("frozen", [False, True])
-def test_save_and_load_round_trip_bit_identically(tmp_path, frozen):
-    kwargs = {"vocabulary_hashes": {"orb": "ab12", "texton": "cd34"}}
-    if frozen:
-        kwargs["frozen_counts"] = np.arange(15 * 6).reshape(15, 6) % 4
-    model = build(12, **kwargs)
-    model.refine_batch(2)
-    path = tmp_path / "sub" / "model.npz"
-    model.save(path)
-    loaded = TopicModel.load(path)
-    assert_same_state(model, loaded)
-    assert (loaded.alpha, loaded.beta, loaded.seed, loaded.frozen) == (0.2, 0.1, 12, frozen)
-    assert loaded.vocabulary_hashes == {"orb": "ab12", "texton": "cd34"}
-    np.testing.assert_array_equal(loaded.neighbours, model.neighbours)
-    # and both continue identically
-    model.refine_realtime(100, eta=0.5)
-    loaded.refine_realtime(100, eta=0.5)
-    assert_same_state(model, loaded)
-    assert [p.name for p in path.parent.iterdir()] == ["model.npz"]
-
-
-def test_save_and_load_an_empty_model_with_hash_tuple(tmp_path):
-    table = grid_neighbours(2, 3, 0)
-    model = TopicModel(4, 9, table, alpha=0.5, beta=0.25, seed=2**64 - 1, vocabulary_hashes=("x", "y"))
-    model.save(tmp_path / "m.npz")
-    loaded = TopicModel.load(tmp_path / "m.npz")
-    assert_same_state(model, loaded)
-    assert loaded.vocabulary_hashes == ("x", "y") and loaded.seed == 2**64 - 1
-
-
-def test_load_of_a_bad_file_is_a_one_line_error_naming_it(tmp_path):
-    bad = tmp_path / "bad.npz"
-    bad.write_text("not numpy")
-    for path in (bad, tmp_path / "missing.npz"):
-        with pytest.raises(CuriosityError, match=path.name) as info:
-            TopicModel.load(path)
-        assert "\n" not in str(info.value)
-    model = build(13)
-    model.save(tmp_path / "m.npz")
-    with np.load(tmp_path / "m.npz") as data:
-        arrays = dict(data)
-    arrays["topics"] = arrays["topics"] + 100
-    np.savez(tmp_path / "corrupt.npz", **arrays)
-    with pytest.raises(CuriosityError, match="corrupt.npz.*topics"):
-        TopicModel.load(tmp_path / "corrupt.npz")
-    arrays["meta"] = np.array('{"format": 99}')
-    np.savez(tmp_path / "future.npz", **arrays)
-    with pytest.raises(CuriosityError, match="future.npz: format: got 99"):
-        TopicModel.load(tmp_path / "future.npz")
 
 
 # --- validation -----------------------------------------------------------------------

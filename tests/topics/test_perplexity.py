@@ -10,11 +10,11 @@ import pytest
 from naive import NaiveModel, topic_perplexity_naive, word_perplexity_naive
 
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.topics import TopicModel, grid_neighbours, topic_perplexity, word_perplexity
+from curiosity_cli.topics import TopicModel, grid_neighbours, take_snapshot, topic_perplexity, word_perplexity
 
 
 def assert_same_state(a: TopicModel, b: TopicModel):
-    sa, sb = a.snapshot(), b.snapshot()
+    sa, sb = take_snapshot(a), take_snapshot(b)
     for field in dataclasses.fields(sa):
         np.testing.assert_array_equal(getattr(sa, field.name), getattr(sb, field.name), err_msg=field.name)
 

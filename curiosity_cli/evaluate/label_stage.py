@@ -32,7 +32,8 @@ cluster, batch references are tasks too, each map's word store goes to the clust
 and its human labels and Z_b pixel labels once; each run's ``run.json`` and checkpoint
 counts Φ_p (a few kilobytes) travel with its task, so workers need no copy of the maps,
 stores or results. Either way this process writes every file, and the same functions
-compute the labels, so the results are identical.
+(:mod:`~curiosity_cli.evaluate.label_sampling`) compute the labels, so the results are
+identical.
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
 from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of, recorded_digest
 
 if TYPE_CHECKING:
-    from curiosity_cli.evaluate.labeling import PathLabeller
+    from curiosity_cli.evaluate.label_sampling import PathLabeller
     from curiosity_cli.map_stores import StoreInfo
     from curiosity_cli.explore.runs import Run
     from curiosity_cli.parallel import Workers
@@ -202,7 +203,7 @@ def _compute_batch(
     on_sweep: Callable[[int], None] | None = None,
 ) -> tuple:
     """A map's batch reference, in this process or a worker: ``(pixel labels, word labels, trace, seconds)``."""
-    from curiosity_cli.evaluate.labeling import batch_labels, pixel_labels
+    from curiosity_cli.evaluate.label_sampling import batch_labels, pixel_labels
     from curiosity_cli.seeds import name_key
 
     seed = int(np.random.SeedSequence((config.seed, name_key(info.name), _BATCH_TAG)).generate_state(1, np.uint64)[0])
@@ -235,7 +236,7 @@ def _labeller(store_path: str, model, store: WordStore) -> PathLabeller:
     Per thread, not per process: a labeller holds its chain's topics, and a Dask worker
     runs tasks on several threads. ``store`` is the map's words, named by ``store_path``.
     """
-    from curiosity_cli.evaluate.labeling import PathLabeller
+    from curiosity_cli.evaluate.label_sampling import PathLabeller
 
     cache = _per_thread.__dict__.setdefault("labellers", {})
     key = (store_path, model)
@@ -276,7 +277,7 @@ def label_run(run: RunInputs, inputs: MapInputs, arrays: MapArrays, config: Expe
     from the map's current word store (:func:`label_experiment` checks).
     """
     from curiosity_cli.evaluate.information import contingency
-    from curiosity_cli.evaluate.labeling import pixel_labels
+    from curiosity_cli.evaluate.label_sampling import pixel_labels
 
     store, human, n_classes, batch, shape, cell_classes = arrays
     k = config.model.topics

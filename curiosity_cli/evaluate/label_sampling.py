@@ -1,4 +1,7 @@
-"""Labelling a whole map with topics: with a path's model (Z_p) or in batch mode (Z_b).
+"""Drawing a whole map's topic labels: with a path's model (Z_p) or in batch mode (Z_b).
+
+This module computes labels and writes nothing; which runs need them, and the files and
+tasks of the ``label`` stage, are in :mod:`~curiosity_cli.evaluate.label_stage`.
 
 Paper section 5.1: "Each of these exploration runs returned a topic model Φ_p, which we
 then used to compute topic labels for each pixel in the map in batch mode."
@@ -22,7 +25,30 @@ from curiosity_cli.errors import ParameterError
 from curiosity_cli.words.store import WordStore
 
 
-def _whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_counts=None):
+def whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_counts=None):
+    """A map's topic model holding every word of the map, each with a uniformly random topic.
+
+    What Z_b and Z_p are sampled on: the map's model
+    (:func:`~curiosity_cli.topics.map_model.map_topic_model`) with every cell added in
+    cell order, so each cell's words in the store's order.
+
+    Parameters
+    ----------
+    store : WordStore
+        The map's words.
+    model : ModelConfig
+        K, α, β and the neighbourhood.
+    seed : int
+        0 .. 2**64 - 1: the model's seed, which draws the initial topics.
+    frozen_counts : (V, K) int ndarray, optional
+        Fix Φ to these word-topic counts (a path model's, for Z_p); default: Φ is
+        learned from the map's words (Z_b).
+
+    Returns
+    -------
+    TopicModel
+        Every one of the store's ``n_cells`` cells observed.
+    """
     from curiosity_cli.topics.map_model import map_topic_model
 
     topic_model = map_topic_model(store, model, seed, frozen_counts=frozen_counts)
@@ -48,7 +74,7 @@ class PathLabeller:
         self._store = store
         self._config = model
         zeros = np.zeros((store.vocabulary_size, model.topics), np.int32)
-        self._model = _whole_map_model(store, model, 0, frozen_counts=zeros)
+        self._model = whole_map_model(store, model, 0, frozen_counts=zeros)
 
     def start(self, phi: np.ndarray, seed: int) -> None:
         """Freeze Φ to ``phi`` (V, K) and give every word a uniformly random topic (stream ``seed``)."""
@@ -158,7 +184,7 @@ def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int
         The model's mean per-word log-likelihood after each sweep (nats): the trace that
         shows whether the sweeps were enough.
     """
-    topic_model = _whole_map_model(store, model, seed)
+    topic_model = whole_map_model(store, model, seed)
     trace = np.empty(sweeps)
     for sweep in range(sweeps):
         topic_model.refine_batch(1, threads=threads)
