@@ -47,6 +47,21 @@ _NAME_RULE = f"1 to {MAX_NAME} letters, digits, '-', '_' or '.', starting with a
 #: The largest ORB or texton vocabulary a config may name and ``vocab build`` may learn.
 MAX_VOCABULARY = 30000
 
+#: The walkers a config may name in ``explore.weight_functions``, in the order reports list
+#: them: the paper's four weight functions in its order, the lawnmower, then the ceilings.
+#: Names are the config's vocabulary, checked here under every entry point;
+#: :data:`curiosity_cli.explore.weights.WEIGHT_FUNCTIONS` gives each its meaning (a test
+#: keeps the two the same).
+WALKER_NAMES = (
+    "random-walk",
+    "stochastic-coverage",
+    "word-perplexity",
+    "topic-perplexity",
+    "lawnmower",
+    "scattered-cells",
+    "compact-block",
+)
+
 
 def _spec(
     *,
@@ -131,7 +146,7 @@ def _check_words(words: WordsConfig, raw: _Raw) -> None:
 class ExploreConfig:
     """Exploration runs on the simulated 2-D grid (paper sections 4 and 5.1)."""
 
-    # walkers named in curiosity_cli.explore.weights.WEIGHT_FUNCTIONS, checked when loading
+    # names in WALKER_NAMES, checked when loading
     weight_functions: tuple[str, ...] = _spec()
     restarts: int = _spec(min=1)
     path_length: int = _spec(min=1)
@@ -629,14 +644,12 @@ def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:
         except ConfigError as exc:
             raise ConfigError(f"{_where(raw, ('datasets', i))}: {exc}") from None
         datasets.append(entry if path.parent == DATASET_CONFIG_DIR else str(path))
-    from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS
-
     explore = config.explore
     for i, name in enumerate(explore.weight_functions):
-        if name not in WEIGHT_FUNCTIONS:
+        if name not in WALKER_NAMES:
             raise ConfigError(
                 f"{_where(raw, ('explore', 'weight_functions', i))}: got {shown(name)}, "
-                f"expected one of {', '.join(WEIGHT_FUNCTIONS)}"
+                f"expected one of {', '.join(WALKER_NAMES)}"
             )
     if len(set(explore.weight_functions)) != len(explore.weight_functions):
         raise ConfigError(

@@ -14,6 +14,8 @@
   robot's motion and view, and its protocol server on a pseudo-terminal.
 - :mod:`~curiosity_cli.drive.overlay`, :mod:`~curiosity_cli.drive.driver`: the paper's
   overlay, video and PNG output, and the loop that ties it together.
+- :mod:`~curiosity_cli.drive.session`: what ``curiosity drive`` and ``curiosity simrobot``
+  open, run and close (camera, robot, run folder and log; the pseudo-terminal).
 
 Heavy libraries (OpenCV, pyserial, numba) are imported inside functions.
 """

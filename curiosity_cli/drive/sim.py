@@ -35,6 +35,11 @@ class Pose:
         """(row, col) of the robot on the map, in (fractional) pixels."""
         return self.y / metres_per_pixel, self.x / metres_per_pixel
 
+    @classmethod
+    def at_pixel(cls, row: float, col: float, heading: float, metres_per_pixel: float) -> Pose:
+        """The pose at (``row``, ``col``) on the map, in (fractional) pixels, facing ``heading`` (rad)."""
+        return cls(col * metres_per_pixel, row * metres_per_pixel, heading)
+
 
 class Body:
     """Unicycle kinematics over a bounded map: surge along the heading, yaw turns it.

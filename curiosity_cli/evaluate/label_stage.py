@@ -58,9 +58,9 @@ from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of, rec
 
 if TYPE_CHECKING:
     from curiosity_cli.evaluate.label_sampling import PathLabeller
-    from curiosity_cli.map_stores import StoreInfo
     from curiosity_cli.explore.runs import Run
     from curiosity_cli.parallel import Workers
+    from curiosity_cli.words.map_stores import StoreInfo
     from curiosity_cli.words.store import WordStore
 
 LABEL_FORMAT = 1
@@ -422,7 +422,7 @@ def label_experiment(
         As :class:`~curiosity_cli.parallel.Workers`; and a Dask scheduler that cannot be
         reached or has unusable workers.
     """
-    from curiosity_cli.map_stores import prepare_stores
+    from curiosity_cli.words.map_stores import prepare_stores
     from curiosity_cli.explore.runs import RunError
     from curiosity_cli.parallel import Workers
     from curiosity_cli.words.store import load_store

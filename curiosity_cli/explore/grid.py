@@ -45,10 +45,10 @@ from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_d
 from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, check_inside, display_path
 from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder
-from curiosity_cli.map_stores import StoreInfo, prepare_stores
 from curiosity_cli.parallel import Workers
 from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of
 from curiosity_cli.seeds import name_key
+from curiosity_cli.words.map_stores import StoreInfo, prepare_stores
 
 #: The config sections a run's numbers depend on ...
 _RUN_SECTIONS = ("seed", "model", "words", "explore")

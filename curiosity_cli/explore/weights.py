@@ -26,9 +26,11 @@ mission, a path compared with the weight functions; and the two **ceilings**
 ``scattered-cells`` and ``compact-block``, models learned from cells chosen without
 walking, which say what any walker could hope for and are reported apart (:data:`CEILINGS`).
 
-To add a walker, write ``def mine(candidates: Candidates) -> np.ndarray`` (or a plan) and
-add it to :data:`WEIGHT_FUNCTIONS` under a name; configs can then name it in
-``explore.weight_functions``.
+To add a walker, write ``def mine(candidates: Candidates) -> np.ndarray`` (or a plan),
+add it to :data:`WEIGHT_FUNCTIONS` under a name, and the name to
+:data:`curiosity_cli.config.WALKER_NAMES` at the same place; configs can then name it in
+``explore.weight_functions`` (the config layer checks the names it loads without
+importing this stage).
 """
 
 from __future__ import annotations
@@ -104,8 +106,8 @@ class Plan:
     ceiling: bool = False
 
 
-#: Every walker by the name configs use: the paper's four weight functions first, in its
-#: order, then the lawnmower baseline, then the ceilings.
+#: Every walker by the name configs use (:data:`curiosity_cli.config.WALKER_NAMES`, in its
+#: order): the paper's four weight functions first, then the lawnmower baseline, then the ceilings.
 WEIGHT_FUNCTIONS: dict[str, WeightFunction | Plan] = {
     "random-walk": random_walk,
     "stochastic-coverage": stochastic_coverage,

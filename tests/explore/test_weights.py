@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from curiosity_cli.config import WALKER_NAMES
 from curiosity_cli.explore.walker import draw_move, in_bounds_neighbours
 from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, coverage_potential
 
@@ -22,6 +23,11 @@ def potential_naive(candidate, visits: dict, cols: int, min_d2: float | None) ->
             return math.inf
         total += n / (d2 if min_d2 is None else max(d2, min_d2))
     return total
+
+
+def test_every_name_a_config_may_give_has_a_walker_and_every_walker_a_name():
+    # the config layer checks names without importing this stage: the two lists must agree, in order
+    assert tuple(WEIGHT_FUNCTIONS) == WALKER_NAMES
 
 
 @pytest.mark.parametrize("min_d2", [0.25, 1.0, 2.0])

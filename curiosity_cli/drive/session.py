@@ -1,0 +1,239 @@
+"""Sessions of the two programs, ``curiosity drive`` and ``curiosity simrobot``: what they open, run and close.
+
+:func:`drive_session` opens the camera (an OpenCV source or the simulated camera), the
+robot (the serial link, an in-process simulated robot for a dry run on a map, or none),
+the run folder and its log, runs :func:`~curiosity_cli.drive.driver.run`, and closes what
+it opened whatever happens; a failure before the loop starts is logged as the run's
+``end`` row too, so every log ends with one.
+
+:func:`simrobot_session` puts a :class:`~curiosity_cli.drive.simrobot.SimRobot` on a new
+pseudo-terminal and serves it until it is told to stop, then closes the terminal and
+removes its symlink.
+
+Both route SIGINT and SIGTERM to a :class:`~curiosity_cli.drive.driver.StopRequest` while
+they run, so a robot is stopped before the program ends: call them from the main thread.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+from curiosity_cli.config import ExperimentConfig
+from curiosity_cli.data import MapData
+from curiosity_cli.drive import camera as cameras
+from curiosity_cli.drive.driver import Outcome, Outputs, StopRequest, prepare_folder, run, stopping_on_signals
+from curiosity_cli.drive.jsonlines import JsonLines
+from curiosity_cli.drive.link import LinkTiming, RobotLink
+from curiosity_cli.drive.pipeline import CuriosityPipeline, warm_up
+from curiosity_cli.drive.sim import Body, Pose
+from curiosity_cli.drive.simrobot import Noise, SimRobot, open_pty
+from curiosity_cli.errors import ParameterError
+from curiosity_cli.layout import DEFAULT_RESULTS
+
+
+def default_run_folder() -> Path:
+    """``results/drive/<date-time>``: a new folder for each run started without ``--out``."""
+    from datetime import datetime
+
+    return DEFAULT_RESULTS / "drive" / datetime.now().strftime("%Y%m%d-%H%M%S")
+
+
+def _body(sim_map: MapData, start: tuple[float, float], heading_deg: float, config: ExperimentConfig) -> Body:
+    """A simulated robot on ``sim_map`` at ``start`` (row, col in pixels), heading degrees clockwise from +col."""
+    metres_per_pixel = config.drive.sim_metres_per_pixel
+    pose = Pose.at_pixel(*start, math.radians(heading_deg), metres_per_pixel)
+    return Body(sim_map.image.shape[:2], metres_per_pixel, pose)
+
+
+def drive_session(
+    config: ExperimentConfig,
+    *,
+    seed: int,
+    camera: str,
+    port: str | None,
+    baud: int | None = None,
+    sim_map: MapData | None = None,
+    start: tuple[float, float] | None = None,
+    heading_deg: float = 0.0,
+    out: Path | None = None,
+    video_out: Path | None = None,
+    png_every: int = 0,
+    max_frames: int | None = None,
+    on_status: Callable[[str], None] = lambda line: None,
+    on_frame=lambda frame_number, decision: None,
+) -> tuple[Outcome, Path]:
+    """Drive until the camera ends, ``max_frames``, ESTOP, SIGINT or SIGTERM, then close everything.
+
+    Parameters
+    ----------
+    config : ExperimentConfig
+        Its ``model``, ``words`` and ``drive`` sections are used.
+    seed : int
+        Seeds the stream's topic models.
+    camera : str
+        A device index, a video file, a stream URL, or ``sim`` for the simulated camera
+        over ``sim_map``.
+    port : str or None
+        Serial device or pyserial URL of the robot; None for a dry run (commands are
+        logged, not sent).
+    baud : int, optional
+        Serial speed; default ``config.drive.baud``.
+    sim_map : MapData, optional
+        With ``camera="sim"``: the map the simulated robot is on.
+    start : (float, float), optional
+        A dry run on ``sim_map`` simulates the robot in this process, moved one
+        ``drive.sim_frame_interval`` per command: its start (row, col) in map pixels,
+        required then.
+    heading_deg : float
+        That robot's start heading, degrees clockwise from the map's +col axis.
+    out : Path, optional
+        The run folder (``log.jsonl``, ``config.yaml``, ``provenance.yaml``,
+        ``frames/``); default :func:`default_run_folder`.
+    video_out : Path, optional
+        The annotated video (``.mp4``, ``.avi`` or ``.mkv``).
+    png_every : int
+        An annotated PNG every this many frames into ``<out>/frames/``; 0 for none.
+    max_frames : int, optional
+        Stop after this many frames.
+    on_status : callable
+        Called with a line of text when the model starts loading and when the robot
+        has answered.
+    on_frame : callable
+        Called after each frame with its number and its
+        :class:`~curiosity_cli.drive.pipeline.Decision`.
+
+    Returns
+    -------
+    outcome : Outcome
+        How the run ended.
+    folder : Path
+        The run folder.
+
+    Raises
+    ------
+    ParameterError
+        ``camera="sim"`` without ``sim_map`` or the other way round; a dry run on
+        ``sim_map`` without ``start``.
+    LinkError
+        The robot cannot be reached, or the link was lost (STOP was attempted).
+    CuriosityError
+        A camera that cannot be opened or fails, an output that cannot be written.
+    """
+    if (camera == "sim") != (sim_map is not None):
+        raise ParameterError(f"camera: got {camera!r}; camera 'sim' and a sim_map go together")
+    d = config.drive
+    lockstep = port is None and sim_map is not None
+    if lockstep and start is None:
+        raise ParameterError("start: a dry run on a simulated map needs the robot's start (row, col)")
+    out = default_run_folder() if out is None else out
+    with stopping_on_signals(StopRequest()) as stop:
+        source = None if camera == "sim" else cameras.OpenCVCamera(camera)
+        on_status("loading the vocabularies and the topic model's kernels")
+        pipeline = CuriosityPipeline(config, seed)
+        warm_up(config)
+        prepare_folder(out, config, seed)
+        log = JsonLines(out / "log.jsonl")
+        map_name = None if sim_map is None else sim_map.config.name
+        log.write("start", seed=seed, camera=camera, sim_map=map_name, serial=port, dry_run=port is None)
+        robot = None
+        try:
+            if port is not None:
+                timing = LinkTiming(d.hello_timeout, d.ack_timeout, d.resends, d.keepalive)
+                robot = RobotLink.open(port, baud or d.baud, timing, log=log.write)
+                on_status(f"connected to {robot.robot_name or 'the robot'} on {port}")
+                log.write("hello", robot=robot.robot_name)
+            elif lockstep:
+                robot = cameras.LockstepRobot(_body(sim_map, start, heading_deg, config), d.sim_frame_interval)
+            if camera == "sim":
+                # a lockstep robot moves only when the loop commands it: no wall-clock frame period
+                interval = 0.0 if port is None else d.sim_frame_interval
+                source = cameras.SimCamera(
+                    sim_map.image, d.sim_metres_per_pixel, (d.sim_view_rows, d.sim_view_cols), robot, interval, d.hello_timeout
+                )
+            outputs = Outputs(out, video_out, png_every)
+            outcome = run(pipeline, source, robot, outputs, log, max_frames=max_frames, stop=stop, on_frame=on_frame)
+        except BaseException as exc:
+            if not log.ended:
+                # run() closes both and logs its end itself; this covers a failure before its loop
+                if source is not None:
+                    source.close()
+                if robot is not None:
+                    robot.close()
+                log.write("end", outcome=None, error=" ".join(str(exc).split()) or type(exc).__name__, frames=0)
+            raise
+        finally:
+            log.close()
+    return outcome, out
+
+
+def simrobot_session(
+    config: ExperimentConfig,
+    sim_map: MapData,
+    *,
+    start: tuple[float, float],
+    heading_deg: float,
+    noise: Noise,
+    seed: int,
+    estop_after: float | None = None,
+    link: Path | None = None,
+    log_file: Path | None = None,
+    on_ready: Callable[[str], None] = lambda path: None,
+) -> str:
+    """Serve a simulated robot on a new pseudo-terminal until SIGINT or SIGTERM.
+
+    Parameters
+    ----------
+    config : ExperimentConfig
+        Its ``drive`` section: the map's scale, STATE rate and watchdog.
+    sim_map : MapData
+        The map the robot moves over.
+    start : (float, float)
+        Where it starts, (row, col) in map pixels.
+    heading_deg : float
+        Its start heading, degrees clockwise from the map's +col axis.
+    noise : Noise
+        Line noise on what the robot sends.
+    seed : int
+        Seeds the noise.
+    estop_after : float, optional
+        Send ESTOP this many seconds after the first VEL.
+    link : Path, optional
+        Also a symlink to the pseudo-terminal here (replacing a symlink already there),
+        removed when the session ends.
+    log_file : Path, optional
+        The robot's events (frames received, watchdog, noise) as JSON Lines.
+    on_ready : callable
+        Called with the pseudo-terminal's path once a host can open it.
+
+    Returns
+    -------
+    str
+        The signal that stopped it, ``SIGINT`` or ``SIGTERM``.
+    """
+    d = config.drive
+    body = _body(sim_map, start, heading_deg, config)
+    events = JsonLines(log_file) if log_file is not None else None
+    master, slave, path = open_pty()
+    try:
+        if link is not None:
+            if link.is_symlink():
+                link.unlink()
+            link.symlink_to(path)
+        on_ready(path)
+        robot = SimRobot(
+            body, state_rate=d.state_rate, watchdog=d.watchdog, noise=noise, seed=seed, estop_after=estop_after,
+            log=events.write if events else (lambda event, **fields: None),
+        )
+        with stopping_on_signals(StopRequest()) as stop:
+            robot.serve(master, lambda: stop.signal is not None)
+        return stop.signal
+    finally:
+        os.close(master)
+        os.close(slave)
+        if link is not None and link.is_symlink():
+            link.unlink()
+        if events is not None:
+            events.close()

@@ -1,0 +1,101 @@
+"""Data flows one way: no module imports a later stage of the pipeline (read with ``ast``, nothing imported).
+
+The stages in order are ``words``, ``topics``, ``explore``, ``evaluate``, ``plots``: a
+stage may import the bottom layer, itself and the stages before it. ``drive`` may import
+``words`` and ``topics``; no stage imports ``drive``. The bottom layer (the top-level
+modules: config, errors, files, data ...) imports no stage at all, and nothing below the
+command line imports ``cli``. Imports inside functions and under ``TYPE_CHECKING`` count
+as much as those at the top of a module.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import curiosity_cli
+
+PACKAGE = Path(curiosity_cli.__file__).parent
+STAGES = ("words", "topics", "explore", "evaluate", "plots")
+
+#: What each room of the package may import besides the bottom layer and itself.
+ALLOWED = {stage: set(STAGES[:i]) for i, stage in enumerate(STAGES)}
+ALLOWED["drive"] = {"words", "topics"}
+
+#: Modules that put several stages together, and why; they may import any stage.
+ORCHESTRATORS = {
+    "cli": "the command line: thin commands over every stage",
+    "__main__": "`python -m curiosity_cli`: runs the command line",
+    "reproduce": "`curiosity reproduce`: extract, explore, label, evaluate and plot one experiment end to end",
+    "sweep": "`curiosity reproduce --sweep`: each combination through reproduce, their headlines compared",
+}
+
+
+def room(module: str) -> str:
+    """The room of ``curiosity_cli.<room>[.…]``: a stage, ``drive``, ``cli``, or a bottom module's own name."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def imported_modules(path: Path, module: str) -> list[tuple[str, int]]:
+    """Every ``curiosity_cli`` module (or name in one) the file imports, with its line."""
+    package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found += [(alias.name, node.lineno) for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = package[: len(package) - node.level + 1] if node.level else []
+            source = ".".join(base + ([node.module] if node.module else []))
+            # `from curiosity_cli import explore` imports the stage itself
+            found += [(f"{source}.{alias.name}", node.lineno) for alias in node.names]
+    return [(name, line) for name, line in found if name.split(".")[0] == "curiosity_cli"]
+
+
+def modules(package: Path) -> list[tuple[Path, str]]:
+    found = []
+    for path in sorted(package.rglob("*.py")):
+        parts = path.relative_to(package.parent).with_suffix("").parts
+        found.append((path, ".".join(parts[:-1] if parts[-1] == "__init__" else parts)))
+    return found
+
+
+def violations(package: Path = PACKAGE) -> list[str]:
+    """``path:line: imports name`` for each import of a room the importing module may not use."""
+    found = []
+    for path, module in modules(package):
+        own = room(module)
+        if own in ORCHESTRATORS:
+            continue
+        allowed = ALLOWED.get(own, set()) | {own}
+        for name, line in imported_modules(path, module):
+            target = room(name)
+            if target in (*STAGES, "drive", "cli", "__main__") and target not in allowed:
+                found.append(f"{path.relative_to(package.parent)}:{line}: imports {name}")
+    return found
+
+
+def test_no_module_imports_a_later_stage():
+    assert violations() == []
+
+
+def test_every_room_is_known_and_every_orchestrator_exists():
+    rooms = {room(module) for _, module in modules(PACKAGE)}
+    assert set(STAGES) | {"drive", "cli"} <= rooms
+    for name in ORCHESTRATORS:
+        assert (PACKAGE / name).is_dir() or (PACKAGE / f"{name}.py").is_file(), name
+
+
+def test_the_check_sees_imports_inside_functions_relative_ones_and_the_bottom_layers(tmp_path):
+    fake = tmp_path / "curiosity_cli"
+    (fake / "topics").mkdir(parents=True)
+    (fake / "__init__.py").write_text("")
+    (fake / "config.py").write_text("def load():\n    from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS\n")
+    (fake / "files.py").write_text("import curiosity_cli.drive.link\nfrom curiosity_cli import errors\n")
+    (fake / "topics" / "__init__.py").write_text("")
+    (fake / "topics" / "model.py").write_text("from ..evaluate import tables\nfrom . import neighbours\nfrom ..words import store\n")
+    assert violations(fake) == [
+        "curiosity_cli/config.py:2: imports curiosity_cli.explore.weights.WEIGHT_FUNCTIONS",
+        "curiosity_cli/files.py:1: imports curiosity_cli.drive.link",
+        "curiosity_cli/topics/model.py:1: imports curiosity_cli.evaluate.tables",
+    ]
