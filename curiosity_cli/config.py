@@ -1,9 +1,9 @@
 """YAML configs → validated, frozen dataclasses.
 
 An experiment config names its ``base`` (usually ``paper.yaml``, which holds the paper's
-parameters) and overrides keys of it; ``--set KEY=VALUE`` options override on top. Every
-leaf remembers which file (or ``--set``) gave it, so an error names the file, the key,
-what was given and what was expected, in one line.
+parameters) and overrides keys of it; ``KEY=VALUE`` overrides (the command line's ``--set``)
+go on top. Every leaf remembers which file (or the overrides) gave it, so an error names
+the file, the key, what was given and what was expected, in one line.
 
 The dataclasses carry no defaults on purpose: the paper's values live in one place,
 ``configs/paper.yaml``, and a config that misses a key says so instead of silently
@@ -35,8 +35,9 @@ SHIPPED_VOCABULARIES = {"shipped": PROJECT_ROOT / "data" / "vocab"}
 
 #: The shipped config a saved experiment config builds on (:func:`saved_yaml`).
 _SAVED_BASE = "paper.yaml"
-#: Where a value given on the command line with ``--set KEY=VALUE`` "comes from".
-_OVERRIDE = "--set"
+#: Where a value given in :func:`load_config`'s ``overrides`` "comes from": the name of
+#: that argument, which begins the message of any error about it.
+OVERRIDES = "overrides"
 
 #: The longest experiment or dataset name; a sweep names its experiments in up to this many.
 MAX_NAME = 120
@@ -131,13 +132,11 @@ def _check_words(words: WordsConfig, raw: _Raw) -> None:
     if fill is None:
         return
     if words.orb_per_tile is None:
-        raise ConfigError(
-            f"{_where(raw, ('words', 'orb_fill_threshold'))}: got {fill}, expected null when "
+        raise _invalid(raw, ('words', 'orb_fill_threshold'), f"got {fill}, expected null when "
             "words.orb_per_tile is null (the top-up only fills tiles capped by orb_per_tile)"
         )
     if fill > words.orb_fast_threshold:
-        raise ConfigError(
-            f"{_where(raw, ('words', 'orb_fill_threshold'))}: got {fill}, expected an integer "
+        raise _invalid(raw, ('words', 'orb_fill_threshold'), f"got {fill}, expected an integer "
             f"between 1 and words.orb_fast_threshold ({words.orb_fast_threshold})"
         )
 
@@ -299,9 +298,12 @@ def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
 def _parse_override(text: str) -> tuple[tuple[str, ...], Any]:
     key, sep, value = text.partition("=")
     if not sep or not key.strip():
-        raise ConfigError(f"--set {shown(text)}: expected KEY=VALUE, e.g. explore.restarts=5")
+        raise ConfigError(f"{OVERRIDES} {shown(text)}: expected KEY=VALUE, e.g. explore.restarts=5", parameter=OVERRIDES)
     key = key.strip()
-    return tuple(key.split(".")), parse_yaml(value, f"--set {shown(key)}")
+    try:
+        return tuple(key.split(".")), parse_yaml(value, f"{OVERRIDES} {shown(key)}")
+    except ConfigError as exc:
+        raise ConfigError(str(exc), parameter=OVERRIDES) from None
 
 
 def _apply_overrides(raw: _Raw, overrides: typing.Iterable[str]) -> None:
@@ -310,11 +312,11 @@ def _apply_overrides(raw: _Raw, overrides: typing.Iterable[str]) -> None:
         nested: Any = value
         for key in reversed(keys[1:]):
             nested = {key: nested}
-        raw.merge({keys[0]: nested}, _OVERRIDE)
+        raw.merge({keys[0]: nested}, OVERRIDES)
 
 
 def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> ExperimentConfig:
-    """Load an experiment config, its chain of ``base`` configs and ``--set`` overrides.
+    """Load an experiment config, its chain of ``base`` configs and ``overrides``.
 
     Parameters
     ----------
@@ -330,7 +332,7 @@ def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> Exper
     Raises
     ------
     ConfigError
-        One line naming the file (or ``--set``), the key, the value and what was expected.
+        One line naming the file (or ``overrides``), the key, the value and what was expected.
     """
     path = Path(path)
     raw = _Raw(str(path.resolve()))
@@ -368,7 +370,9 @@ def load_words_config(path: str | Path, overrides: typing.Iterable[str] = ()) ->
     _load_chain(path, raw)
     for text in overrides:
         if not _parse_override(text)[0][0] == "words":
-            raise ConfigError(f"--set {shown(text)}: expected a words.* key; this command reads only words")
+            raise ConfigError(
+                f"{OVERRIDES} {shown(text)}: expected a words.* key; this command reads only words", parameter=OVERRIDES
+            )
     _apply_overrides(raw, overrides)
     words = _build(WordsConfig, raw.data.get("words"), ("words",), raw)
     _check_words(words, raw)
@@ -485,9 +489,14 @@ def saved_yaml(config) -> str:
 # --------------------------------------------------------------------------- validation
 
 
+def _invalid(raw: _Raw, keys: tuple, problem: str) -> ConfigError:
+    """The error of the value at ``keys``, named by where it was set: a file, or the overrides."""
+    return ConfigError(f"{_where(raw, keys)}: {problem}", parameter=OVERRIDES if raw.origin(keys) == OVERRIDES else None)
+
+
 def _where(raw: _Raw, keys: tuple) -> str:
     source = raw.origin(keys)
-    label = source if source == _OVERRIDE else display_path(Path(source))
+    label = source if source == OVERRIDES else display_path(Path(source))
     key = "".join(_key_text(k) for k in keys).lstrip(".")
     # a key is user input too: an unknown one may be of any length
     key = key if len(key) <= SHOWN_CHARS else key[: SHOWN_CHARS - 3] + "..."
@@ -539,13 +548,12 @@ def _range_text(meta: dict) -> str:
 
 def _build(cls, data: Any, keys: tuple, raw: _Raw):
     if not isinstance(data, dict):
-        raise ConfigError(f"{_where(raw, keys)}: got {shown(data)} ({type(data).__name__}), expected a mapping of keys")
+        raise _invalid(raw, keys, f"got {shown(data)} ({type(data).__name__}), expected a mapping of keys")
     hints = typing.get_type_hints(cls)
     names = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in names:
-            raise ConfigError(
-                f"{_where(raw, keys + (key,))}: unknown key; expected one of {', '.join(names)}"
+            raise _invalid(raw, keys + (key,), f"unknown key; expected one of {', '.join(names)}"
             )
     values = {}
     for f in dataclasses.fields(cls):
@@ -553,7 +561,7 @@ def _build(cls, data: Any, keys: tuple, raw: _Raw):
             if f.default is not dataclasses.MISSING:
                 values[f.name] = f.default
                 continue
-            raise ConfigError(f"{_where(raw, keys + (f.name,))}: missing key")
+            raise _invalid(raw, keys + (f.name,), f"missing key")
         values[f.name] = _convert(hints[f.name], f.metadata, data[f.name], keys + (f.name,), raw)
     return cls(**values)
 
@@ -568,7 +576,7 @@ def _convert(tp, meta: dict, value: Any, keys: tuple, raw: _Raw):
 
     def refuse(expected: str):
         given = f"{shown(value)} ({type(value).__name__})" if not isinstance(value, dict) else "a mapping"
-        raise ConfigError(f"{_where(raw, keys)}: got {given}, expected {expected}")
+        raise _invalid(raw, keys, f"got {given}, expected {expected}")
 
     if dataclasses.is_dataclass(tp):
         return _build(tp, value, keys, raw)
@@ -603,7 +611,7 @@ def _convert(tp, meta: dict, value: Any, keys: tuple, raw: _Raw):
         named = meta["named"] or {}
         result = named[value] if value in named else _resolve_path(value, keys, raw)
         if meta["must_exist"] and not result.exists():
-            raise ConfigError(f"{_where(raw, keys)}: file not found: {display_path(result)}")
+            raise _invalid(raw, keys, f"file not found: {display_path(result)}")
         return result
     else:  # pragma: no cover - a field type the validator does not know is a bug here
         raise TypeError(f"unsupported config field type {tp!r}")
@@ -620,15 +628,15 @@ def _convert(tp, meta: dict, value: Any, keys: tuple, raw: _Raw):
 
 
 def _resolve_path(value: str, keys: tuple, raw: _Raw) -> Path:
-    """Relative paths count from the YAML file that wrote them (from the cwd for --set)."""
+    """Relative paths count from the YAML file that wrote them (from the cwd for overrides)."""
     try:
         path = Path(value).expanduser()
     except RuntimeError:  # ~user of a user this machine does not know
-        raise ConfigError(f"{_where(raw, keys)}: got {shown(value)}, expected a file path; no such home folder") from None
+        raise _invalid(raw, keys, f"got {shown(value)}, expected a file path; no such home folder") from None
     if path.is_absolute():
         return path
     source = raw.origin(keys)
-    base = Path.cwd() if source == _OVERRIDE else Path(source).parent
+    base = Path.cwd() if source == OVERRIDES else Path(source).parent
     return (base / path).resolve()
 
 
@@ -638,28 +646,25 @@ def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:
     datasets = []
     for i, entry in enumerate(config.datasets):
         source = raw.origin(("datasets", i))
-        relative_to = None if source == _OVERRIDE else Path(source).parent
+        relative_to = None if source == OVERRIDES else Path(source).parent
         try:
             path = dataset_path(entry, relative_to)
         except ConfigError as exc:
-            raise ConfigError(f"{_where(raw, ('datasets', i))}: {exc}") from None
+            raise _invalid(raw, ('datasets', i), f"{exc}") from None
         datasets.append(entry if path.parent == DATASET_CONFIG_DIR else str(path))
     explore = config.explore
     for i, name in enumerate(explore.weight_functions):
         if name not in WALKER_NAMES:
-            raise ConfigError(
-                f"{_where(raw, ('explore', 'weight_functions', i))}: got {shown(name)}, "
+            raise _invalid(raw, ('explore', 'weight_functions', i), f"got {shown(name)}, "
                 f"expected one of {', '.join(WALKER_NAMES)}"
             )
     if len(set(explore.weight_functions)) != len(explore.weight_functions):
-        raise ConfigError(
-            f"{_where(raw, ('explore', 'weight_functions'))}: got {list(explore.weight_functions)}, "
+        raise _invalid(raw, ('explore', 'weight_functions'), f"got {list(explore.weight_functions)}, "
             "expected each weight function once"
         )
     checkpoints = list(explore.checkpoints)
     if checkpoints != sorted(set(checkpoints)) or checkpoints[-1] > explore.path_length:
-        raise ConfigError(
-            f"{_where(raw, ('explore', 'checkpoints'))}: got {checkpoints}, expected increasing "
+        raise _invalid(raw, ('explore', 'checkpoints'), f"got {checkpoints}, expected increasing "
             f"path lengths no longer than explore.path_length ({explore.path_length})"
         )
     _check_drive(config.drive, raw)
@@ -676,4 +681,4 @@ def _check_drive(drive: DriveConfig, raw: _Raw) -> None:
     ]
     for ok, key, expected in rules:
         if not ok:
-            raise ConfigError(f"{_where(raw, ('drive', key))}: got {getattr(drive, key)}, expected {expected}")
+            raise _invalid(raw, ('drive', key), f"got {getattr(drive, key)}, expected {expected}")

@@ -69,7 +69,7 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from curiosity_cli.config import ExperimentConfig, load_config
+from curiosity_cli.config import OVERRIDES, ExperimentConfig, load_config
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.layout import DEFAULT_RESULTS, ExperimentFolder
@@ -254,7 +254,7 @@ def parse_sweeps(options: Sequence[str], sets: Sequence[str] = ()) -> tuple[Swee
                 raise SweepSyntaxError(f"{text!r}: {other} is already swept; give each key once")
         for other in set_keys:
             if _overlap(key, other):
-                raise SweepSyntaxError(f"{text!r}: {other} is also given with --set; give it in one of them")
+                raise SweepSyntaxError(f"{text!r}: {other} is also among the overrides; give it in one of them")
         parts = {}
         for value in values:
             part = _part(key, value)
@@ -320,10 +320,10 @@ def _part(key: str, value: str) -> str:
 
 
 def _parsed(value: str):
-    """A value as ``--set`` reads it (YAML, with the numbers a person types)."""
+    """A value as an override reads it (YAML, with the numbers a person types)."""
     from curiosity_cli.yamlfile import parse_yaml
 
-    return parse_yaml(value, "--sweep")
+    return parse_yaml(value, "sweeps")
 
 
 def _digest(text: str, digits: int) -> str:
@@ -352,9 +352,9 @@ def plan_sweep(config_path: str | Path, axes: Sequence[SweepAxis], sets: Sequenc
     Raises
     ------
     ConfigError
-        The first combination that does not validate, in one line: the error
-        ``--set`` would give, naming ``--sweep`` when a swept key is at fault, else
-        followed by the combination.
+        The first combination that does not validate, in one line: the error its
+        overrides give, naming the sweeps when a swept key is at fault, else followed by
+        the combination.
     """
     if not axes:
         raise ValueError("a sweep needs at least one axis")
@@ -366,7 +366,7 @@ def plan_sweep(config_path: str | Path, axes: Sequence[SweepAxis], sets: Sequenc
         try:
             config = load_config(config_path, [*sets, *overrides])
         except ConfigError as exc:
-            raise ConfigError(_sweep_message(str(exc), keys, overrides)) from None
+            raise _combination_error(exc, keys, overrides) from None
         base_name = config.name  # the same for every combination: name cannot be swept
         name = combination_name(overrides)
         assert _NAME.match(name), name  # by construction: keys are config fields, values made safe
@@ -374,17 +374,18 @@ def plan_sweep(config_path: str | Path, axes: Sequence[SweepAxis], sets: Sequenc
     return Sweep(base_name, config_path, sets, tuple(axes), tuple(loaded))
 
 
-def _sweep_message(text: str, keys: Sequence[str], overrides: Sequence[str]) -> str:
-    """``--set``'s message for a value that came from ``--sweep``, naming ``--sweep``."""
-    prefix = "--set: "
-    if text.startswith("--set '"):  # a malformed --set option: not the sweep's doing
-        return text
-    if text.startswith(prefix):
-        rest = text[len(prefix):]
+def _combination_error(exc: ConfigError, keys: Sequence[str], overrides: Sequence[str]) -> ConfigError:
+    """The error of a combination that does not validate: the overrides' error, naming the
+    sweeps when a swept key is at fault, else followed by the combination."""
+    if exc.parameter == OVERRIDES:
+        rest = str(exc)[len(OVERRIDES):]
+        if rest.startswith(" "):  # a malformed override: not the sweep's doing
+            return exc
         for key in keys:
-            if rest.startswith(key) and rest[len(key):len(key) + 1] in (":", ".", "["):
-                return f"--sweep: {rest}"
-    return f"{text} (with --sweep {', '.join(overrides)})"
+            at = rest[2:]
+            if at.startswith(key) and at[len(key):len(key) + 1] in (":", ".", "["):
+                return ConfigError(f"sweeps{rest}", parameter="sweeps")
+    return ConfigError(f"{exc} (with the sweep's {', '.join(overrides)})", parameter=exc.parameter)
 
 
 # --------------------------------------------------------------------------- running

@@ -210,11 +210,19 @@ def test_a_missing_config_file_is_refused(tmp_path, monkeypatch):
         load_config("nope.yaml")
 
 
-def test_a_bad_override_names_the_option():
-    with pytest.raises(ConfigError, match=r"^--set: explore\.restarts: got -2 \(int\), expected an integer >= 1$"):
+def test_a_bad_override_names_the_argument(tmp_path):
+    with pytest.raises(ConfigError, match=r"^overrides: explore\.restarts: got -2 \(int\), expected an integer >= 1$") as bad:
         load_config(CONFIG_DIR / "quick.yaml", ["explore.restarts=-2"])
-    with pytest.raises(ConfigError, match=r"^--set 'restarts': expected KEY=VALUE"):
+    assert bad.value.parameter == "overrides"
+    with pytest.raises(ConfigError, match=r"^overrides 'restarts': expected KEY=VALUE") as malformed:
         load_config(CONFIG_DIR / "quick.yaml", ["restarts"])
+    assert malformed.value.parameter == "overrides"
+    with pytest.raises(ConfigError, match=r"^overrides 'seed': ") as not_yaml:
+        load_config(CONFIG_DIR / "quick.yaml", ["seed=[1"])
+    assert not_yaml.value.parameter == "overrides"
+    with pytest.raises(ConfigError, match=r"exp\.yaml: explore\.restarts: got -2") as in_a_file:
+        load_config(_experiment(tmp_path, "explore:\n  restarts: -2\n"))
+    assert in_a_file.value.parameter is None
 
 
 def test_a_dataset_yaml_missing_its_image_is_refused(own_map):
@@ -286,7 +294,7 @@ def test_bad_orb_keys_are_refused_naming_the_key(tmp_path, text, message):
 def test_a_top_up_without_a_tile_cap_is_refused_on_the_command_line():
     from curiosity_cli.config import load_words_config
 
-    with pytest.raises(ConfigError, match=r"^--set: words\.orb_fill_threshold: got 1, expected null when words\.orb_per_tile is null"):
+    with pytest.raises(ConfigError, match=r"^overrides: words\.orb_fill_threshold: got 1, expected null when words\.orb_per_tile is null"):
         load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_fill_threshold=1"])
 
 

@@ -79,7 +79,7 @@ def test_values_split_on_commas_outside_brackets():
         (["model.topics=16,,32"], [], "'model.topics=16,,32': an empty value; write null for null"),
         (["model.topics=16", "model.topics=32"], [], "'model.topics=32': model.topics is already swept"),
         (["model=16", "model.topics=32"], [], "'model.topics=32': model is already swept"),
-        (["model.topics=16"], ["model.topics=8"], "model.topics is also given with --set"),
+        (["model.topics=16"], ["model.topics=8"], "model.topics is also among the overrides"),
         (["datasets=[a,b"], [], "'[a,b': a bracket is not closed"),
         (["datasets=a],b"], [], "a closing ']' without its opening bracket"),
         (["model.topics=16,32,16"], [], "'16' is the same value as '16'; give each value once"),
@@ -126,14 +126,15 @@ def test_every_combination_is_loaded_with_its_values_and_named_by_them():
     assert planned.command().endswith("--set explore.restarts=2 --sweep model.topics=16,32 --sweep seed=3")
 
 
-def test_a_bad_swept_value_is_refused_like_set_naming_sweep():
+def test_a_bad_swept_value_is_refused_like_an_override_naming_the_sweeps():
     axes = parse_sweeps(["model.topics=16,300"])
-    with pytest.raises(ConfigError, match=r"^--sweep: model.topics: got 300 \(int\), expected an integer >= 2 and <= 127$"):
+    with pytest.raises(ConfigError, match=r"^sweeps: model.topics: got 300 \(int\), expected an integer >= 2 and <= 127$") as bad:
         plan_sweep(CONFIG_DIR / "quick.yaml", axes)
-    with pytest.raises(ConfigError, match=r"^--sweep: model.topicz: unknown key; expected one of topics,"):
+    assert bad.value.parameter == "sweeps"
+    with pytest.raises(ConfigError, match=r"^sweeps: model.topicz: unknown key; expected one of topics,"):
         plan_sweep(CONFIG_DIR / "quick.yaml", parse_sweeps(["model.topicz=16"]))
     # a rule tying keys together names the key it checks, and the combination that broke it
-    with pytest.raises(ConfigError, match=r"explore.checkpoints: .* \(with --sweep explore.path_length=50\)$"):
+    with pytest.raises(ConfigError, match=r"explore.checkpoints: .* \(with the sweep's explore.path_length=50\)$"):
         plan_sweep(CONFIG_DIR / "quick.yaml", parse_sweeps(["explore.path_length=160,50"]))
 
 

@@ -102,5 +102,5 @@ def test_drive_keys_that_contradict_each_other_are_refused_in_one_line(tmp_path,
     with pytest.raises(ConfigError) as info:
         load_config(config)
     assert str(info.value) == f"{display_path(config)}: {message}"
-    with pytest.raises(ConfigError, match=f"--set: {message.split(':')[0]}"):
+    with pytest.raises(ConfigError, match=f"overrides: {message.split(':')[0]}"):
         load_config(CONFIG_DIR / "paper-grid.yaml", [f"drive.{key}={value}" for key, value in change.items()])
