@@ -561,7 +561,7 @@ def _build(cls, data: Any, keys: tuple, raw: _Raw):
             if f.default is not dataclasses.MISSING:
                 values[f.name] = f.default
                 continue
-            raise _invalid(raw, keys + (f.name,), f"missing key")
+            raise _invalid(raw, keys + (f.name,), "missing key")
         values[f.name] = _convert(hints[f.name], f.metadata, data[f.name], keys + (f.name,), raw)
     return cls(**values)
 
