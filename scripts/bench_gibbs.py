@@ -254,10 +254,11 @@ def prepare_corpora(names: list[str], quick: bool, seed: int, folder: Path) -> d
         else:
             from curiosity_cli.config import CONFIG_DIR, PROJECT_ROOT, load_words_config
             from curiosity_cli.data import load_map
+            from curiosity_cli.layout import DEFAULT_CACHE
             from curiosity_cli.words.extract import extract_words
 
             store = extract_words(
-                load_map(name), load_words_config(CONFIG_DIR / "paper.yaml"), cache_dir=PROJECT_ROOT / "results" / "cache"
+                load_map(name), load_words_config(CONFIG_DIR / "paper.yaml"), cache_dir=PROJECT_ROOT / DEFAULT_CACHE
             ).store
             words, cell_start, shape = store.words, store.cell_start, (*store.grid_shape, store.vocabulary_size)
         path = folder / f"{name}.npz"
