@@ -1,6 +1,7 @@
 """The ROST spatial topic model (paper section 3) and the perplexities of section 4.
 
-- :mod:`~curiosity_cli.topics.neighbours`: neighbour tables of grids and frame streams.
+- :mod:`~curiosity_cli.topics.neighbours`: neighbour tables of frame streams, and their check
+  (a map's table is its grid's, :mod:`curiosity_cli.cell_grid`).
 - :mod:`~curiosity_cli.topics.model`: :class:`TopicModel`, its Gibbs refinement
   (batch, realtime, frozen Φ), ML topics, snapshots and files.
 - :mod:`~curiosity_cli.topics.perplexity`: word and topic perplexity of a candidate cell.
@@ -10,13 +11,12 @@ model computes, so importing this package stays cheap.
 """
 
 from curiosity_cli.topics.model import ModelSnapshot, TopicModel
-from curiosity_cli.topics.neighbours import grid_neighbours, stream_neighbours
+from curiosity_cli.topics.neighbours import stream_neighbours
 from curiosity_cli.topics.perplexity import topic_perplexity, word_perplexity
 
 __all__ = [
     "ModelSnapshot",
     "TopicModel",
-    "grid_neighbours",
     "stream_neighbours",
     "topic_perplexity",
     "word_perplexity",
