@@ -20,6 +20,14 @@ def check_int(name: str, value, minimum: int, maximum: int | None = None) -> int
     return int(value)
 
 
+def check_choice(name: str, value, choices: tuple[int, ...]) -> int:
+    """``value`` as an int, if it is one of ``choices``, else :class:`ParameterError` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) not in choices:
+        expected = " or ".join(str(c) for c in choices)
+        raise ParameterError(f"{name}: got {value!r}, expected {expected}")
+    return int(value)
+
+
 def check_float(
     name: str, value, low: float | None = None, high: float | None = None, *, low_open: bool = False,
     high_open: bool = False,

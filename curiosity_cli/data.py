@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.config import DatasetConfig, dataset_names, dataset_path, load_dataset_config
 from curiosity_cli.errors import ConfigError, DatasetError
 from curiosity_cli.files import display_path
@@ -60,9 +61,9 @@ class MapData:
     rendering: Rendering
 
     @property
-    def grid_shape(self) -> tuple[int, int]:
-        """Cells per column and per row of the map (rows, cols); see :func:`grid_shape`."""
-        return grid_shape(self.image.shape[:2], self.config.cell_width)
+    def grid(self) -> SquareGrid:
+        """The map's cells: its ``cell_width`` grid over the image."""
+        return SquareGrid.covering(self.image.shape[:2], self.config.cell_width)
 
     @property
     def labels_digest(self) -> str | None:
@@ -72,27 +73,6 @@ class MapData:
         n_classes = max(c.id for c in self.legend) + 1
         head = f"{self.labels.dtype.str}{self.labels.shape}{n_classes}{self.config.cell_width}".encode()
         return hashlib.sha256(head + np.ascontiguousarray(self.labels).tobytes()).hexdigest()[:16]
-
-
-def grid_shape(image_shape: tuple[int, int], cell_width: int) -> tuple[int, int]:
-    """Rows and columns of cells covering an image.
-
-    A partial cell at the bottom or right border counts as a cell, as in the paper
-    (2500 px at 32 px cells gives 79 x 79 = 6241 cells, its Table 1).
-
-    Parameters
-    ----------
-    image_shape : (int, int)
-        Image rows and columns in pixels.
-    cell_width : int
-        Cell side in pixels.
-
-    Returns
-    -------
-    (int, int)
-    """
-    rows, cols = image_shape
-    return -(-rows // cell_width), -(-cols // cell_width)
 
 
 def load_legend(path: Path) -> tuple[MapClass, ...]:
@@ -221,4 +201,4 @@ def load_map(name_or_path: str | Path, *, announce=_to_stderr) -> MapData:
     return MapData(config=config, image=image, labels=labels, legend=legend, rendering=rendering)
 
 
-__all__ = ["MapClass", "MapData", "dataset_names", "grid_shape", "load_legend", "load_map"]
+__all__ = ["MapClass", "MapData", "dataset_names", "load_legend", "load_map"]

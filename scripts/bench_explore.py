@@ -35,14 +35,13 @@ from curiosity_cli.data import load_map
 from curiosity_cli.explore.walker import explore
 from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS
 from curiosity_cli.topics.model import TopicModel
-from curiosity_cli.topics.neighbours import grid_neighbours
 from curiosity_cli.words.extract import extract_words
 
 
 def refinement_alone(store, path: np.ndarray, model, budget: int) -> float:
     """Steps per second of observing and refining along ``path``, nothing else."""
     topic_model = TopicModel(
-        model.topics, store.vocabulary_size, grid_neighbours(*store.grid_shape, model.spatial_neighbours),
+        model.topics, store.vocabulary_size, store.grid.neighbour_table(model.spatial_neighbours),
         alpha=model.alpha, beta=model.beta, seed=0,
     )
     start = time.perf_counter()

@@ -6,8 +6,8 @@ Corpora (cells are documents):
   aerial-mosaic  the word store of the embedded aerial map (paper's vocabularies)
 
 Samplers, each on K = 64 topics, alpha = beta = 0.1:
-  (a) ours, no neighbours     TopicModel with grid_neighbours(rows, cols, spatial=0): LDA
-  (b) ours, 4 neighbours      TopicModel with grid_neighbours(rows, cols, spatial=4): ROST
+  (a) ours, no neighbours     TopicModel with SquareGrid(rows, cols).neighbour_table(spatial=0): LDA
+  (b) ours, 4 neighbours      TopicModel with SquareGrid(rows, cols).neighbour_table(spatial=4): ROST
   (c) tomotopy                LDAModel(k=64, alpha=0.1, eta=0.1), symmetric alpha = 0.1
                               per topic, hyper-parameter optimisation off
                               (optim_interval = 0), train(workers=1, ParallelScheme.NONE)
@@ -143,11 +143,11 @@ def _rss_mb() -> float:
 
 def _ours(spec: dict, words: np.ndarray, cell_start: np.ndarray, rows: int, cols: int, vocabulary_size: int) -> tuple:
     from curiosity_cli.topics.model import TopicModel
-    from curiosity_cli.topics.neighbours import grid_neighbours
+    from curiosity_cli.cell_grid import SquareGrid
 
     def build(rows, cols, cell_start, seed):
         model = TopicModel(
-            N_TOPICS, vocabulary_size, grid_neighbours(rows, cols, spatial=spec["spatial"]),
+            N_TOPICS, vocabulary_size, SquareGrid(rows, cols).neighbour_table(spatial=spec["spatial"]),
             alpha=ALPHA, beta=BETA, seed=seed,
         )  # fmt: skip
         for c in range(rows * cols):
@@ -260,7 +260,7 @@ def prepare_corpora(names: list[str], quick: bool, seed: int, folder: Path) -> d
             store = extract_words(
                 load_map(name), load_words_config(CONFIG_DIR / "paper.yaml"), cache_dir=PROJECT_ROOT / DEFAULT_CACHE
             ).store
-            words, cell_start, shape = store.words, store.cell_start, (*store.grid_shape, store.vocabulary_size)
+            words, cell_start, shape = store.words, store.cell_start, (*store.grid.shape, store.vocabulary_size)
         path = folder / f"{name}.npz"
         np.savez(path, words=np.asarray(words, np.int32), cell_start=np.asarray(cell_start, np.int64), shape=np.array(shape))
         sizes = np.diff(cell_start)

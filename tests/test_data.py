@@ -6,7 +6,8 @@ import pytest
 import yaml
 from small_maps import edit_yaml
 
-from curiosity_cli.data import dataset_names, grid_shape, load_legend, load_map
+from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.data import dataset_names, load_legend, load_map
 from curiosity_cli.errors import ConfigError, DatasetError
 
 # Size and cells from each map's purpose: the paper's Table 1 and section 5.1 settings.
@@ -25,7 +26,7 @@ def test_embedded_map_matches_its_metadata(name):
     assert m.labels.shape == size
     assert tuple(m.config.size) == size
     assert (m.config.cell_width, m.config.word_stride) == (cell_width, stride)
-    rows, cols = m.grid_shape
+    rows, cols = m.grid.shape
     assert rows * cols == cells
 
 
@@ -44,15 +45,15 @@ def test_aerial_mosaic_has_a_rare_class():
 
 
 def test_grid_counts_partial_border_cells():
-    assert grid_shape((2500, 2500), 32) == (79, 79)
-    assert grid_shape((1024, 1024), 16) == (64, 64)
-    assert grid_shape((96, 129), 16) == (6, 9)
+    assert SquareGrid.covering((2500, 2500), 32).shape == (79, 79)
+    assert SquareGrid.covering((1024, 1024), 16).shape == (64, 64)
+    assert SquareGrid.covering((96, 129), 16).shape == (6, 9)
 
 
 def test_own_map_loads(own_map):
     m = load_map(own_map)
     assert m.image.shape == (96, 128, 3)
-    assert m.grid_shape == (6, 8)
+    assert m.grid.shape == (6, 8)
     assert [c.name for c in m.legend] == ["sand", "rock"]
     assert m.legend[1].colour == (0x60, 0x60, 0x60)
 

@@ -163,7 +163,7 @@ def test_the_real_archive_makes_the_map_it_holds(cache):
     for colour, count in zip(map(tuple, colours), counts):
         (name,) = [n for n, c in COLOURS.items() if c == colour]
         in_archive[name] = count / len(crop)
-    assert m.image.shape == (1024, 1024, 3) and m.grid_shape == (64, 64)
+    assert m.image.shape == (1024, 1024, 3) and m.grid.shape == (64, 64)
     assert [c.name for c in m.legend] == [n for n in COLOURS if in_archive[n] > 0]
     for c in m.legend:
         assert np.mean(m.labels == c.id) == pytest.approx(in_archive[c.name], abs=0)

@@ -27,7 +27,8 @@ def list_datasets() -> None:
     A fetched map that is not cached yet is listed from its YAML; nothing is downloaded.
     """
     from curiosity_cli.config import dataset_path, load_dataset_config
-    from curiosity_cli.data import dataset_names, grid_shape, load_map
+    from curiosity_cli.cell_grid import SquareGrid
+    from curiosity_cli.data import dataset_names, load_map
     from curiosity_cli.fetched import is_fetched
 
     rows = []
@@ -39,13 +40,13 @@ def list_datasets() -> None:
             size, classes = m.image.shape[:2], str(len(m.legend))
         else:
             size, classes = config.size, "?"
-        grid = grid_shape(size, config.cell_width) if size is not None else None
+        grid = SquareGrid.covering(size, config.cell_width) if size is not None else None
         rows.append(
             [
                 name,
                 f"{size[0]} x {size[1]}" if size is not None else "?",
                 str(config.cell_width),
-                f"{grid[0] * grid[1]} ({grid[0]} x {grid[1]})" if grid is not None else "?",
+                f"{grid.n_cells} ({grid.rows} x {grid.cols})" if grid is not None else "?",
                 classes,
                 cached,
                 config.source,
@@ -75,7 +76,7 @@ def show(
 
     maps = [load_map(d) for d in datasets]
     for m in maps:
-        rows, cols = m.grid_shape
+        rows, cols = m.grid.shape
         typer.echo(
             f"{m.config.name}: {m.image.shape[0]} x {m.image.shape[1]} px, {m.config.cell_width} px cells "
             f"({rows} x {cols} = {rows * cols}), words every {m.config.word_stride} px"

@@ -37,8 +37,8 @@ def extract(
     per_cell = store.words_per_cell()
     typer.echo(f"{'reused' if result.reused else 'wrote'} {display_path(result.path)}")
     typer.echo(
-        f"{len(store.words):,} words in {store.n_cells} cells ({store.grid_shape[0]} x {store.grid_shape[1]}, "
-        f"{store.cell_width} px), vocabulary {store.vocabulary_size}"
+        f"{len(store.words):,} words in {store.n_cells} cells ({store.grid.rows} x {store.grid.cols}, "
+        f"{store.grid.cell_width} px), vocabulary {store.vocabulary_size}"
     )
     for t in store.types:
         typer.echo(f"  {t.kind:<7} {store.count_by_type()[t.kind]:>10,}  ids {t.offset}..{t.offset + t.size - 1} ({t.name})")

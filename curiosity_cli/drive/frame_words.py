@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.config import DriveConfig, WordsConfig
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.words.kinds import OrbSettings, Picture, WordRecipe
@@ -87,8 +88,8 @@ class FrameWords:
         -------
         list of (n_c,) int32 ndarray
             One per image cell, row-major (``row * grid_cols + col``); the frame is cut
-            into ``grid_rows x grid_cols`` cells of (near) equal size, a pixel at
-            ``(r, c)`` belonging to cell ``(r * grid_rows // h, c * grid_cols // w)``.
+            into ``grid_rows x grid_cols`` cells of (near) equal size
+            (:meth:`~curiosity_cli.cell_grid.SquareGrid.cells_of_pixels`).
         """
         import cv2
 
@@ -120,9 +121,8 @@ def split_by_cell(rows, cols, ids, image_shape: tuple[int, int], grid: tuple[int
     list of (n_c,) int32 ndarray
         ``grid[0] * grid[1]`` arrays, row-major; within a cell, words keep their order.
     """
-    height, width = image_shape
-    n_rows, n_cols = grid
-    cell = (np.asarray(rows, np.int64) * n_rows // height) * n_cols + np.asarray(cols, np.int64) * n_cols // width
+    image_cells = SquareGrid(*grid)
+    cell = image_cells.cells_of_pixels(rows, cols, image_shape)
     order = np.argsort(cell, kind="stable")
-    bounds = np.searchsorted(cell[order], np.arange(1, n_rows * n_cols))
+    bounds = np.searchsorted(cell[order], np.arange(1, image_cells.n_cells))
     return [part.astype(np.int32) for part in np.split(np.asarray(ids)[order], bounds)]

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.drive.controller import Command
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.errors import CuriosityError
@@ -27,7 +28,8 @@ def draw_overlay(frame: np.ndarray, scores: np.ndarray, target: tuple[int, int],
     Parameters
     ----------
     frame : (H, W, 3) uint8 ndarray
-        RGB, any size; cell ``(r, c)`` covers rows ``r * H / rows .. (r + 1) * H / rows``.
+        RGB, any size; the grid of ``scores`` is stretched over it
+        (:meth:`~curiosity_cli.cell_grid.SquareGrid.centres`).
     scores : (rows, cols) float ndarray
         Curiosity scores, >= 0.
     target : (int, int)
@@ -44,13 +46,15 @@ def draw_overlay(frame: np.ndarray, scores: np.ndarray, target: tuple[int, int],
 
     height, width = frame.shape[:2]
     rows, cols = scores.shape
+    grid = SquareGrid(rows, cols)
     top = float(scores.max())
     opacity = np.zeros((height, width), np.float32)
     paint = np.zeros_like(frame)
     radius = max(1, int(0.35 * min(height / rows, width / cols)))
+    centre_rows, centre_cols = grid.centres(np.arange(grid.n_cells).reshape(rows, cols), (height, width))
     for row in range(rows):
         for col in range(cols):
-            centre = (int((col + 0.5) * width / cols), int((row + 0.5) * height / rows))  # OpenCV's (x, y)
+            centre = (int(centre_cols[row, col]), int(centre_rows[row, col]))  # OpenCV's (x, y)
             alpha = MAX_OPACITY * (scores[row, col] / top if top > 0 else 0.0)
             is_target = (row, col) == tuple(target)
             cv2.circle(opacity, centre, radius, MAX_OPACITY if is_target else alpha, -1, cv2.LINE_AA)

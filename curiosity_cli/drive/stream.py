@@ -79,6 +79,7 @@ class StreamModel:
         seed: int,
         vocabulary_hashes=None,
     ):
+        from curiosity_cli.cell_grid import SquareGrid
         from curiosity_cli.topics import stream_neighbours
 
         self._rows = check_int("grid rows", grid[0], 1)
@@ -93,7 +94,9 @@ class StreamModel:
             n_topics=n_topics, vocabulary_size=vocabulary_size, alpha=alpha, beta=beta,
             vocabulary_hashes=vocabulary_hashes,
         )
-        self._table = stream_neighbours(self._rows, self._cols, self._window, spatial=spatial, temporal=temporal)
+        self._table = stream_neighbours(
+            SquareGrid(self._rows, self._cols), self._window, spatial=spatial, temporal=temporal
+        )
         self._recent: deque[list[np.ndarray]] = deque(maxlen=max(self._carry, 1))
         self.windows = 0  # models started so far
         self.model = self._new_model()

@@ -128,8 +128,9 @@ def mean_recall(table: np.ndarray) -> float:
 def cell_class_pixels(labels: np.ndarray, cell_width: int, n_classes: int) -> np.ndarray:
     """Pixels of each class in each cell of a map's grid.
 
-    Cells as in the word store: ``(row // cell_width, col // cell_width)``, row-major; a
-    partial cell at the bottom or right border is a cell of its own with fewer pixels.
+    Cells as in the word store (:meth:`~curiosity_cli.cell_grid.SquareGrid.cells_of_pixels`
+    of the ``cell_width`` grid over the labels); a partial cell at the bottom or right
+    border is a cell of its own with fewer pixels.
 
     Parameters
     ----------
@@ -148,21 +149,19 @@ def cell_class_pixels(labels: np.ndarray, cell_width: int, n_classes: int) -> np
         raise ParameterError(f"labels: got shape {labels.shape}, expected (H, W)")
     if labels.size and (labels.min() < 0 or labels.max() >= n_classes):
         raise ParameterError(f"labels: class ids {labels.min()} .. {labels.max()}, expected 0 .. {n_classes - 1}")
-    from curiosity_cli.data import grid_shape
+    from curiosity_cli.cell_grid import SquareGrid
 
-    rows, cols = labels.shape
-    grid_rows, grid_cols = grid_shape(labels.shape, cell_width)
-    out = np.zeros((grid_rows * grid_cols, n_classes), np.int64)
-    col_cells = np.arange(cols) // cell_width
-    # one band of cell rows at a time: no (H, W) int64 index array for a large map
-    for top in range(0, rows, cell_width):
+    grid = SquareGrid.covering(labels.shape, cell_width)
+    out = np.zeros((grid.n_cells, n_classes), np.int64)
+    pixel_cols = np.arange(labels.shape[1])
+    # one band of cell_width pixel rows at a time: no (H, W) int64 index array for a large map
+    for top in range(0, labels.shape[0], cell_width):
         band = labels[top : top + cell_width].astype(np.int64)
-        cells = (top // cell_width) * grid_cols + col_cells  # (W,)
-        joint = (cells[None, :] * n_classes + band).ravel()
-        first = (top // cell_width) * grid_cols
-        out[first : first + grid_cols] = np.bincount(
-            joint - first * n_classes, minlength=grid_cols * n_classes
-        ).reshape(grid_cols, n_classes)
+        cells = grid.cells_of_pixels(np.arange(top, top + band.shape[0])[:, None], pixel_cols[None, :])
+        first, last = cells.min(), cells.max()
+        out[first : last + 1] += np.bincount(
+            ((cells - first) * n_classes + band).ravel(), minlength=(last + 1 - first) * n_classes
+        ).reshape(-1, n_classes)
     return out
 
 

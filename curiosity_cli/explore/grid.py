@@ -135,12 +135,12 @@ def plan_runs(config: ExperimentConfig, stores: dict[str, StoreInfo]) -> list[Ru
     tasks = []
     for entry in config.datasets:
         dataset = stores[entry].name
-        grid_shape = stores[entry].grid_shape
-        n_cells = grid_shape[0] * grid_shape[1]
+        grid = stores[entry].grid
+        n_cells = grid.n_cells
         if config.explore.path_length > n_cells:
             raise ConfigError(
                 f"explore.path_length: got {config.explore.path_length} steps, but {dataset} has only {n_cells} "
-                f"cells ({grid_shape[0]} x {grid_shape[1]}); use fewer steps or a smaller cell width"
+                f"cells ({grid.rows} x {grid.cols}); use fewer steps or a smaller cell width"
             )
         starts = start_cells(config.seed, dataset, n_cells, config.explore.restarts)
         for restart, start in enumerate(starts):
@@ -322,18 +322,18 @@ def _write(
     from curiosity_cli import __version__
     from curiosity_cli.explore.runs import write_run
 
-    grid_shape = store.grid_shape
+    start_row, start_col = store.grid.row_col(task.start_cell)
     meta = {
         "dataset": task.dataset,
         "weight_function": task.weight_function,
         "restart": task.restart,
         "start_cell": task.start_cell,
-        "start_row": task.start_cell // grid_shape[1],
-        "start_col": task.start_cell % grid_shape[1],
+        "start_row": int(start_row),
+        "start_col": int(start_col),
         "seed": list(task.seed),
         "store": store.path.name,
         "vocabulary_hashes": store.vocabulary_hashes,
-        "grid_shape": list(grid_shape),
+        "grid_shape": list(store.grid.shape),
         "vocabulary_size": store.vocabulary_size,
         "n_topics": config.model.topics,
         "path_length": config.explore.path_length,
@@ -343,7 +343,7 @@ def _write(
         "curiosity": __version__,
         RECIPE_KEY: recipe.record(),
     }
-    return write_run(ExperimentFolder(folder).run(task.dataset, task.weight_function, task.restart), exploration, meta, grid_shape[1])
+    return write_run(ExperimentFolder(folder).run(task.dataset, task.weight_function, task.restart), exploration, meta, store.grid)
 
 
 def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[RunTask], stores) -> None:
@@ -360,10 +360,10 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
         tmp.write_text(yaml.safe_dump(provenance(config.seed), sort_keys=False))
     rows = []
     for t in tasks:
-        cols = stores[t.dataset].grid_shape[1]
+        start_row, start_col = stores[t.dataset].grid.row_col(t.start_cell)
         rows.append(
             {"dataset": t.dataset, "weight_function": t.weight_function, "restart": t.restart,
-             "start_row": t.start_cell // cols, "start_col": t.start_cell % cols,
+             "start_row": int(start_row), "start_col": int(start_col),
              "seed": " ".join(map(str, t.seed)), "store": Path(t.store_path).name}
         )
     with atomic_path(layout.runs_csv) as tmp:
@@ -372,7 +372,7 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
     for name, info in stores.items():
         total = sum(info.word_counts.values())
         maps.append(
-            {"dataset": name, "stands_in_for": info.stands_in_for or "", "cells": info.grid_shape[0] * info.grid_shape[1],
+            {"dataset": name, "stands_in_for": info.stands_in_for or "", "cells": info.grid.n_cells,
              "words": total, **{f"{kind}_words": n for kind, n in info.word_counts.items()},
              "orb_share": info.word_counts.get("orb", 0) / total if total else float("nan"), "store": info.path.name}
         )

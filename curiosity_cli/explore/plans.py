@@ -1,7 +1,8 @@
 """Planned walkers: runs whose cells are fixed when they start, not drawn step by step.
 
-A plan is a pure function ``plan(start_cell, grid_shape, length, rng)`` returning the
-``(length,)`` row-major cells the run observes, in order. Two kinds use it:
+A plan is a pure function ``plan(start_cell, grid, length, rng)`` returning the
+``(length,)`` row-major cells of the map's :class:`~curiosity_cli.cell_grid.SquareGrid`
+the run observes, in order. Two kinds use it:
 
 - ``lawnmower``, the pre-programmed mission the paper's introduction argues against: a
   boustrophedon sweep (:func:`lawnmower`). Every step moves to a 4-neighbour, so it is a
@@ -20,8 +21,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from curiosity_cli.cell_grid import SquareGrid
 
-def lawnmower(start_cell: int, grid_shape: tuple[int, int], length: int, rng: np.random.Generator) -> np.ndarray:
+
+def lawnmower(start_cell: int, grid: SquareGrid, length: int, rng: np.random.Generator) -> np.ndarray:
     """A boustrophedon sweep from ``start_cell``: lanes along rows, one row apart.
 
     The first lane runs from the start towards the farther column edge (east on a tie);
@@ -37,8 +40,8 @@ def lawnmower(start_cell: int, grid_shape: tuple[int, int], length: int, rng: np
     ----------
     start_cell : int
         Row-major cell of the first step.
-    grid_shape : (int, int)
-        Rows and columns of cells, at least 2 cells.
+    grid : SquareGrid
+        The map's cells, at least 2.
     length : int
         Steps of the path.
     rng : numpy.random.Generator
@@ -49,8 +52,8 @@ def lawnmower(start_cell: int, grid_shape: tuple[int, int], length: int, rng: np
     (length,) int64 ndarray
         Row-major cells; each is a 4-neighbour of the one before.
     """
-    rows, cols = grid_shape
-    row, col = divmod(int(start_cell), cols)
+    rows, cols = grid.shape
+    row, col = (int(v) for v in grid.row_col(start_cell))
     d_col = 1 if cols - 1 - col >= col else -1
     d_row = 1 if rows - 1 - row >= row else -1
     cells = np.empty(length, np.int64)
@@ -66,22 +69,21 @@ def lawnmower(start_cell: int, grid_shape: tuple[int, int], length: int, rng: np
                 d_row = -d_row
             row += d_row
             d_col = -d_col
-        cells[step] = row * cols + col
+        cells[step] = grid.cell_of(row, col)
     return cells
 
 
-def scattered_cells(start_cell: int, grid_shape: tuple[int, int], length: int, rng: np.random.Generator) -> np.ndarray:
+def scattered_cells(start_cell: int, grid: SquareGrid, length: int, rng: np.random.Generator) -> np.ndarray:
     """Cells in a uniformly random order drawn from ``rng`` (the start cell plays no part).
 
     Returns
     -------
     (length,) int64 ndarray
     """
-    n_cells = grid_shape[0] * grid_shape[1]
-    return np.resize(rng.permutation(n_cells).astype(np.int64), length)
+    return np.resize(rng.permutation(grid.n_cells).astype(np.int64), length)
 
 
-def compact_block(start_cell: int, grid_shape: tuple[int, int], length: int, rng: np.random.Generator) -> np.ndarray:
+def compact_block(start_cell: int, grid: SquareGrid, length: int, rng: np.random.Generator) -> np.ndarray:
     """Cells by Euclidean distance from ``start_cell``, nearest first; ties in row-major order.
 
     ``rng`` is unused: the order is deterministic.
@@ -90,8 +92,6 @@ def compact_block(start_cell: int, grid_shape: tuple[int, int], length: int, rng
     -------
     (length,) int64 ndarray
     """
-    rows, cols = grid_shape
-    row, col = divmod(int(start_cell), cols)
-    r, c = np.divmod(np.arange(rows * cols, dtype=np.int64), cols)
-    order = np.argsort((r - row) ** 2 + (c - col) ** 2, kind="stable")
+    d2 = grid.squared_distances(np.arange(grid.n_cells), [start_cell])[:, 0]
+    order = np.argsort(d2, kind="stable")
     return np.resize(order.astype(np.int64), length)

@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.explore.walker import Exploration, SparseCounts
 from curiosity_cli.files import CorruptFileError, display_path, naming_os_errors, note, open_npz
@@ -56,7 +57,7 @@ def remove_partial_runs(root: Path) -> int:
     return removed
 
 
-def write_run(folder: Path, exploration: Exploration, meta: dict, grid_cols: int) -> int:
+def write_run(folder: Path, exploration: Exploration, meta: dict, grid: SquareGrid) -> int:
     """Write a run's folder atomically (replacing an old one); returns its size in bytes, run.json included.
 
     Parameters
@@ -66,15 +67,15 @@ def write_run(folder: Path, exploration: Exploration, meta: dict, grid_cols: int
     exploration : Exploration
     meta : dict
         JSON-ready facts about the run; ``format``, ``checkpoints`` and ``bytes`` are added.
-    grid_cols : int
-        Cells per row of the map's grid, to write rows and columns.
+    grid : SquareGrid
+        The map's cells, to write their rows and columns.
     """
     folder = Path(folder)
     tmp = folder.parent / f".{folder.name}{_TMP_MARK}{uuid.uuid4().hex[:8]}"
     tmp.mkdir(parents=True)
     try:
         with naming_os_errors(folder):  # a full disk names the run, not "no space left" alone
-            size = _write_files(tmp, exploration, meta, grid_cols)
+            size = _write_files(tmp, exploration, meta, grid)
         if folder.exists():
             shutil.rmtree(folder)
         os.rename(tmp, folder)
@@ -84,12 +85,12 @@ def write_run(folder: Path, exploration: Exploration, meta: dict, grid_cols: int
     return size
 
 
-def _write_files(tmp: Path, exploration: Exploration, meta: dict, grid_cols: int) -> int:
+def _write_files(tmp: Path, exploration: Exploration, meta: dict, grid: SquareGrid) -> int:
     """The files of a run folder (module docstring), written into ``tmp``; returns their size in bytes."""
     import pandas as pd
 
     e = exploration
-    rows, cols = np.divmod(e.path, grid_cols)
+    rows, cols = grid.row_col(e.path)
     pd.DataFrame(
         {
             "step": np.arange(e.path.size), "row": rows, "col": cols, "cell": e.path,
@@ -97,7 +98,7 @@ def _write_files(tmp: Path, exploration: Exploration, meta: dict, grid_cols: int
             "log_likelihood": e.log_likelihood, "fallback": e.fallback, "boxed_in": e.boxed_in,
         }
     ).to_csv(tmp / "path.csv", index=False)
-    c_rows, c_cols = np.divmod(e.candidate_cell, grid_cols)
+    c_rows, c_cols = grid.row_col(e.candidate_cell)
     pd.DataFrame(
         {
             "step": e.candidate_step, "row": c_rows, "col": c_cols, "cell": e.candidate_cell,

@@ -8,7 +8,9 @@ Each step ``t`` (0-based) of a run of ``path_length`` steps, with the walker in 
    samples, or for a wall-clock budget when ``explore.step_seconds`` is set. The fixed
    budget stands in for the paper's 200 ms per step, so results do not depend on how
    fast the machine is.
-3. **Score** the in-bounds 4-neighbours with the run's weight function
+3. **Score** the in-bounds neighbours (the cell's row of the grid's neighbour table,
+   :meth:`~curiosity_cli.cell_grid.SquareGrid.neighbour_table`: up, down, left, right,
+   those that exist) with the run's weight function
    (:mod:`curiosity_cli.explore.weights`). When every neighbour is visited and the
    paper's repulsion leaves them all weight 0, they are scored again by the boxed-in
    rule of that module, and the step is counted as boxed in.
@@ -124,18 +126,6 @@ class Exploration:
     checkpoints: dict[int, SparseCounts]
 
 
-def in_bounds_neighbours(cell: int, grid_shape: tuple[int, int]) -> np.ndarray:
-    """(n,) int64 ndarray: the 4-neighbours of ``cell`` inside the grid, up, down, left, right."""
-    rows, cols = grid_shape
-    row, col = divmod(int(cell), cols)
-    out = []
-    for d_row, d_col in ((-1, 0), (1, 0), (0, -1), (0, 1)):
-        r, c = row + d_row, col + d_col
-        if 0 <= r < rows and 0 <= c < cols:
-            out.append(r * cols + c)
-    return np.array(out, np.int64)
-
-
 def draw_move(weights: np.ndarray, rng: np.random.Generator) -> tuple[int, bool]:
     """Index drawn with probability proportional to ``weights``; ``(index, fell back to uniform)``.
 
@@ -199,10 +189,10 @@ def explore(
         raise ParameterError("store: the map has a single cell, so there is nowhere to move")
     if not 0 <= int(start_cell) < n_cells:
         raise ParameterError(f"start_cell: got {start_cell}, expected 0 .. {n_cells - 1}")
-    grid_cols = store.grid_shape[1]
     model_seed, move_seed = np.random.SeedSequence(seed).spawn(2)
     rng = np.random.default_rng(move_seed)
     topic_model = map_topic_model(store, model, int(model_seed.generate_state(1, np.uint64)[0]))
+    neighbours = store.grid.neighbour_table()
 
     length = settings.path_length
     path = np.empty(length, np.int64)
@@ -216,7 +206,7 @@ def explore(
     checkpoints: dict[int, SparseCounts] = {}
     keep = set(settings.checkpoints)
 
-    planned = walker.cells(int(start_cell), store.grid_shape, length, rng) if isinstance(walker, Plan) else None
+    planned = walker.cells(int(start_cell), store.grid, length, rng) if isinstance(walker, Plan) else None
     cell = int(start_cell) if planned is None else int(planned[0])
     for step in range(length):
         path[step] = cell
@@ -234,11 +224,12 @@ def explore(
             cell = int(planned[step + 1])
             continue
 
-        cells = in_bounds_neighbours(cell, store.grid_shape)
+        around = neighbours[cell]
+        cells = around[around >= 0].astype(np.int64)
         visited = np.flatnonzero(visits)
         candidates = Candidates(
             cells=cells,
-            coverage=coverage_potential(cells, visited, visits[visited], grid_cols, settings.min_d2),
+            coverage=coverage_potential(cells, visited, visits[visited], store.grid, settings.min_d2),
             word_perplexity=np.array([word_perplexity(topic_model, store.cell_words(g)) for g in cells]),
             topic_perplexity=np.array([topic_perplexity(topic_model, store.cell_words(g), g) for g in cells]),
         )

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.explore import plans
 
 
@@ -50,8 +51,9 @@ class Candidates:
     Attributes
     ----------
     cells : (n,) int64 ndarray
-        Row-major indices of the in-bounds 4-neighbours, in the order up, down, left,
-        right (those that exist).
+        Row-major indices of the in-bounds neighbours: the walker's cell's row of
+        :meth:`~curiosity_cli.cell_grid.SquareGrid.neighbour_table` without its ``-1``
+        (up, down, left, right: those that exist).
     coverage : (n,) float64 ndarray
         The coverage potential ``U(g_i)`` (module docstring), > 0: infinite for a visited
         candidate under the paper's rule, and its visit count when the walker is boxed in.
@@ -96,13 +98,13 @@ class Plan:
     Attributes
     ----------
     cells : callable
-        ``cells(start_cell, grid_shape, length, rng)`` -> (length,) int64 ndarray of
-        row-major cells.
+        ``cells(start_cell, grid, length, rng)`` -> (length,) int64 ndarray of
+        row-major cells of the :class:`~curiosity_cli.cell_grid.SquareGrid` ``grid``.
     ceiling : bool
         True for a reference that is not a path (reported apart from the walkers).
     """
 
-    cells: Callable[[int, tuple[int, int], int, np.random.Generator], np.ndarray]
+    cells: Callable[[int, SquareGrid, int, np.random.Generator], np.ndarray]
     ceiling: bool = False
 
 
@@ -123,7 +125,7 @@ CEILINGS: tuple[str, ...] = tuple(n for n, w in WEIGHT_FUNCTIONS.items() if isin
 
 
 def coverage_potential(
-    candidates: np.ndarray, visited: np.ndarray, visits: np.ndarray, grid_cols: int, min_d2: float | None
+    candidates: np.ndarray, visited: np.ndarray, visits: np.ndarray, grid: SquareGrid, min_d2: float | None
 ) -> np.ndarray:
     """``U(g) = Σ_j n_j / d²(g, c_j)`` for each candidate cell ``g`` (eq. 8), ``d²`` clamped or not.
 
@@ -135,8 +137,8 @@ def coverage_potential(
         The distinct visited cells ``c_j``.
     visits : (m,) int ndarray
         ``n_j``, how often each was visited.
-    grid_cols : int
-        Cells per row of the grid (to turn indices into rows and columns).
+    grid : SquareGrid
+        The map's cells, whose distances ``d`` are.
     min_d2 : float or None
         Lower clamp on the squared distance, > 0; None for the paper's rule, under which
         a visited candidate (``d = 0``) has ``U = ∞``.
@@ -145,9 +147,7 @@ def coverage_potential(
     -------
     (n,) float64 ndarray
     """
-    c_rows, c_cols = np.divmod(np.asarray(candidates, np.int64), grid_cols)
-    v_rows, v_cols = np.divmod(np.asarray(visited, np.int64), grid_cols)
-    d2 = (c_rows[:, None] - v_rows[None, :]) ** 2 + (c_cols[:, None] - v_cols[None, :]) ** 2
+    d2 = grid.squared_distances(candidates, visited)
     n = np.asarray(visits, np.float64)[None, :]
     if min_d2 is not None:
         return (n / np.maximum(d2, min_d2)).sum(axis=1)

@@ -182,8 +182,8 @@ def read_path(experiment_dir: Path, dataset: str, weight_function: str, restart:
 
     Returns
     -------
-    (rows, cols) : pair of (L,) int64 ndarray, or None
-        The cell of each step, in step order.
+    (L,) int64 ndarray, or None
+        The row-major cell of each step, in step order.
     """
     import pandas as pd
 
@@ -192,12 +192,12 @@ def read_path(experiment_dir: Path, dataset: str, weight_function: str, restart:
         notes.append(f"{display_path(path)}: not found; no path figure (run `curiosity explore` first)")
         return None
     try:
-        table = pd.read_csv(path, usecols=["step", "row", "col"])
+        table = pd.read_csv(path, usecols=["step", "cell"])
     except (ValueError, pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         notes.append(f"{display_path(path)}: unreadable ({exc}); no path figure")
         return None
     table = table.sort_values("step")
-    return table["row"].to_numpy(np.int64), table["col"].to_numpy(np.int64)
+    return table["cell"].to_numpy(np.int64)
 
 
 def _read_npz(path: Path, keys: list[str], notes: list[str]) -> dict | None:

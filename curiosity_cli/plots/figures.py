@@ -295,8 +295,8 @@ def path_figure(m, path, example: Example, z_p: np.ndarray, z_b: np.ndarray | No
     Parameters
     ----------
     m : MapData
-    path : pair of (L,) int ndarray
-        Cell rows and cols of every step of the run; the first ``example.length`` are drawn.
+    path : (L,) int ndarray
+        The cell of every step of the run; the first ``example.length`` are drawn.
     example : Example
         The run and path length the labelling ``z_p`` was learned from.
     z_p : (H, W) int ndarray
@@ -312,9 +312,7 @@ def path_figure(m, path, example: Example, z_p: np.ndarray, z_b: np.ndarray | No
     from matplotlib.colors import LinearSegmentedColormap, Normalize
     from matplotlib.figure import Figure
 
-    rows, cols = (np.asarray(a)[: example.length] for a in path)
-    half = m.config.cell_width / 2
-    pixel_rows, pixel_cols = rows * m.config.cell_width + half, cols * m.config.cell_width + half
+    pixel_rows, pixel_cols = m.grid.centres(np.asarray(path)[: example.length])
     height, width = m.image.shape[:2]
     fig = Figure(figsize=(10.5, 5.6), layout="constrained")
     ax_path, ax_labels = fig.subplots(1, 2)
@@ -322,7 +320,7 @@ def path_figure(m, path, example: Example, z_p: np.ndarray, z_b: np.ndarray | No
     points = np.stack([pixel_cols, pixel_rows], axis=1)  # matplotlib draws (x, y) = (col, row)
     segments = np.stack([points[:-1], points[1:]], axis=1)
     blue_red = LinearSegmentedColormap.from_list("blue-red", ["#1f3fff", "#b000b0", "#ff1f1f"])
-    norm = Normalize(0, max(len(rows) - 1, 1))
+    norm = Normalize(0, max(len(pixel_rows) - 1, 1))
     # a dark outline under the coloured line keeps it visible on bright and dark ground alike
     ax_path.add_collection(LineCollection(segments, colors="black", linewidths=3.2, alpha=0.55, capstyle="round"))
     line = LineCollection(segments, cmap=blue_red, norm=norm, linewidths=1.8, capstyle="round")

@@ -23,7 +23,7 @@ def write_word_density(map_data: MapData, store: WordStore, path: Path) -> None:
     """
     from matplotlib.figure import Figure
 
-    rows, cols = store.grid_shape
+    rows, cols = store.grid.shape
     per_cell = store.words_per_cell()
     # every cell of a full grid holds the same number of texton words, so the count of
     # distinct words is what shows where the texture is rich and where it is plain
@@ -37,11 +37,11 @@ def write_word_density(map_data: MapData, store: WordStore, path: Path) -> None:
     shown = ax_density.imshow(distinct, cmap="viridis", interpolation="nearest")
     fig.colorbar(shown, ax=ax_density, shrink=0.8, label="distinct words per cell")
     ax_density.set_title(
-        f"{len(store.words):,} words in {store.n_cells} cells of {store.cell_width} px\n"
+        f"{len(store.words):,} words in {store.n_cells} cells of {store.grid.cell_width} px\n"
         f"words per cell: min {per_cell.min()}, median {int(np.median(per_cell))}, max {per_cell.max()}"
     )
 
-    cw = store.cell_width
+    cw = store.grid.cell_width
     top, left = (rows // 2) * cw, (cols // 2) * cw
     side = _CLOSE_UP_CELLS * cw
     inside = (store.rows >= top) & (store.rows < top + side) & (store.cols >= left) & (store.cols < left + side)

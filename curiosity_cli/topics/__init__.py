@@ -1,6 +1,7 @@
 """The ROST spatial topic model (paper section 3) and the perplexities of section 4.
 
-- :mod:`~curiosity_cli.topics.neighbours`: neighbour tables of grids and frame streams.
+- :mod:`~curiosity_cli.topics.neighbours`: neighbour tables of frame streams, and their check
+  (a map's table is its grid's, :mod:`curiosity_cli.cell_grid`).
 - :mod:`~curiosity_cli.topics.model`: :class:`TopicModel`, its Gibbs refinement
   (batch, realtime, frozen Φ), ML topics.
 - :mod:`~curiosity_cli.topics.persistence`: snapshots of a model's state, and model files.
@@ -11,14 +12,13 @@ model computes, so importing this package stays cheap.
 """
 
 from curiosity_cli.topics.model import TopicModel
-from curiosity_cli.topics.neighbours import grid_neighbours, stream_neighbours
+from curiosity_cli.topics.neighbours import stream_neighbours
 from curiosity_cli.topics.perplexity import topic_perplexity, word_perplexity
 from curiosity_cli.topics.persistence import ModelSnapshot, load_model, restore_snapshot, save_model, take_snapshot
 
 __all__ = [
     "ModelSnapshot",
     "TopicModel",
-    "grid_neighbours",
     "load_model",
     "restore_snapshot",
     "save_model",

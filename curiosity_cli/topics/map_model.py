@@ -20,12 +20,11 @@ def map_topic_model(store: WordStore, model: ModelConfig, seed: int, *, frozen_c
     word types go into the model, so a saved model names what its word ids mean.
     """
     from curiosity_cli.topics.model import TopicModel
-    from curiosity_cli.topics.neighbours import grid_neighbours
 
     return TopicModel(
         model.topics,
         store.vocabulary_size,
-        grid_neighbours(*store.grid_shape, model.spatial_neighbours),
+        store.grid.neighbour_table(model.spatial_neighbours),
         alpha=model.alpha,
         beta=model.beta,
         seed=seed,

@@ -1,8 +1,10 @@
-"""Neighbourhood graphs of cells, as fixed-width tables.
+"""Neighbourhood graphs of cells, as fixed-width tables: streams of frames, and the check of any table.
 
 A table is an ``(n_cells, width) int32`` array: row ``c`` lists the neighbours of cell
 ``c``, one per column, ``-1`` where a neighbour does not exist (at a border). Each column
-has a fixed meaning, so a caller can read directions from it:
+has a fixed meaning, so a caller can read directions from it. A map's table is its
+grid's (:meth:`curiosity_cli.cell_grid.SquareGrid.neighbour_table`); a stream's adds two
+columns to it:
 
 ======  ==========================================================
 column  neighbour of ``(row, col)`` (frame ``t``)
@@ -30,38 +32,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from curiosity_cli.checks import check_int
+from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.checks import check_choice, check_int
 from curiosity_cli.errors import ParameterError
 
 
-def grid_neighbours(rows: int, cols: int, spatial: int = 4) -> np.ndarray:
-    """Neighbour table of a grid of ``rows x cols`` cells numbered row-major.
+def stream_neighbours(grid: SquareGrid, n_frames: int, *, spatial: int = 4, temporal: int = 2) -> np.ndarray:
+    """Neighbour table of a stream of ``n_frames`` frames of a grid's cells.
 
     Parameters
     ----------
-    rows, cols : int
-        Grid size, both >= 1.
-    spatial : {4, 0}
-        4 for up, down, left and right; 0 for none (the model is then plain LDA).
-
-    Returns
-    -------
-    (rows * cols, spatial) ndarray of int32
-        Columns up, down, left, right; ``-1`` off the grid.
-    """
-    rows = check_int("rows", rows, 1)
-    cols = check_int("cols", cols, 1)
-    spatial = _check_choice("spatial", spatial, (4, 0))
-    return stream_neighbours(rows, cols, 1, spatial=spatial, temporal=0)
-
-
-def stream_neighbours(rows: int, cols: int, n_frames: int, *, spatial: int = 4, temporal: int = 2) -> np.ndarray:
-    """Neighbour table of a stream of ``n_frames`` frames of ``rows x cols`` cells.
-
-    Parameters
-    ----------
-    rows, cols : int
-        Cells per frame, both >= 1.
+    grid : SquareGrid
+        The cells of one frame.
     n_frames : int
         Number of frames, >= 1.
     spatial : {4, 0}
@@ -71,30 +53,22 @@ def stream_neighbours(rows: int, cols: int, n_frames: int, *, spatial: int = 4, 
 
     Returns
     -------
-    (n_frames * rows * cols, spatial + temporal) ndarray of int32
-        Cell ``frame * rows * cols + row * cols + col``; columns up, down, left, right
-        (if ``spatial``), then previous, next (if ``temporal``); ``-1`` where the
-        neighbour is off the grid or outside the stream.
+    (n_frames * grid.n_cells, spatial + temporal) ndarray of int32
+        Cell ``frame * grid.n_cells + cell``; the columns of
+        :meth:`~curiosity_cli.cell_grid.SquareGrid.neighbour_table` (if ``spatial``),
+        then previous, next (if ``temporal``); ``-1`` where the neighbour is off the grid
+        or outside the stream.
     """
-    rows = check_int("rows", rows, 1)
-    cols = check_int("cols", cols, 1)
     n_frames = check_int("n_frames", n_frames, 1)
-    spatial = _check_choice("spatial", spatial, (4, 0))
-    temporal = _check_choice("temporal", temporal, (2, 0))
-
-    frame, row, col = np.meshgrid(np.arange(n_frames), np.arange(rows), np.arange(cols), indexing="ij")
-    frame, row, col = frame.ravel(), row.ravel(), col.ravel()
-    offsets = []
-    if spatial:
-        offsets += [(0, -1, 0), (0, 1, 0), (0, 0, -1), (0, 0, 1)]
+    within = np.tile(grid.neighbour_table(spatial).astype(np.int64), (n_frames, 1))  # (n_frames * n, spatial)
+    temporal = check_choice("temporal", temporal, (2, 0))
+    n = grid.n_cells
+    first = np.repeat(np.arange(n_frames, dtype=np.int64) * n, n)[:, None]  # the first cell of each cell's frame
+    columns = [np.where(within >= 0, within + first, -1)]
     if temporal:
-        offsets += [(-1, 0, 0), (1, 0, 0)]
-    table = np.full((frame.size, len(offsets)), -1, dtype=np.int32)
-    for j, (df, dr, dc) in enumerate(offsets):
-        f, r, c = frame + df, row + dr, col + dc
-        inside = (f >= 0) & (f < n_frames) & (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
-        table[inside, j] = ((f * rows + r) * cols + c)[inside]
-    return table
+        cells = np.arange(n_frames * n, dtype=np.int64)
+        columns += [np.where(cells >= n, cells - n, -1), np.where(cells < (n_frames - 1) * n, cells + n, -1)]
+    return np.column_stack(columns).astype(np.int32)
 
 
 def check_neighbours(neighbours) -> np.ndarray:
@@ -135,10 +109,3 @@ def check_neighbours(neighbours) -> np.ndarray:
             "but not the other way round"
         )
     return table
-
-
-def _check_choice(name: str, value, choices: tuple[int, ...]) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) not in choices:
-        expected = " or ".join(str(c) for c in choices)
-        raise ParameterError(f"{name}: got {value!r}, expected {expected}")
-    return int(value)

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.checks import check_float, check_int
 from curiosity_cli.errors import ParameterError
 
@@ -78,8 +79,8 @@ class PlantedMap(PlantedCorpus):
 
     Attributes
     ----------
-    grid_shape : (int, int)
-        ``(rows, cols)``; cell ``c`` is at row ``c // cols``, column ``c % cols``.
+    grid : SquareGrid
+        The ``rows x cols`` cells (row-major).
     regions : (n_cells,) int32 ndarray
         The region of every cell, in ``[0, n_regions)``; each region is contiguous.
     region_theta : (n_regions, K) float64 ndarray
@@ -88,7 +89,7 @@ class PlantedMap(PlantedCorpus):
     Other attributes as in :class:`PlantedCorpus`; here ``theta[c] == region_theta[regions[c]]``.
     """
 
-    grid_shape: tuple[int, int]
+    grid: SquareGrid
     regions: np.ndarray
     region_theta: np.ndarray
 
@@ -203,11 +204,9 @@ def voronoi_regions(rows: int, cols: int, n_regions: int, rng: np.random.Generat
     (rows * cols,) int32 ndarray
         Region id of each cell, row-major.
     """
-    seeds = rng.choice(rows * cols, size=n_regions, replace=False)
-    seed_rows, seed_cols = np.divmod(seeds, cols)
-    grid_rows, grid_cols = np.divmod(np.arange(rows * cols), cols)
-    distance = (grid_rows[:, None] - seed_rows[None, :]) ** 2 + (grid_cols[:, None] - seed_cols[None, :]) ** 2
-    return np.argmin(distance, axis=1).astype(np.int32)
+    grid = SquareGrid(rows, cols)
+    seeds = rng.choice(grid.n_cells, size=n_regions, replace=False)
+    return np.argmin(grid.squared_distances(np.arange(grid.n_cells), seeds), axis=1).astype(np.int32)
 
 
 def planted_map(
@@ -258,7 +257,7 @@ def planted_map(
     -------
     PlantedMap
         ``words`` (N,), ``cell_start`` (rows * cols + 1,), ``topics`` (N,), ``phi`` (K, V),
-        ``theta`` (rows * cols, K), ``grid_shape``, ``regions`` (rows * cols,),
+        ``theta`` (rows * cols, K), ``grid``, ``regions`` (rows * cols,),
         ``region_theta`` (n_regions, K).
     """
     rows = check_int("rows", rows, 1)
@@ -291,7 +290,7 @@ def planted_map(
         topics=topics,
         phi=phi,
         theta=theta,
-        grid_shape=(rows, cols),
+        grid=SquareGrid(rows, cols),
         regions=regions,
         region_theta=region_theta,
     )

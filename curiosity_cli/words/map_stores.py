@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.errors import ConfigError
 from curiosity_cli.files import check_inside, display_path
@@ -21,7 +22,7 @@ class StoreInfo:
 
     name: str
     path: Path
-    grid_shape: tuple[int, int]
+    grid: SquareGrid
     vocabulary_size: int
     vocabulary_hashes: list[str]
     word_counts: dict[str, int]  # words of each kind ("orb", "texton", "hue")
@@ -51,7 +52,7 @@ def prepare_stores(config: ExperimentConfig, cache_dir: Path) -> dict[str, Store
         extraction = extract_words(map_data, config.words, cache_dir=cache_dir)
         store = extraction.store
         stores[entry] = StoreInfo(
-            name, extraction.path, store.grid_shape, store.vocabulary_size, [t.sha256 for t in store.types],
+            name, extraction.path, store.grid, store.vocabulary_size, [t.sha256 for t in store.types],
             store.count_by_type(), map_data.config.stands_in_for, map_data.labels_digest,
         )
     return stores

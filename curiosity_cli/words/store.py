@@ -4,11 +4,11 @@ All word types share one id space with fixed offsets, in this order: ORB words
 ``[0, n_orb)``, texton words ``[n_orb, n_orb + n_texton)``, then hue words (when on).
 With the paper's vocabularies that is ORB 0–4999, texton 5000–5999, hue 6000–6179.
 
-The cell of a word at pixel ``(row, col)`` is ``(row // cell_width, col // cell_width)``,
-numbered row-major. A partial cell at the bottom or right border (when the image is not
-a multiple of the cell width) is a cell of its own with fewer pixels, as in the paper's
-Table 1 (2500 px at 32 px cells: 79 x 79 = 6241 cells). Words are sorted by cell, so the
-words of cell ``c`` are the contiguous slice ``cell_start[c]:cell_start[c + 1]``.
+The cell of a word is the cell of its pixel on the map's grid
+(:class:`~curiosity_cli.cell_grid.SquareGrid`: ``(row // cell_width, col // cell_width)``,
+numbered row-major, a partial cell at the bottom or right border a cell of its own).
+Words are sorted by cell, so the words of cell ``c`` are the contiguous slice
+``cell_start[c]:cell_start[c + 1]``.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.files import atomic_path, display_path, open_npz
 
@@ -48,9 +49,8 @@ class WordStore:
         Word id in the shared id space (see :attr:`types`).
     cell_start : (n_cells + 1,) int64 ndarray
         Words of cell ``c`` are ``[cell_start[c], cell_start[c + 1])``.
-    grid_shape : (int, int)
-        Cells per column and per row.
-    cell_width : int
+    grid : SquareGrid
+        The map's cells.
     types : tuple of WordType
     params : dict
         What made the store: dataset, image hash, stride, ORB settings, package version.
@@ -60,14 +60,13 @@ class WordStore:
     cols: np.ndarray
     words: np.ndarray
     cell_start: np.ndarray
-    grid_shape: tuple[int, int]
-    cell_width: int
+    grid: SquareGrid
     types: tuple[WordType, ...]
     params: dict
 
     @property
     def n_cells(self) -> int:
-        return self.grid_shape[0] * self.grid_shape[1]
+        return self.grid.n_cells
 
     @property
     def vocabulary_size(self) -> int:
@@ -125,15 +124,13 @@ def build_store(
         Sorted by cell, then row, column and word id, so the order does not depend on
         the order the extractors produced words in.
     """
-    from curiosity_cli.data import grid_shape as _grid_shape
-
-    grid = _grid_shape(image_shape, cell_width)
+    grid = SquareGrid.covering(image_shape, cell_width)
     rows = np.asarray(rows, dtype=np.int64)
     cols = np.asarray(cols, dtype=np.int64)
     words = np.asarray(words, dtype=np.int64)
-    cells = (rows // cell_width) * grid[1] + cols // cell_width
+    cells = grid.cells_of_pixels(rows, cols)
     order = np.lexsort((words, cols, rows, cells))
-    counts = np.bincount(cells, minlength=grid[0] * grid[1])
+    counts = np.bincount(cells, minlength=grid.n_cells)
     cell_start = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
     vocabulary_size = max(t.offset + t.size for t in types)
     return WordStore(
@@ -141,8 +138,7 @@ def build_store(
         cols=_smallest_unsigned(cols[order], image_shape[1] - 1),
         words=_smallest_unsigned(words[order], vocabulary_size - 1),
         cell_start=cell_start,
-        grid_shape=grid,
-        cell_width=int(cell_width),
+        grid=grid,
         types=tuple(types),
         params=dict(params),
     )
@@ -152,8 +148,8 @@ def save_store(store: WordStore, path: Path) -> None:
     """Write a store as one compressed ``.npz``, atomically."""
     meta = {
         "format": STORE_FORMAT,
-        "grid_shape": list(store.grid_shape),
-        "cell_width": store.cell_width,
+        "grid_shape": list(store.grid.shape),
+        "cell_width": store.grid.cell_width,
         "types": [t.__dict__ for t in store.types],
         "params": store.params,
     }
@@ -194,8 +190,7 @@ def load_store(path: Path) -> WordStore:
         )
     return WordStore(
         **arrays,
-        grid_shape=tuple(meta["grid_shape"]),
-        cell_width=meta["cell_width"],
+        grid=SquareGrid(*meta["grid_shape"], meta["cell_width"]),
         types=tuple(WordType(**t) for t in meta["types"]),
         params=meta["params"],
     )

@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.config import WALKER_NAMES
-from curiosity_cli.explore.walker import draw_move, in_bounds_neighbours
+from curiosity_cli.explore.walker import draw_move
 from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, coverage_potential
 
 
@@ -35,7 +36,7 @@ def test_coverage_potential_matches_the_sum_with_the_clamp(min_d2):
     cols = 5
     visits = {0: 3, 6: 1, 7: 2, 24: 1}  # 7 is also a candidate: d = 0 hits the clamp
     candidates = np.array([1, 7, 12, 23])
-    got = coverage_potential(candidates, np.array(list(visits)), np.array(list(visits.values())), cols, min_d2)
+    got = coverage_potential(candidates, np.array(list(visits)), np.array(list(visits.values())), SquareGrid(5, cols), min_d2)
     expected = [potential_naive(int(c), visits, cols, min_d2) for c in candidates]
     np.testing.assert_allclose(got, expected, rtol=1e-15)
     # the visited candidate (7) gets n / min_d2 from itself
@@ -46,7 +47,7 @@ def test_without_a_clamp_a_visited_candidate_has_infinite_potential_and_weight_0
     cols = 5
     visits = {0: 3, 6: 1, 7: 2, 24: 1}
     candidates = np.array([1, 7, 12, 23])
-    got = coverage_potential(candidates, np.array(list(visits)), np.array(list(visits.values())), cols, None)
+    got = coverage_potential(candidates, np.array(list(visits)), np.array(list(visits.values())), SquareGrid(5, cols), None)
     expected = [potential_naive(int(c), visits, cols, None) for c in candidates]
     np.testing.assert_allclose(got, expected, rtol=1e-15)
     assert got[1] == math.inf and np.isfinite(got[[0, 2, 3]]).all()
@@ -72,23 +73,6 @@ def test_the_four_weight_functions_are_the_papers_formulas():
     assert list(WEIGHT_FUNCTIONS)[:4] == list(expected)
     for name, weights in expected.items():
         np.testing.assert_allclose(WEIGHT_FUNCTIONS[name](candidates), weights, rtol=1e-15)
-
-
-@pytest.mark.parametrize(
-    "cell, expected",
-    [
-        (0, [4, 1]),  # top-left corner: down, right
-        (3, [7, 2]),  # top-right corner: down, left
-        (5, [1, 9, 4, 6]),  # inside: up, down, left, right
-        (10, [6, 9, 11]),  # bottom edge: up, left, right
-    ],
-)
-def test_neighbours_stay_on_a_3_by_4_grid(cell, expected):
-    assert in_bounds_neighbours(cell, (3, 4)).tolist() == expected
-
-
-def test_a_single_column_grid_has_only_vertical_neighbours():
-    assert in_bounds_neighbours(2, (5, 1)).tolist() == [1, 3]
 
 
 def test_draw_follows_the_weights_and_falls_back_to_uniform_only_without_positive_weight():
@@ -124,5 +108,5 @@ def _candidates(n: int) -> Candidates:
 def test_the_clamp_keeps_a_revisited_cell_reachable():
     # unclamped, a candidate the walker stands on would have infinite potential
     cols = 3
-    potential = coverage_potential(np.array([4]), np.array([4]), np.array([1]), cols, 0.25)
+    potential = coverage_potential(np.array([4]), np.array([4]), np.array([1]), SquareGrid(3, cols), 0.25)
     assert math.isfinite(potential[0]) and potential[0] == pytest.approx(4.0)

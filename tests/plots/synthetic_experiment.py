@@ -87,7 +87,7 @@ def make_experiment(
         m = load_map(entry)
         name = m.config.name
         truth = truth_of(m)
-        grid = m.grid_shape
+        grid = m.grid.shape
         batch = folder / "batch"
         batch.mkdir(exist_ok=True)
         sweep = np.arange(1, sweeps + 1)

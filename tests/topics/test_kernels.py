@@ -23,19 +23,20 @@ from naive import (
     unit64,
 )
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics import _rng
 from curiosity_cli.topics._gibbs_kernels import distance2_colouring
 from curiosity_cli.topics._sampler import lane_draw as lane_draw_kernel
 from curiosity_cli.topics.model import TopicModel
-from curiosity_cli.topics.neighbours import grid_neighbours, stream_neighbours
+from curiosity_cli.topics.neighbours import stream_neighbours
 
 
 def small_model(seed, *, rows=3, cols=4, spatial=4, n_topics=5, vocabulary=12, observed=0.75, frozen=None):
     """A model over a small grid with most cells observed, some of them empty."""
     rng = np.random.default_rng(seed)
     model = TopicModel(
-        n_topics, vocabulary, grid_neighbours(rows, cols, spatial), alpha=0.3, beta=0.2, seed=seed, frozen_counts=frozen
+        n_topics, vocabulary, SquareGrid(rows, cols).neighbour_table(spatial), alpha=0.3, beta=0.2, seed=seed, frozen_counts=frozen
     )
     for cell in rng.permutation(rows * cols)[: max(1, int(observed * rows * cols))]:
         model.add_cell(int(cell), rng.integers(0, vocabulary, rng.integers(0, 9)))
@@ -108,7 +109,7 @@ def test_lane_draw_takes_last_positive_topic_when_the_target_rounds_past_the_tot
 @pytest.mark.parametrize("spatial", [4, 0])
 def test_add_cell_matches_twin(spatial):
     rng = np.random.default_rng(1)
-    model = TopicModel(6, 10, grid_neighbours(3, 3, spatial), alpha=0.5, beta=0.1, seed=11)
+    model = TopicModel(6, 10, SquareGrid(3, 3).neighbour_table(spatial), alpha=0.5, beta=0.1, seed=11)
     twin = NaiveModel.of(model)
     for cell in rng.permutation(9):
         words = rng.integers(0, 10, rng.integers(0, 12))
@@ -183,7 +184,7 @@ def test_refine_batch_with_many_repeated_words_in_a_cell_matches_twin():
 
 def test_refine_batch_on_a_stream_table_matches_twin():
     rng = np.random.default_rng(8)
-    model = TopicModel(4, 8, stream_neighbours(2, 3, 8), alpha=0.3, beta=0.2, seed=8)
+    model = TopicModel(4, 8, stream_neighbours(SquareGrid(2, 3), 8), alpha=0.3, beta=0.2, seed=8)
     for frame in range(8):
         for cell in range(frame * 6, frame * 6 + 6):
             model.add_cell(cell, rng.integers(0, 8, rng.integers(0, 6)), time=frame)
@@ -206,7 +207,7 @@ def test_refine_realtime_matches_twin(eta):
 
 def test_refine_realtime_with_observation_times_matches_twin():
     rng = np.random.default_rng(10)
-    model = TopicModel(5, 10, stream_neighbours(2, 2, 4), alpha=0.3, beta=0.2, seed=10)
+    model = TopicModel(5, 10, stream_neighbours(SquareGrid(2, 2), 4), alpha=0.3, beta=0.2, seed=10)
     for frame in range(4):
         for cell in range(frame * 4, frame * 4 + 4):
             model.add_cell(cell, rng.integers(0, 10, rng.integers(1, 5)), time=2 * frame)
@@ -240,7 +241,7 @@ def test_frozen_sweeps_over_runs_of_one_word_id_match_twin(threads):
     """Cells sorted by word id, as word stores are: long runs of one word id in a cell."""
     rows, cols = BATCH_GRID["rows"], BATCH_GRID["cols"]
     rng = np.random.default_rng(17)
-    model = TopicModel(5, 12, grid_neighbours(rows, cols, 4), alpha=0.3, beta=0.2, seed=17,
+    model = TopicModel(5, 12, SquareGrid(rows, cols).neighbour_table(4), alpha=0.3, beta=0.2, seed=17,
                        frozen_counts=rng.integers(0, 5, (12, 5)))
     for cell in range(rows * cols):
         model.add_cell(cell, np.sort(rng.integers(0, 3, rng.integers(0, 15))))
@@ -313,7 +314,10 @@ def test_ml_topics_and_log_likelihood_match_twins(frozen):
 
 @pytest.mark.parametrize(
     "table",
-    [grid_neighbours(7, 9), grid_neighbours(1, 6), grid_neighbours(4, 4, 0), stream_neighbours(3, 4, 5)],
+    [
+        SquareGrid(7, 9).neighbour_table(), SquareGrid(1, 6).neighbour_table(), SquareGrid(4, 4).neighbour_table(0),
+        stream_neighbours(SquareGrid(3, 4), 5),
+    ],
     ids=["grid", "row", "lda", "stream"],
 )
 def test_distance2_colouring_matches_twin_and_separates_interacting_cells(table):
@@ -328,4 +332,4 @@ def test_distance2_colouring_matches_twin_and_separates_interacting_cells(table)
 
 def test_grid_colouring_uses_few_colours():
     # 5 is the minimum for a 4-neighbour grid ((row + 2 col) mod 5 achieves it)
-    assert distance2_colouring(grid_neighbours(64, 64)).max() + 1 <= 8
+    assert distance2_colouring(SquareGrid(64, 64).neighbour_table()).max() + 1 <= 8

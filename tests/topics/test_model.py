@@ -10,8 +10,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from naive import recount
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.topics import TopicModel, grid_neighbours, stream_neighbours, take_snapshot
+from curiosity_cli.topics import TopicModel, stream_neighbours, take_snapshot
 from curiosity_cli.topics.neighbours import check_neighbours
 
 
@@ -19,7 +20,7 @@ def build(seed=0, rows=4, cols=5, spatial=4, n_topics=6, vocabulary=15, words_pe
     """A model with random words in every cell; ``seed`` draws the words and seeds the model."""
     rng = np.random.default_rng(seed)
     model_seed = seed if model_seed is None else model_seed
-    table = grid_neighbours(rows, cols, spatial)
+    table = SquareGrid(rows, cols).neighbour_table(spatial)
     model = TopicModel(n_topics, vocabulary, table, alpha=0.2, beta=0.1, seed=model_seed, **kw)
     for cell in rng.permutation(rows * cols):
         model.add_cell(int(cell), rng.integers(0, vocabulary, rng.integers(*words_per_cell)))
@@ -85,7 +86,7 @@ def test_counts_stay_consistent_through_any_sequence_of_operations(
     rng = np.random.default_rng(seed)
     frozen_counts = rng.integers(0, 4, (vocabulary, n_topics)) if frozen else None
     model = TopicModel(
-        n_topics, vocabulary, grid_neighbours(rows, cols, spatial), alpha=0.5, beta=0.3, seed=seed,
+        n_topics, vocabulary, SquareGrid(rows, cols).neighbour_table(spatial), alpha=0.5, beta=0.3, seed=seed,
         frozen_counts=frozen_counts,
     )
     pending = list(rng.permutation(rows * cols))
@@ -107,7 +108,7 @@ def test_counts_stay_consistent_through_any_sequence_of_operations(
 
 
 def test_state_accessors_are_in_store_order_and_copies():
-    model = TopicModel(3, 10, grid_neighbours(2, 2), alpha=0.1, beta=0.1, seed=0)
+    model = TopicModel(3, 10, SquareGrid(2, 2).neighbour_table(), alpha=0.1, beta=0.1, seed=0)
     model.add_cell(3, [5, 6])
     model.add_cell(0, [1])
     model.add_cell(2, [])
@@ -124,8 +125,8 @@ def test_state_accessors_are_in_store_order_and_copies():
 
 
 def test_topic_labels_use_the_smallest_integer_type():
-    assert TopicModel(127, 5, grid_neighbours(1, 1), alpha=1, beta=1, seed=0).topic_dtype == np.int8
-    wide = TopicModel(200, 5, grid_neighbours(1, 2), alpha=1, beta=1, seed=0)
+    assert TopicModel(127, 5, SquareGrid(1, 1).neighbour_table(), alpha=1, beta=1, seed=0).topic_dtype == np.int8
+    wide = TopicModel(200, 5, SquareGrid(1, 2).neighbour_table(), alpha=1, beta=1, seed=0)
     assert wide.topic_dtype == np.int16
     wide.add_cell(0, [0, 1, 2, 3, 4] * 20)
     wide.add_cell(1, [4] * 30)
@@ -156,14 +157,14 @@ def test_ml_topics_default_to_every_observed_cell_in_cell_order():
 def test_log_likelihood_rises_as_the_sampler_fits_clustered_words():
     # two kinds of cells with disjoint words: refinement should separate them
     rng = np.random.default_rng(3)
-    model = TopicModel(2, 20, grid_neighbours(4, 4), alpha=0.1, beta=0.1, seed=3)
+    model = TopicModel(2, 20, SquareGrid(4, 4).neighbour_table(), alpha=0.1, beta=0.1, seed=3)
     for cell in range(16):
         base = 0 if cell % 4 < 2 else 10
         model.add_cell(cell, base + rng.integers(0, 10, 30))
     start = model.log_likelihood()
     model.refine_batch(30)
     assert model.log_likelihood() > start + 0.3
-    assert TopicModel(2, 20, grid_neighbours(4, 4), alpha=0.1, beta=0.1, seed=3).log_likelihood() == 0.0
+    assert TopicModel(2, 20, SquareGrid(4, 4).neighbour_table(), alpha=0.1, beta=0.1, seed=3).log_likelihood() == 0.0
 
 
 # --- realtime refinement --------------------------------------------------------------
@@ -173,7 +174,7 @@ def test_log_likelihood_rises_as_the_sampler_fits_clustered_words():
 def test_realtime_refines_the_newest_observation_with_probability_eta(eta):
     # earlier cells hold one word each, the newest none: every pick spends one unit of
     # the budget, words sampled = earlier picks, and each pick advances the counter
-    model = TopicModel(4, 5, grid_neighbours(1, 50, 0), alpha=0.1, beta=0.1, seed=4)
+    model = TopicModel(4, 5, SquareGrid(1, 50).neighbour_table(0), alpha=0.1, beta=0.1, seed=4)
     for cell in range(49):
         model.add_cell(cell, [cell % 5])
     model.add_cell(49, [])
@@ -188,7 +189,7 @@ def test_realtime_refines_the_newest_observation_with_probability_eta(eta):
 def test_realtime_picks_earlier_observations_uniformly():
     # earlier cells of 1, 100 and 10,000 words and an empty newest one: with eta = 0 and
     # a budget of 1, each call makes one pick, and the words sampled say which cell
-    model = TopicModel(2, 3, grid_neighbours(1, 4, 0), alpha=0.1, beta=0.1, seed=5)
+    model = TopicModel(2, 3, SquareGrid(1, 4).neighbour_table(0), alpha=0.1, beta=0.1, seed=5)
     sizes = [1, 100, 10_000]
     for cell, size in enumerate(sizes):
         model.add_cell(cell, np.zeros(size, int))
@@ -210,7 +211,7 @@ def test_realtime_respects_the_budget():
 
 
 def test_realtime_ends_even_when_no_reachable_cell_has_words():
-    model = TopicModel(3, 5, grid_neighbours(1, 3), alpha=0.1, beta=0.1, seed=0)
+    model = TopicModel(3, 5, SquareGrid(1, 3).neighbour_table(), alpha=0.1, beta=0.1, seed=0)
     assert model.refine_realtime(10, eta=0.5) == 0
     model.add_cell(0, [1, 2])
     model.add_cell(1, [])
@@ -219,14 +220,14 @@ def test_realtime_ends_even_when_no_reachable_cell_has_words():
     assert model.full_state()["counter"] == counter + 11  # ten empty picks spent the budget
     assert model.refine_realtime(10, eta=0.0) >= 10
     # a vanishing chance of picking the only cell with words still ends
-    model = TopicModel(3, 5, grid_neighbours(1, 3), alpha=0.1, beta=0.1, seed=0)
+    model = TopicModel(3, 5, SquareGrid(1, 3).neighbour_table(), alpha=0.1, beta=0.1, seed=0)
     model.add_cell(0, [])
     model.add_cell(1, [1, 2])
     assert model.refine_realtime(1000, eta=5e-324) == 0
 
 
 def test_realtime_refines_every_cell_of_the_picked_time():
-    model = TopicModel(3, 5, stream_neighbours(2, 2, 2), alpha=0.1, beta=0.1, seed=0)
+    model = TopicModel(3, 5, stream_neighbours(SquareGrid(2, 2), 2), alpha=0.1, beta=0.1, seed=0)
     for cell in range(8):
         model.add_cell(cell, [cell % 5] * (cell + 1), time=cell // 4)
     # eta = 1 picks the newest time only: cells 4..7 with 5 + 6 + 7 + 8 words
@@ -241,7 +242,7 @@ def test_frozen_refinement_leaves_word_topic_counts_unchanged_and_labels_a_map()
     learned.refine_batch(5)
     counts = learned.topic_word_counts()
     whole = TopicModel(
-        learned.n_topics, learned.vocabulary_size, grid_neighbours(4, 5), alpha=0.2, beta=0.1, seed=70,
+        learned.n_topics, learned.vocabulary_size, SquareGrid(4, 5).neighbour_table(), alpha=0.2, beta=0.1, seed=70,
         frozen_counts=counts,
     )
     assert whole.frozen
@@ -313,7 +314,7 @@ def test_batch_is_the_same_on_any_number_of_threads_with_many_cells_per_phase(fr
 def test_batch_on_a_single_observed_cell_is_the_same_on_two_threads():
     models = []
     for threads in (1, 2):
-        model = TopicModel(3, 5, grid_neighbours(2, 2), alpha=0.1, beta=0.1, seed=1)
+        model = TopicModel(3, 5, SquareGrid(2, 2).neighbour_table(), alpha=0.1, beta=0.1, seed=1)
         model.add_cell(2, [0, 1, 1, 4, 4, 4])
         model.refine_batch(4, threads=threads)
         assert_consistent(model)
@@ -350,7 +351,7 @@ def test_batch_on_a_single_observed_cell_is_the_same_on_two_threads():
     ],
 )
 def test_constructor_names_the_bad_parameter(kwargs, name):
-    arguments = {"n_topics": 4, "vocabulary_size": 10, "neighbours": grid_neighbours(2, 2)}
+    arguments = {"n_topics": 4, "vocabulary_size": 10, "neighbours": SquareGrid(2, 2).neighbour_table()}
     arguments.update(alpha=0.1, beta=0.1, seed=0)
     arguments.update(kwargs)
     positional = [arguments.pop(k) for k in ("n_topics", "vocabulary_size", "neighbours")]
@@ -359,7 +360,7 @@ def test_constructor_names_the_bad_parameter(kwargs, name):
 
 
 def test_methods_name_the_bad_parameter():
-    model = TopicModel(4, 10, grid_neighbours(2, 2), alpha=0.1, beta=0.1, seed=0)
+    model = TopicModel(4, 10, SquareGrid(2, 2).neighbour_table(), alpha=0.1, beta=0.1, seed=0)
     model.add_cell(0, [1, 2])
     cases = [
         (lambda: model.add_cell(0, [1]), "cell"),
@@ -391,32 +392,34 @@ def test_methods_name_the_bad_parameter():
 
 
 def test_grid_neighbours_columns_are_up_down_left_right():
-    table = grid_neighbours(2, 3)
+    table = SquareGrid(2, 3).neighbour_table()
     assert table.dtype == np.int32 and table.shape == (6, 4)
     np.testing.assert_array_equal(table[0], [-1, 3, -1, 1])
     np.testing.assert_array_equal(table[4], [1, -1, 3, 5])
-    assert grid_neighbours(3, 3, spatial=0).shape == (9, 0)
-    check_neighbours(grid_neighbours(5, 7))
+    assert SquareGrid(3, 3).neighbour_table(spatial=0).shape == (9, 0)
+    check_neighbours(SquareGrid(5, 7).neighbour_table())
 
 
 def test_stream_neighbours_add_previous_and_next_frame():
-    table = stream_neighbours(2, 2, 3)
+    table = stream_neighbours(SquareGrid(2, 2), 3)
     assert table.shape == (12, 6)
     np.testing.assert_array_equal(table[5], [-1, 7, 4, -1, 1, 9])
-    np.testing.assert_array_equal(stream_neighbours(2, 2, 3, temporal=0)[:4], grid_neighbours(2, 2))
-    np.testing.assert_array_equal(stream_neighbours(1, 1, 2, spatial=0), [[-1, 1], [0, -1]])
-    check_neighbours(stream_neighbours(3, 4, 5))
+    np.testing.assert_array_equal(
+        stream_neighbours(SquareGrid(2, 2), 3, temporal=0)[:4], SquareGrid(2, 2).neighbour_table()
+    )
+    np.testing.assert_array_equal(stream_neighbours(SquareGrid(1, 1), 2, spatial=0), [[-1, 1], [0, -1]])
+    check_neighbours(stream_neighbours(SquareGrid(3, 4), 5))
 
 
 @pytest.mark.parametrize(
     ("call", "name"),
     [
-        (lambda: grid_neighbours(0, 3), "rows"),
-        (lambda: grid_neighbours(3, -1), "cols"),
-        (lambda: grid_neighbours(3, 3, spatial=8), "spatial"),
-        (lambda: stream_neighbours(2, 2, 0), "n_frames"),
-        (lambda: stream_neighbours(2, 2, 2, temporal=1), "temporal"),
-        (lambda: stream_neighbours(2, 2, 2, spatial=True), "spatial"),
+        (lambda: SquareGrid(0, 3), "rows"),
+        (lambda: SquareGrid(3, -1), "cols"),
+        (lambda: SquareGrid(3, 3).neighbour_table(spatial=8), "spatial"),
+        (lambda: stream_neighbours(SquareGrid(2, 2), 0), "n_frames"),
+        (lambda: stream_neighbours(SquareGrid(2, 2), 2, temporal=1), "temporal"),
+        (lambda: stream_neighbours(SquareGrid(2, 2), 2, spatial=True), "spatial"),
     ],
 )
 def test_neighbour_tables_name_the_bad_parameter(call, name):

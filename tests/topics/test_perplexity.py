@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from naive import NaiveModel, topic_perplexity_naive, word_perplexity_naive
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.topics import TopicModel, grid_neighbours, take_snapshot, topic_perplexity, word_perplexity
+from curiosity_cli.topics import TopicModel, take_snapshot, topic_perplexity, word_perplexity
 
 
 def assert_same_state(a: TopicModel, b: TopicModel):
@@ -22,7 +23,7 @@ def assert_same_state(a: TopicModel, b: TopicModel):
 def path_model(seed=0, frozen=None):
     """A model of a 5-cell path on a 4 x 4 grid, refined a little."""
     rng = np.random.default_rng(seed)
-    model = TopicModel(5, 12, grid_neighbours(4, 4), alpha=0.3, beta=0.2, seed=seed, frozen_counts=frozen)
+    model = TopicModel(5, 12, SquareGrid(4, 4).neighbour_table(), alpha=0.3, beta=0.2, seed=seed, frozen_counts=frozen)
     for cell in [5, 6, 10, 9, 13]:
         model.add_cell(cell, rng.integers(0, 12, rng.integers(3, 15)))
     model.refine_batch(3)
@@ -44,7 +45,7 @@ def test_word_perplexity_is_eq_11():
 
 def test_word_perplexity_of_an_empty_model_is_the_vocabulary_size():
     # every word equally likely under uniform Φ: perplexity V
-    model = TopicModel(3, 40, grid_neighbours(2, 2), alpha=0.1, beta=0.1, seed=0)
+    model = TopicModel(3, 40, SquareGrid(2, 2).neighbour_table(), alpha=0.1, beta=0.1, seed=0)
     assert word_perplexity(model, [1, 2, 3]) == pytest.approx(40, rel=1e-12)
     assert topic_perplexity(model, [1, 2, 3], 0) == pytest.approx(3, rel=1e-12)
 
@@ -67,7 +68,7 @@ def test_topic_perplexity_matches_twin_and_eq_12_given_its_topics(cell, frozen):
 def test_topic_perplexity_draws_depend_on_the_cells_neighbourhood():
     # two topics with disjoint words, cells of topic 0 on the left; a candidate on the
     # left edge labels an ambiguous word (in both topics) as topic 0 far more often
-    model = TopicModel(2, 3, grid_neighbours(1, 6), alpha=0.01, beta=0.01, seed=3)
+    model = TopicModel(2, 3, SquareGrid(1, 6).neighbour_table(), alpha=0.01, beta=0.01, seed=3)
     for cell in range(6):
         model.add_cell(cell, [0] * 50 if cell < 3 else [1] * 50)
     model.refine_batch(20)
@@ -99,7 +100,7 @@ def test_perplexity_calls_do_not_change_the_model():
 
 
 def test_perplexities_are_at_least_one_and_higher_for_unseen_words():
-    model = TopicModel(4, 30, grid_neighbours(3, 3), alpha=0.1, beta=0.1, seed=5)
+    model = TopicModel(4, 30, SquareGrid(3, 3).neighbour_table(), alpha=0.1, beta=0.1, seed=5)
     for cell in range(5):
         model.add_cell(cell, np.arange(10).repeat(5))
     model.refine_batch(10)

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from test_model import assert_consistent, assert_same_state, build
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.errors import CuriosityError, ParameterError
-from curiosity_cli.topics import TopicModel, grid_neighbours, load_model, restore_snapshot, save_model, take_snapshot
+from curiosity_cli.topics import TopicModel, load_model, restore_snapshot, save_model, take_snapshot
 
 
 def test_snapshot_and_restore_round_trip_bit_identically():
@@ -51,7 +52,7 @@ def test_restore_rejects_a_snapshot_of_another_shape():
 
 
 def test_restore_also_undoes_added_cells():
-    model = TopicModel(3, 5, grid_neighbours(2, 2), alpha=0.1, beta=0.1, seed=0)
+    model = TopicModel(3, 5, SquareGrid(2, 2).neighbour_table(), alpha=0.1, beta=0.1, seed=0)
     model.add_cell(0, [1, 2])
     snap = take_snapshot(model)
     model.add_cell(1, [3] * 2000)  # grows the word arrays
@@ -83,7 +84,7 @@ def test_save_and_load_round_trip_bit_identically(tmp_path, frozen):
 
 
 def test_save_and_load_an_empty_model_with_hash_tuple(tmp_path):
-    table = grid_neighbours(2, 3, 0)
+    table = SquareGrid(2, 3).neighbour_table(0)
     model = TopicModel(4, 9, table, alpha=0.5, beta=0.25, seed=2**64 - 1, vocabulary_hashes=("x", "y"))
     save_model(model, tmp_path / "m.npz")
     loaded = load_model(tmp_path / "m.npz")

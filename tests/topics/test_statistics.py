@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
+from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.topics.model import TopicModel
-from curiosity_cli.topics.neighbours import grid_neighbours
 from curiosity_cli.topics.synthetic import planted_lda, planted_map
 
 # ---------------------------------------------------------------------------- helpers
@@ -124,7 +124,7 @@ def test_planted_lda_is_what_it_says():
 
 def test_planted_map_regions_are_contiguous_and_mix_one_or_two_topics():
     planted = planted_map(20, 30, 7, 100, 8, 15, seed=4)
-    rows, cols = planted.grid_shape
+    rows, cols = planted.grid.shape
     assert (rows, cols) == (20, 30) and planted.regions.shape == (600,)
     assert set(np.unique(planted.regions)) == set(range(7))
     grid = planted.regions.reshape(rows, cols)
@@ -164,7 +164,7 @@ def test_lda_recovers_planted_topics(sweep):
     corpus = planted_lda(**LDA, seed=11)
     k, v = LDA["n_topics"], LDA["vocabulary_size"]
     model = fill(
-        TopicModel(k, v, grid_neighbours(10, 20, spatial=0), alpha=LDA["alpha"], beta=LDA["beta"], seed=5), corpus
+        TopicModel(k, v, SquareGrid(10, 20).neighbour_table(spatial=0), alpha=LDA["alpha"], beta=LDA["beta"], seed=5), corpus
     )
     if sweep == "batch":
         model.refine_batch(SWEEPS)
@@ -213,7 +213,7 @@ def region_nmi(spatial: int, seed: int) -> float:
     planted = planted_map(**MAP, seed=seed)
     model = fill(
         TopicModel(
-            MAP["n_topics"], MAP["vocabulary_size"], grid_neighbours(MAP["rows"], MAP["cols"], spatial=spatial),
+            MAP["n_topics"], MAP["vocabulary_size"], SquareGrid(MAP["rows"], MAP["cols"]).neighbour_table(spatial=spatial),
             alpha=0.1, beta=0.1, seed=seed,
         ),
         planted,

@@ -17,7 +17,7 @@ def random_words(n=500, shape=(40, 50), seed=0):
 def test_words_are_grouped_by_cell_including_partial_border_cells():
     rows, cols, words = random_words()
     store = build_store(rows, cols, words, (40, 50), 16, TYPES, {"dataset": "t"})
-    assert store.grid_shape == (3, 4)  # 40 / 16 and 50 / 16 rounded up
+    assert store.grid.shape == (3, 4)  # 40 / 16 and 50 / 16 rounded up
     assert store.cell_start[-1] == len(rows) and store.cell_start[0] == 0
     for cell in range(store.n_cells):
         sl = slice(store.cell_start[cell], store.cell_start[cell + 1])
@@ -53,8 +53,8 @@ def test_store_round_trips(tmp_path):
     for name in ("rows", "cols", "words", "cell_start"):
         assert np.array_equal(getattr(again, name), getattr(store, name))
         assert getattr(again, name).dtype == getattr(store, name).dtype
-    assert (again.grid_shape, again.cell_width, again.types, again.params) == (
-        store.grid_shape, store.cell_width, store.types, store.params,
+    assert (again.grid.shape, again.grid.cell_width, again.types, again.params) == (
+        store.grid.shape, store.grid.cell_width, store.types, store.params,
     )
 
 
