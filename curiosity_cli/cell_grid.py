@@ -9,6 +9,10 @@ object, only the arrays it builds (the neighbour table).
 :class:`SquareGrid` is the paper's lattice: ``rows x cols`` square cells of
 ``cell_width`` pixels, numbered row-major, each with up to four neighbours.
 
+:func:`map_grid` is the one place that picks the lattice a map is cut into (the word
+store, the runs, the labels and the figures all take the map's grid from it, or from a
+store that recorded it); a camera frame's image cells (``drive``) are square by design.
+
 Another lattice (hexagonal cells, say) is another class here, with the same methods:
 
 - ``covering(image_shape, cell_width)`` (class method): the grid over an image, and
@@ -244,3 +248,21 @@ def _inside(name: str, pixels, size: int) -> np.ndarray:
     if pixels.size and (pixels.min() < 0 or pixels.max() >= size):
         raise ParameterError(f"{name}: got {pixels.min()} .. {pixels.max()}, expected 0 .. {size - 1}")
     return pixels
+
+
+def map_grid(image_shape: tuple[int, int], cell_width: int) -> SquareGrid:
+    """The cell grid of a map: ``cell_width`` cells over an image of ``image_shape`` pixels.
+
+    Parameters
+    ----------
+    image_shape : (int, int)
+        Image rows and columns in pixels.
+    cell_width : int
+        Cell side in pixels.
+
+    Returns
+    -------
+    SquareGrid
+        :meth:`SquareGrid.covering`: the paper's lattice.
+    """
+    return SquareGrid.covering(image_shape, cell_width)

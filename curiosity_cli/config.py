@@ -132,12 +132,15 @@ def _check_words(words: WordsConfig, raw: _Raw) -> None:
     if fill is None:
         return
     if words.orb_per_tile is None:
-        raise _invalid(raw, ('words', 'orb_fill_threshold'), f"got {fill}, expected null when "
-            "words.orb_per_tile is null (the top-up only fills tiles capped by orb_per_tile)"
+        raise _invalid(
+            raw, ("words", "orb_fill_threshold"),
+            f"got {fill}, expected null when words.orb_per_tile is null (the top-up only fills tiles capped by "
+            "orb_per_tile)",
         )
     if fill > words.orb_fast_threshold:
-        raise _invalid(raw, ('words', 'orb_fill_threshold'), f"got {fill}, expected an integer "
-            f"between 1 and words.orb_fast_threshold ({words.orb_fast_threshold})"
+        raise _invalid(
+            raw, ("words", "orb_fill_threshold"),
+            f"got {fill}, expected an integer between 1 and words.orb_fast_threshold ({words.orb_fast_threshold})",
         )
 
 
@@ -298,7 +301,9 @@ def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
 def _parse_override(text: str) -> tuple[tuple[str, ...], Any]:
     key, sep, value = text.partition("=")
     if not sep or not key.strip():
-        raise ConfigError(f"{OVERRIDES} {shown(text)}: expected KEY=VALUE, e.g. explore.restarts=5", parameter=OVERRIDES)
+        raise ConfigError(
+            f"{OVERRIDES} {shown(text)}: expected KEY=VALUE, e.g. explore.restarts=5", parameter=OVERRIDES
+        )
     key = key.strip()
     try:
         return tuple(key.split(".")), parse_yaml(value, f"{OVERRIDES} {shown(key)}")
@@ -491,7 +496,8 @@ def saved_yaml(config) -> str:
 
 def _invalid(raw: _Raw, keys: tuple, problem: str) -> ConfigError:
     """The error of the value at ``keys``, named by where it was set: a file, or the overrides."""
-    return ConfigError(f"{_where(raw, keys)}: {problem}", parameter=OVERRIDES if raw.origin(keys) == OVERRIDES else None)
+    parameter = OVERRIDES if raw.origin(keys) == OVERRIDES else None
+    return ConfigError(f"{_where(raw, keys)}: {problem}", parameter=parameter)
 
 
 def _where(raw: _Raw, keys: tuple) -> str:
@@ -553,8 +559,7 @@ def _build(cls, data: Any, keys: tuple, raw: _Raw):
     names = [f.name for f in dataclasses.fields(cls)]
     for key in data:
         if key not in names:
-            raise _invalid(raw, keys + (key,), f"unknown key; expected one of {', '.join(names)}"
-            )
+            raise _invalid(raw, keys + (key,), f"unknown key; expected one of {', '.join(names)}")
     values = {}
     for f in dataclasses.fields(cls):
         if f.name not in data:
@@ -650,22 +655,24 @@ def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:
         try:
             path = dataset_path(entry, relative_to)
         except ConfigError as exc:
-            raise _invalid(raw, ('datasets', i), f"{exc}") from None
+            raise _invalid(raw, ("datasets", i), str(exc)) from None
         datasets.append(entry if path.parent == DATASET_CONFIG_DIR else str(path))
     explore = config.explore
     for i, name in enumerate(explore.weight_functions):
         if name not in WALKER_NAMES:
-            raise _invalid(raw, ('explore', 'weight_functions', i), f"got {shown(name)}, "
-                f"expected one of {', '.join(WALKER_NAMES)}"
+            raise _invalid(
+                raw, ("explore", "weight_functions", i), f"got {shown(name)}, expected one of {', '.join(WALKER_NAMES)}"
             )
     if len(set(explore.weight_functions)) != len(explore.weight_functions):
-        raise _invalid(raw, ('explore', 'weight_functions'), f"got {list(explore.weight_functions)}, "
-            "expected each weight function once"
+        raise _invalid(
+            raw, ("explore", "weight_functions"), f"got {list(explore.weight_functions)}, expected each weight function once"
         )
     checkpoints = list(explore.checkpoints)
     if checkpoints != sorted(set(checkpoints)) or checkpoints[-1] > explore.path_length:
-        raise _invalid(raw, ('explore', 'checkpoints'), f"got {checkpoints}, expected increasing "
-            f"path lengths no longer than explore.path_length ({explore.path_length})"
+        raise _invalid(
+            raw, ("explore", "checkpoints"),
+            f"got {checkpoints}, expected increasing path lengths no longer than explore.path_length "
+            f"({explore.path_length})",
         )
     _check_drive(config.drive, raw)
     return dataclasses.replace(config, datasets=tuple(datasets))
@@ -681,4 +688,4 @@ def _check_drive(drive: DriveConfig, raw: _Raw) -> None:
     ]
     for ok, key, expected in rules:
         if not ok:
-            raise _invalid(raw, ('drive', key), f"got {getattr(drive, key)}, expected {expected}")
+            raise _invalid(raw, ("drive", key), f"got {getattr(drive, key)}, expected {expected}")

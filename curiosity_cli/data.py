@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.cell_grid import SquareGrid, map_grid
 from curiosity_cli.config import DatasetConfig, dataset_names, dataset_path, load_dataset_config
 from curiosity_cli.errors import ConfigError, DatasetError
 from curiosity_cli.files import display_path
@@ -63,7 +63,7 @@ class MapData:
     @property
     def grid(self) -> SquareGrid:
         """The map's cells: its ``cell_width`` grid over the image."""
-        return SquareGrid.covering(self.image.shape[:2], self.config.cell_width)
+        return map_grid(self.image.shape[:2], self.config.cell_width)
 
     @property
     def labels_digest(self) -> str | None:

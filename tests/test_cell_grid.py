@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.cell_grid import SquareGrid, map_grid
 from curiosity_cli.errors import ParameterError
 
 
@@ -139,3 +139,9 @@ def test_a_frame_is_cut_into_cells_of_near_equal_size():
 def test_bad_sizes_are_refused_by_name(make, name):
     with pytest.raises(ParameterError, match=name):
         make()
+
+
+def test_a_map_is_cut_into_the_papers_square_cells():
+    grid = map_grid((2500, 2500), 32)
+    assert isinstance(grid, SquareGrid) and grid == SquareGrid.covering((2500, 2500), 32)
+    assert (grid.shape, grid.n_cells) == ((79, 79), 6241)  # the paper's Table 1

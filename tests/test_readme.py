@@ -24,3 +24,9 @@ def test_ci_runs_the_readme_test_command_verbatim():
 def test_readme_picture_exists():
     (picture,) = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", README)
     assert (PROJECT_ROOT / picture).is_file()
+
+
+def test_readme_links_to_files_that_exist():
+    targets = [t for t in re.findall(r"\]\(([^)]+)\)", README) if "://" not in t]
+    assert "docs/ARCHITECTURE.md" in targets
+    assert all((PROJECT_ROOT / t.split("#")[0]).exists() for t in targets), targets

@@ -27,7 +27,7 @@ def list_datasets() -> None:
     A fetched map that is not cached yet is listed from its YAML; nothing is downloaded.
     """
     from curiosity_cli.config import dataset_path, load_dataset_config
-    from curiosity_cli.cell_grid import SquareGrid
+    from curiosity_cli.cell_grid import map_grid
     from curiosity_cli.data import dataset_names, load_map
     from curiosity_cli.fetched import is_fetched
 
@@ -40,7 +40,7 @@ def list_datasets() -> None:
             size, classes = m.image.shape[:2], str(len(m.legend))
         else:
             size, classes = config.size, "?"
-        grid = SquareGrid.covering(size, config.cell_width) if size is not None else None
+        grid = map_grid(size, config.cell_width) if size is not None else None
         rows.append(
             [
                 name,

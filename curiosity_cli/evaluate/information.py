@@ -149,9 +149,9 @@ def cell_class_pixels(labels: np.ndarray, cell_width: int, n_classes: int) -> np
         raise ParameterError(f"labels: got shape {labels.shape}, expected (H, W)")
     if labels.size and (labels.min() < 0 or labels.max() >= n_classes):
         raise ParameterError(f"labels: class ids {labels.min()} .. {labels.max()}, expected 0 .. {n_classes - 1}")
-    from curiosity_cli.cell_grid import SquareGrid
+    from curiosity_cli.cell_grid import map_grid
 
-    grid = SquareGrid.covering(labels.shape, cell_width)
+    grid = map_grid(labels.shape, cell_width)
     out = np.zeros((grid.n_cells, n_classes), np.int64)
     pixel_cols = np.arange(labels.shape[1])
     # one band of cell_width pixel rows at a time: no (H, W) int64 index array for a large map

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.cell_grid import SquareGrid, map_grid
 from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.files import atomic_path, display_path, open_npz
 
@@ -124,7 +124,7 @@ def build_store(
         Sorted by cell, then row, column and word id, so the order does not depend on
         the order the extractors produced words in.
     """
-    grid = SquareGrid.covering(image_shape, cell_width)
+    grid = map_grid(image_shape, cell_width)
     rows = np.asarray(rows, dtype=np.int64)
     cols = np.asarray(cols, dtype=np.int64)
     words = np.asarray(words, dtype=np.int64)
