@@ -251,18 +251,6 @@ def _inside(name: str, pixels, size: int) -> np.ndarray:
 
 
 def map_grid(image_shape: tuple[int, int], cell_width: int) -> SquareGrid:
-    """The cell grid of a map: ``cell_width`` cells over an image of ``image_shape`` pixels.
-
-    Parameters
-    ----------
-    image_shape : (int, int)
-        Image rows and columns in pixels.
-    cell_width : int
-        Cell side in pixels.
-
-    Returns
-    -------
-    SquareGrid
-        :meth:`SquareGrid.covering`: the paper's lattice.
-    """
+    """The cell grid of a map of ``image_shape`` pixels: the paper's square lattice,
+    :meth:`SquareGrid.covering` (its parameters)."""
     return SquareGrid.covering(image_shape, cell_width)
