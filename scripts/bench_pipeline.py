@@ -10,14 +10,16 @@ Part 1, one process (numba compiled first, untimed), on --map (default aerial-mo
 - the batch reference Z_b of each map of --config (label.batch_sweeps sweeps on
   --threads threads), once each.
 Part 2 (--full-grid): `curiosity reproduce CONFIG --jobs N` in a fresh process, words
-already cached, into --results-dir (a temporary folder unless given), for --config and,
-with --paper-maps, for the paper's own grid (its three embedded maps only): wall time,
-and the seconds per stage from its REPORT.md, beside the figures of commit 8f4a5d2 (the
-paper's grid with 4 frozen sweeps from a random start at every checkpoint, measured on a
-2-core machine: explore 4.6, label 7.9, all 12.7 minutes).
+already cached, into --results-dir (a temporary folder unless given), for the grids of
+--grids: ``paper``, the paper's own grid (the three embedded maps of --config x the
+paper's four weight functions), and ``config``, the whole of --config as it stands: wall
+time, and the seconds per stage from its REPORT.md, beside the figures of commit 8f4a5d2
+(the paper's grid with 4 frozen sweeps from a random start at every checkpoint, measured
+on a 2-core machine: explore 4.6, label 7.9, all 12.7 minutes). --grid-only skips part 1.
 
     python scripts/bench_pipeline.py                                   # part 1, a few minutes
-    python scripts/bench_pipeline.py --full-grid --paper-maps          # and both grids
+    python scripts/bench_pipeline.py --full-grid                       # and both grids
+    python scripts/bench_pipeline.py --full-grid --grid-only --grids paper
 
 Prints and never asserts: timings depend on the machine.
 """
@@ -42,6 +44,8 @@ from curiosity_cli.words.extract import extract_words
 
 #: Minutes per stage of the paper's grid at commit 8f4a5d2 (README, issue 14), 2 cores.
 BEFORE = {"explore": 4.6, "label": 7.9, "all": 12.7}
+#: The weight functions of the paper's own grid (its section 5.1).
+PAPER_WEIGHT_FUNCTIONS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity")
 
 
 def main() -> None:
@@ -51,12 +55,47 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--full-grid", action="store_true")
-    parser.add_argument("--paper-maps", action="store_true", help="with --full-grid: also the paper's grid of 3 embedded maps")
+    parser.add_argument("--grids", nargs="+", choices=["paper", "config"], default=["paper", "config"],
+                        help="with --full-grid: the paper's grid, the whole --config, or both")
+    parser.add_argument("--grid-only", action="store_true", help="with --full-grid: skip part 1")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--results-dir", type=Path, default=None)
     args = parser.parse_args()
 
     config = load_config(args.config)
+    if not (args.full_grid and args.grid_only):
+        part_one(config, args)
+
+    if args.full_grid:
+        embedded = [e for e in config.datasets if load_dataset_config(dataset_path(e)).fetch is None]
+        grids = {
+            "paper": ("the paper's grid: 3 embedded maps x the paper's 4 weight functions", args.config, [
+                "--set", f"datasets={embedded}", "--set", f"explore.weight_functions={list(PAPER_WEIGHT_FUNCTIONS)}",
+                "--set", f"name={config.name}-paper-grid",
+            ]),
+            "config": (f"{args.config.name} as it stands", args.config, []),
+        }
+        grids = [grids[name] for name in args.grids]
+        print(f"\nbefore (commit 8f4a5d2, paper's grid, 2 cores): explore {BEFORE['explore']} min, "
+              f"label {BEFORE['label']} min, all {BEFORE['all']} min")
+        for title, path, sets in grids:
+            with tempfile.TemporaryDirectory() as tmp:
+                results = args.results_dir or Path(tmp)
+                command = [sys.executable, "-m", "curiosity_cli", "reproduce", str(path), *sets, "--jobs", str(args.jobs),
+                           "--results-dir", str(results)]
+                began = time.perf_counter()
+                subprocess.run(command, check=True)
+                minutes = (time.perf_counter() - began) / 60
+                name = sets[-1].split("=", 1)[1] if sets else config.name
+                report = (results / name / "REPORT.md").read_text()
+            print(f"\n{title}, `curiosity reproduce {path.name} {' '.join(sets)} --jobs {args.jobs}`: "
+                  f"{minutes:.1f} min end to end")
+            times = report[report.index("## Time"):report.index("## Config")]
+            print(times.strip())
+
+
+def part_one(config, args) -> None:
+    """Labelling one run, three ways, and each map's batch reference (module docstring, part 1)."""
     map_data = load_map(args.map)
     store = extract_words(map_data, config.words).store
     label = config.label
@@ -105,29 +144,6 @@ def main() -> None:
         seconds = time.perf_counter() - began
         print(f"  {m.config.name:<16} {len(s.words):>10,} words {seconds:7.1f} s   log-likelihood "
               f"{trace[0]:.3f} -> {trace[len(trace) // 2]:.3f} -> {trace[-1]:.3f} (first, middle, last sweep)")
-
-    if args.full_grid:
-        grids = [("paper-grid.yaml as it stands", args.config, [])]
-        if args.paper_maps:
-            embedded = [e for e in config.datasets if load_dataset_config(dataset_path(e)).fetch is None]
-            grids.insert(0, ("the paper's grid: 3 embedded maps", args.config,
-                             ["--set", f"datasets={embedded}", "--set", f"name={config.name}-paper-maps"]))
-        print(f"\nbefore (commit 8f4a5d2, paper's grid, 2 cores): explore {BEFORE['explore']} min, "
-              f"label {BEFORE['label']} min, all {BEFORE['all']} min")
-        for title, path, sets in grids:
-            with tempfile.TemporaryDirectory() as tmp:
-                results = args.results_dir or Path(tmp)
-                command = [sys.executable, "-m", "curiosity_cli", "reproduce", str(path), *sets, "--jobs", str(args.jobs),
-                           "--results-dir", str(results)]
-                began = time.perf_counter()
-                subprocess.run(command, check=True)
-                minutes = (time.perf_counter() - began) / 60
-                name = sets[-1].split("=", 1)[1] if sets else config.name
-                report = (results / name / "REPORT.md").read_text()
-            print(f"\n{title}, `curiosity reproduce {path.name} {' '.join(sets)} --jobs {args.jobs}`: "
-                  f"{minutes:.1f} min end to end")
-            times = report[report.index("## Time"):report.index("## Config")]
-            print(times.strip())
 
 
 if __name__ == "__main__":
