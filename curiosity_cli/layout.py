@@ -13,6 +13,7 @@ are the models)::
         <table>.csv  mi.parquet  skipped.json                     (evaluate)
         figures/  REPORT.md                                       (plot, reproduce)
 
+:func:`experiment_root` says where an experiment of a name lives under a results folder,
 and the default places of experiment folders and of the word-store cache are
 :data:`DEFAULT_RESULTS` and :data:`DEFAULT_CACHE`.
 """
@@ -26,6 +27,11 @@ from pathlib import Path
 DEFAULT_RESULTS = Path("results")
 #: Where word stores are cached unless ``--cache-dir`` says otherwise.
 DEFAULT_CACHE = DEFAULT_RESULTS / "cache"
+
+
+def experiment_root(results_dir: Path, name: str) -> Path:
+    """Where the experiment ``name`` lives: ``results_dir/<name>``."""
+    return Path(results_dir) / name
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from curiosity_cli.config import ExperimentConfig
-from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder
+from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder, experiment_root
 
 
 def reproduce(
@@ -50,7 +50,7 @@ def reproduce(
         if on_done is not None:
             on_done()
 
-    folder = Path(results_dir) / config.name
+    folder = experiment_root(results_dir, config.name)
     seconds = {}
     started = time.perf_counter()
     stage("words and exploration set-up", 0)

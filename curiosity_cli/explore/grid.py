@@ -44,7 +44,7 @@ import numpy as np
 from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
 from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, check_inside, display_path
-from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder
+from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder, experiment_root
 from curiosity_cli.parallel import Workers
 from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of
 from curiosity_cli.seeds import name_key
@@ -230,7 +230,7 @@ def run_grid(
     started = time.perf_counter()
     owned = Workers(backend, scheduler, jobs) if workers is None else None  # checks the backend before any work
     workers = workers or owned
-    folder = Path(results_dir) / config.name
+    folder = experiment_root(results_dir, config.name)
     check_inside(folder, results_dir, "name")
     check_saved_config(folder, config)
     stores = prepare_stores(config, cache_dir)
