@@ -74,7 +74,7 @@ _RC = {
 }
 _MATCH_NOTE = (
     "Topic colours: $Z_b$'s topics by size, largest first; each $Z_p$ topic takes the colour of the $Z_b$ topic "
-    "it is matched to (one to one, greedily by pixel overlap); $Z_p$ topics left unmatched get colours $Z_b$ does not use."
+    "it is matched to (one to one, the matching that shares the most pixels); $Z_p$ topics left unmatched get colours $Z_b$ does not use."
 )
 
 
