@@ -19,7 +19,8 @@ class _ErrorMappingGroup(TyperGroup):
 
     An OS error (a full disk, a read-only folder, a file where a folder belongs) is the
     user's machine speaking, not a bug: it is reported by the path it concerns. A broken
-    pipe on stdout is left to click, which exits quietly.
+    pipe on stdout is left to click, which exits quietly, and an error raised while Ctrl-C
+    unwinds the command is left to :func:`main`, which reports the interrupt.
     """
 
     def invoke(self, ctx):
@@ -28,11 +29,15 @@ class _ErrorMappingGroup(TyperGroup):
         try:
             return super().invoke(ctx)
         except CuriosityError as exc:
+            if _unwinding_interrupt(exc):
+                raise
             typer.echo(f"Error: {_command_line_message(exc, self.get_command(ctx, ctx.invoked_subcommand or ''))}", err=True)
             raise typer.Exit(1) from None
         except BrokenPipeError:
             raise
         except OSError as exc:
+            if _unwinding_interrupt(exc):
+                raise
             typer.echo(f"Error: {os_error_message(exc)}", err=True)
             raise typer.Exit(1) from None
 
@@ -111,8 +116,25 @@ def main() -> None:
         signal.signal(signum, interrupt)
     try:
         app()
-    except (SystemExit, KeyboardInterrupt):  # typer turns KeyboardInterrupt into exit code 130
-        if not received:
+    except BaseException as error:  # typer turns KeyboardInterrupt into exit code 130
+        if not received or not (isinstance(error, SystemExit) or _unwinding_interrupt(error)):
             raise
         typer.echo("Interrupted; finished work is kept, run the same command again to resume.", err=True)
         sys.exit(128 + received[0])
+
+
+def _unwinding_interrupt(error: BaseException) -> bool:
+    """Whether ``error`` was raised while a KeyboardInterrupt (a signal, see :func:`main`) unwound the command.
+
+    A library's clean-up can raise its own error as the interrupt passes through it
+    (``np.savez_compressed`` closing a half-opened zip member raises ValueError), and
+    that error, not the interrupt, is what comes up; it is the interrupt's echo, not a
+    fault to report.
+    """
+    seen = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return False

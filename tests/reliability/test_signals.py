@@ -116,6 +116,40 @@ def test_sigterm_stops_the_workers_too_and_exits_143(exploring):
     assert run.remaining_workers() == []
 
 
+# A command whose clean-up fails as Ctrl-C passes through it, as np.savez_compressed
+# does when the signal lands between opening a zip member and writing it (CI saw it).
+_FAILING_CLEAN_UP = """
+import os, signal, sys
+from curiosity_cli.cli import app, main
+from curiosity_cli.errors import CuriosityError
+
+@app.command("clean-up-fails")
+def clean_up_fails(kind: str):
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        signal.pause()
+    finally:
+        raise {"value": ValueError("can't close the zip file"), "os": OSError(28, "No space left on device"),
+               "library": CuriosityError("the run's files were not written")}[kind]
+
+sys.argv = ["curiosity", "clean-up-fails", sys.argv[1]]
+main()
+"""
+
+
+@pytest.mark.parametrize("kind", ["value", "os", "library"])
+def test_an_error_from_clean_up_during_ctrl_c_is_still_the_one_interrupted_line(tmp_path, kind):
+    done = subprocess.run([sys.executable, "-c", _FAILING_CLEAN_UP, kind], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 130, done.stderr
+    assert done.stderr == INTERRUPTED + "\n"
+
+
+def test_an_error_without_a_signal_is_not_taken_for_an_interrupt():
+    script = _FAILING_CLEAN_UP.replace("os.kill(os.getpid(), signal.SIGINT)\n        signal.pause()", "pass")
+    done = subprocess.run([sys.executable, "-c", script, "value"], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1 and "ValueError: can't close the zip file" in done.stderr, done.stderr
+
+
 def test_the_workers_of_a_killed_command_exit_on_their_own(exploring):
     run = exploring()
     run.process.kill()
