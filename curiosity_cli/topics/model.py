@@ -323,12 +323,7 @@ class TopicModel:
         """
         from curiosity_cli.topics._gibbs_kernels import redraw_topics_kernel
 
-        self._seed = check_int("seed", seed, 0, 2**64 - 1)
-        cells = np.sort(self._order[: self._n_observed]).astype(np.int64)
-        self._order[: self._n_observed] = cells
-        self._times[: self._n_observed] = np.arange(cells.size)
-        self._ncz[:] = 0
-        self._ng[:] = 0
+        cells = self._forget_topics(seed)
         if not self._frozen:
             self._nwk[:] = 0
             self._nk[:] = 0
@@ -338,6 +333,44 @@ class TopicModel:
             self._ncz, self._ng, self._table, self._k, self._v * self._beta, self._key(), not self._frozen,
         )
         self._counter = cells.size
+
+    def place(self, seed: int) -> None:
+        """Every word of a frozen model drawn anew, given the words drawn before it; a new seed.
+
+        The observed cells in cell order, each cell's words in order: each word's topic
+        is drawn from eq. 5 with the counts of the words placed so far (its cell's and
+        its neighbours'), then counted, so the start already follows Φ and the
+        neighbourhoods, where :meth:`restart`'s uniform topics know neither. Cell ``c``
+        draws from stream ``(0, c)``; the counter is then 1. Otherwise as
+        :meth:`restart`: the state depends on the seed, the frozen counts and the cells'
+        words only.
+
+        Raises
+        ------
+        ParameterError
+            The model is not frozen, or ``seed`` outside 0 .. 2**64 - 1.
+        """
+        from curiosity_cli.topics._gibbs_kernels import place_frozen_kernel
+
+        if not self._frozen:
+            raise ParameterError("place: the model learns its word-topic counts; only a frozen model places its words (restart() this one)")
+        cells = self._forget_topics(seed)
+        place_frozen_kernel(
+            cells, self._cell_first, self._cell_count, self._words, self._topics, self._frozen_weights(),
+            self._ncz, self._ng, self._table, np.float32(self._alpha), self._key(), np.uint64(0),
+        )
+        self._counter = 1
+
+    def _forget_topics(self, seed: int) -> np.ndarray:
+        """Take a new seed, reorder the observed cells by cell with times 0, 1, ..., and zero
+        the cell counts; returns the cells, (n_observed,) int64, in that order."""
+        self._seed = check_int("seed", seed, 0, 2**64 - 1)
+        cells = np.sort(self._order[: self._n_observed]).astype(np.int64)
+        self._order[: self._n_observed] = cells
+        self._times[: self._n_observed] = np.arange(cells.size)
+        self._ncz[:] = 0
+        self._ng[:] = 0
+        return cells
 
     def set_frozen_counts(self, counts) -> None:
         """Replace the frozen word-topic counts (Φ) of a frozen model, keeping every topic.
@@ -471,9 +504,7 @@ class TopicModel:
 
         from curiosity_cli.topics._gibbs_kernels import refine_frozen_phase
 
-        beta = np.float32(self._beta)
-        phiw = _aligned_zeros(self._nwk.shape, np.float32)
-        np.multiply(self._nwk.astype(np.float32) + beta, self._inv, out=phiw)
+        phiw = self._frozen_weights()
         taken = _aligned_zeros(1, np.int64)
         alpha, key = np.float32(self._alpha), self._key()
 
@@ -494,6 +525,12 @@ class TopicModel:
                         other.result()
         self._counter += sweeps
         return sweeps * self._n_words
+
+    def _frozen_weights(self) -> np.ndarray:
+        """(V, Kp) float32: ``(float32(n_kw) + β) * inv[k]``, the factors of eq. 5 that frozen counts fix."""
+        phiw = _aligned_zeros(self._nwk.shape, np.float32)
+        np.multiply(self._nwk.astype(np.float32) + np.float32(self._beta), self._inv, out=phiw)
+        return phiw
 
     def _phases(self) -> list[np.ndarray]:
         """The phases of a batch sweep (see :meth:`refine_batch`): a list of (n,) int64 cell arrays."""

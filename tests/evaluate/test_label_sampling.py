@@ -63,8 +63,8 @@ def test_a_phi_of_the_wrong_shape_is_refused():
         label_with_phi(store, np.zeros((3, 8)), small_config().model, sweeps=1, seed=0)
 
 
-def test_a_path_labelling_is_the_exact_sampler_cold_then_warm():
-    from naive import NaiveModel, ml_topics_naive, refine_batch_naive, restart_naive
+def test_a_path_labelling_is_the_exact_sampler_placed_then_warm():
+    from naive import NaiveModel, ml_topics_naive, place_naive, refine_batch_naive
 
     from curiosity_cli.evaluate.label_sampling import PathLabeller
 
@@ -78,7 +78,7 @@ def test_a_path_labelling_is_the_exact_sampler_cold_then_warm():
     twin = NaiveModel.of(labeller._model)
     cells = sorted(twin.topics)
     twin.frozen = phis[0]
-    restart_naive(twin, 21)
+    place_naive(twin, 21)
     refine_batch_naive(twin, 3)
     expected = [ml_topics_naive(twin, cells)]
     for phi in phis[1:]:
@@ -113,6 +113,6 @@ def test_warm_started_checkpoints_reach_the_labels_of_a_long_cold_chain():
         return mutual_information(contingency(words, truth, model.topics, 3))
 
     cold = [np.mean([mi(labeller.label_path([phi], seed=s, sweeps=64, warm_sweeps=None)[0]) for s in range(4)]) for phi in phis]
-    warm = np.mean([[mi(w) for w in labeller.label_path(phis, seed=s, sweeps=16, warm_sweeps=4)] for s in range(4)], axis=0)
+    warm = np.mean([[mi(w) for w in labeller.label_path(phis, seed=s, sweeps=64, warm_sweeps=4)] for s in range(4)], axis=0)
     assert cold[-1] > 1.0  # the planted regions are found
     np.testing.assert_allclose(warm, cold, atol=0.02)
