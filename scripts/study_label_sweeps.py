@@ -1,33 +1,31 @@
-"""How many frozen-Φ Gibbs sweeps Z_p needs, from a placed start and warm-started.
+"""How many frozen-Φ Gibbs sweeps Z_p needs: chains from two starts, and warm-started chains.
 
 Labels a sample of the runs of an explored and labelled experiment (it needs the runs and
 each map's batch reference Z_b) with the sampler of ``curiosity label``, and prints the
 mean MI of Z_p against the human labels (Z_h) and against Z_b:
 
-- placed: each checkpoint from a placed start (``TopicModel.place``, what ``label``
-  does), after 0, 1, 2, 4, ... --max-sweeps sweeps (one chain per checkpoint: its labels
-  after s sweeps are exactly those of an s-sweep labelling with the same seed);
-- uniform: the same chains from uniformly random topics, the far-off start;
-- warm: a path's checkpoints in order, the first placed with --first sweeps, each later
-  one starting from the topics the one before left, with w sweeps, for each w of --warm;
-- down (with --down S): the same from the longest path to the shortest, the longest
-  placed with S sweeps.
+- uniform: each checkpoint from uniformly random topics (what ``label`` does), after 0,
+  1, 2, 4, ... --max-sweeps sweeps (one chain per checkpoint: its labels after s sweeps
+  are exactly those of an s-sweep labelling with the same seed);
+- placed: the same chains from a placed start (``TopicModel.place``: each word drawn
+  from eq. 5 given the words placed before it). Its labels begin smooth where the
+  uniform ones begin as noise, so the two come at the chain's fixed point from opposite
+  sides;
+- warm: a path's checkpoints in order, the first from random topics with --first
+  sweeps, each later one starting from the topics the one before left, with w sweeps,
+  for each w of --warm (what ``label`` does with ``label.warm_sweeps``).
 
-Two checks, against Z_h and against Z_b, on every map and path length:
+The reference for every schedule is the mean of the two starts after --max-sweeps
+sweeps, paired by run and length. Two checks, against Z_h and against Z_b, on every map
+and path length, each passed by a mean within --tolerance bits (default 0.01) or within
+twice the standard error over runs (the chains' own noise):
 
-- doubling: a schedule is converged when doubling its sweeps changes the mean MI by less
-  than --tolerance bits (default 0.01), or by less than twice the standard error of that
-  change over runs (the chain's own noise);
-- two starts: chains from the placed and the uniform start must end at the same mean MI
-  (within the same bounds) after --max-sweeps. A chain that forgets its start slowly
-  passes the doubling check long before it gets there; the two starts come at the fixed
-  point from opposite sides.
+- two starts: the uniform and the placed chain end at the same mean MI;
+- doubling: doubling a schedule's sweeps no longer changes its mean MI. A chain that
+  forgets its start slowly passes this one long before it gets there, which is why the
+  two-start check comes first.
 
-The script prints the smallest sweeps that pass the doubling check per schedule, the gap
-between the two starts, and how far each warm schedule's mean lies from the placed
-reference (--max-sweeps) beside the run-to-run standard error of that difference.
-
-    python scripts/study_label_sweeps.py results/paper-grid --restarts 2
+    python scripts/study_label_sweeps.py results/paper-grid --restarts 1 --max-sweeps 256 --first 256 --warm 8 16 32
 """
 
 from __future__ import annotations
@@ -83,7 +81,7 @@ def study_map(folder: Path, config, dataset: str, entry: str, store_file: Path, 
                 if args.cold_lengths and length not in args.cold_lengths:
                     continue
                 for schedule in args.starts:
-                    labeller.start(phi, seed + j, uniform=schedule == "uniform")
+                    labeller.start(phi, seed + j, placed=schedule == "placed")
                     done = 0
                     for s in record:
                         labeller.sweep(s - done, args.threads)
@@ -93,13 +91,10 @@ def study_map(folder: Path, config, dataset: str, entry: str, store_file: Path, 
                                      "mi_human": human_mi, "mi_batch": batch_mi})
             for w in args.warm:
                 labels = labeller.label_path(phis, seed=seed, sweeps=args.first, warm_sweeps=w, threads=args.threads)
-                if args.down is not None:
-                    down = labeller.label_path(phis[::-1], seed=seed, sweeps=args.down, warm_sweeps=w, threads=args.threads)
-                for schedule, chain in [("warm", labels)] + ([("down", down[::-1])] if args.down is not None else []):
-                    for length, words in zip(lengths, chain):
-                        human_mi, batch_mi = mi_pair(store, words, shape, human, n_classes, batch, k)
-                        rows.append({**base, "path_length": length, "schedule": schedule, "sweeps": w,
-                                     "mi_human": human_mi, "mi_batch": batch_mi})
+                for length, words in zip(lengths, labels):
+                    human_mi, batch_mi = mi_pair(store, words, shape, human, n_classes, batch, k)
+                    rows.append({**base, "path_length": length, "schedule": "warm", "sweeps": w,
+                                 "mi_human": human_mi, "mi_batch": batch_mi})
             print(f"  {dataset} {weight} restart {restart}: done", flush=True)
     return rows
 
@@ -142,11 +137,10 @@ def main() -> None:
     parser.add_argument("--restarts", type=int, default=2, help="restarts per weight function (0 .. N-1)")
     parser.add_argument("--max-sweeps", type=int, default=64)
     parser.add_argument("--cold-lengths", type=int, nargs="*", help="path lengths of the placed and uniform chains; default every checkpoint")
-    parser.add_argument("--starts", nargs="*", choices=["placed", "uniform"], default=["placed", "uniform"],
+    parser.add_argument("--starts", nargs="*", choices=["uniform", "placed"], default=["uniform", "placed"],
                         help="starts of the chains of each checkpoint")
     parser.add_argument("--first", type=int, default=64, help="sweeps of the first checkpoint of a warm chain")
     parser.add_argument("--warm", type=int, nargs="+", default=[1, 2, 4, 8, 16])
-    parser.add_argument("--down", type=int, help="also warm chains from the longest path down, the longest with this many sweeps")
     parser.add_argument("--tolerance", type=float, default=0.01)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--cache-dir", type=Path, default=DEFAULT_CACHE)
@@ -174,35 +168,38 @@ def main() -> None:
         print(means.pivot_table(index=["dataset", "path_length"], columns=["schedule", "sweeps"], values=against).round(3).to_string())
 
     def chain(schedule, sweeps):
-        return table[(table.schedule == schedule) & (table.sweeps == sweeps)].set_index(RUN_KEYS)
+        return table[(table.schedule == schedule) & (table.sweeps == sweeps)].set_index(RUN_KEYS)[["mi_human", "mi_batch"]]
 
-    reference = chain("placed", args.max_sweeps)
-    for schedule in ("warm", "down"):
-        if schedule not in set(table.schedule):
-            continue
-        print(f"\n{schedule} minus placed after {args.max_sweeps} sweeps, mean over runs and lengths (standard error), bits")
-        for w in args.warm:
-            for against in ("mi_human", "mi_batch"):
-                diff = (chain(schedule, w)[against] - reference[against]).dropna()
-                by_map = diff.groupby(level="dataset").agg(["mean", "sem"])
-                text = ", ".join(f"{d} {r['mean']:+.4f} ({r['sem']:.4f})" for d, r in by_map.iterrows())
-                print(f"  w = {w:>2} {against}: {text}")
+    def flag(mean, sem):
+        return "*" if abs(mean) >= max(args.tolerance, 2 * sem) else ""
 
-    print(f"\nrule: doubling the sweeps changes the mean MI by < {args.tolerance} bits, or by less than twice its "
-          "standard error over runs, against Z_h and Z_b, every map and length")
+    ends = {start: chain(start, args.max_sweeps) for start in args.starts}
+    reference = sum(ends.values()) / len(ends)
+    if len(ends) == 2:
+        print(f"\ntwo starts: uniform minus placed after {args.max_sweeps} sweeps, mean (standard error) over runs, bits; "
+              f"'*' where it is >= {args.tolerance} and >= twice its standard error")
+        gap = (ends["uniform"] - ends["placed"]).dropna().groupby(level=["dataset", "path_length"]).agg(["mean", "sem"])
+        for (dataset, length), r in gap.iterrows():
+            print(f"  {dataset:>16} {length:>4}: " + ", ".join(
+                f"{a} {r[(a, 'mean')]:+.3f} ({r[(a, 'sem')]:.3f}){flag(r[(a, 'mean')], r[(a, 'sem')])}" for a in ("mi_human", "mi_batch")))
+
+    print(f"\neach schedule minus the mean of the {' and '.join(args.starts)} chains after {args.max_sweeps} sweeps, "
+          "mean over runs, bits (against Z_h / against Z_b); '*' as above")
+    columns = {}
+    for schedule, block in table.groupby("schedule"):
+        for s in sorted(block.sweeps.unique()):
+            diff = (chain(schedule, s) - reference).dropna().groupby(level=["dataset", "path_length"]).agg(["mean", "sem"])
+            columns[f"{schedule} {s}"] = [
+                "/".join(f"{r[(a, 'mean')]:+.3f}{flag(r[(a, 'mean')], r[(a, 'sem')])}" for a in ("mi_human", "mi_batch"))
+                for _, r in diff.iterrows()]
+            index = diff.index
+    print(pd.DataFrame(columns, index=index).to_string())
+
+    print(f"\ndoubling: the mean MI changes by < {args.tolerance} bits, or by less than twice its standard error over "
+          "runs, against Z_h and Z_b, every map and length")
     for schedule, (found, worst) in smallest_converged(table, args.tolerance).items():
         steps = ", ".join(f"{s}->{2 * s}: {c:+.4f} ({e:.4f})" for s, (c, e) in worst.items())
-        print(f"  {schedule}: smallest converged sweeps {found}; largest change per doubling {steps}")
-    if {"placed", "uniform"} <= set(table.schedule):
-        print(f"\ntwo starts: uniform minus placed after {args.max_sweeps} sweeps, mean (standard error), bits; "
-              f"'*' where it is >= {args.tolerance} and >= twice its standard error")
-        for against in ("mi_human", "mi_batch"):
-            diff = (chain("uniform", args.max_sweeps)[against] - reference[against]).dropna()
-            by = diff.groupby(level=["dataset", "path_length"]).agg(["mean", "sem"])
-            text = ", ".join(
-                f"{d} {n}: {r['mean']:+.3f} ({r['sem']:.3f}){'*' if abs(r['mean']) >= max(args.tolerance, 2 * r['sem']) else ''}"
-                for (d, n), r in by.iterrows())
-            print(f"  {against}: {text}")
+        print(f"  {schedule}: smallest passing sweeps {found}; largest change per doubling {steps}")
     print(f"\n{time.perf_counter() - started:.0f} s; wrote {out}")
     print(json.dumps({"maps": sorted(table.dataset.unique()), "restarts": args.restarts}))
 

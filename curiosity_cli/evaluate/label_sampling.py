@@ -6,13 +6,12 @@ tasks of the ``label`` stage, are in :mod:`~curiosity_cli.evaluate.label_stage`.
 Paper section 5.1: "Each of these exploration runs returned a topic model Φ_p, which we
 then used to compute topic labels for each pixel in the map in batch mode."
 
-- **Z_p** (:func:`label_with_phi`): every word of the map gets a topic from a few Gibbs
+- **Z_p** (:func:`label_with_phi`): every word of the map gets a topic from Gibbs
   sweeps with the word-topic counts frozen to Φ_p (cells and neighbourhoods as in the
-  model), then its maximum-likelihood topic. The sweeps start from a placed start
-  (:meth:`~curiosity_cli.topics.model.TopicModel.place`: each word drawn from eq. 5
-  given the words placed before it), not from uniformly random topics: from random
-  topics the chain of a short path's nearly flat Φ_p needs hundreds of sweeps to
-  forget its start (``scripts/study_label_sweeps.py``).
+  model, initial topics uniformly random), then its maximum-likelihood topic. How many
+  sweeps that takes is measured by ``scripts/study_label_sweeps.py``, which also runs
+  chains from a placed start (:meth:`PathLabeller.start`) to see whether two far-apart
+  starts have met.
 - **Z_b** (:func:`batch_labels`): a model learned on all words of the map with random
   access (Algorithm 1), then each word's maximum-likelihood topic.
 - **Pixels** (:func:`pixel_labels`): the per-pixel texton words carry the labels; with a
@@ -80,16 +79,20 @@ class PathLabeller:
         zeros = np.zeros((store.vocabulary_size, model.topics), np.int32)
         self._model = whole_map_model(store, model, 0, frozen_counts=zeros)
 
-    def start(self, phi: np.ndarray, seed: int, *, uniform: bool = False) -> None:
-        """Freeze Φ to ``phi`` (V, K) and place every word anew (stream ``seed``), see
-        :meth:`~curiosity_cli.topics.model.TopicModel.place`; with ``uniform``, give every
-        word a uniformly random topic instead: the far-off start a convergence study
-        checks the placed start against."""
+    def start(self, phi: np.ndarray, seed: int, *, placed: bool = False) -> None:
+        """Freeze Φ to ``phi`` (V, K) and give every word a uniformly random topic (stream ``seed``).
+
+        With ``placed``, draw each word from eq. 5 given the words drawn before it
+        instead (:meth:`~curiosity_cli.topics.model.TopicModel.place`): a start on the
+        far side of the chain's fixed point from the uniform one (its labels begin
+        smooth, the uniform ones begin as noise), which a convergence study checks the
+        uniform start against.
+        """
         self.switch(phi)
-        if uniform:
-            self._model.restart(seed % 2**64)
-        else:
+        if placed:
             self._model.place(seed % 2**64)
+        else:
+            self._model.restart(seed % 2**64)
 
     def switch(self, phi: np.ndarray) -> None:
         """Freeze Φ to ``phi`` (V, K), keeping every word's topic (a warm start)."""
@@ -110,13 +113,13 @@ class PathLabeller:
     ) -> list[np.ndarray]:
         """Z_p of every word for each of a path's checkpoints, in order.
 
-        The first checkpoint starts from placed topics (:meth:`start`, stream ``seed``)
-        and gets ``sweeps`` frozen-Φ Gibbs sweeps; each later one starts from the topics
-        the one before left and gets ``warm_sweeps`` (a warm start), or, with
-        ``warm_sweeps`` None, is placed again (stream ``seed + j`` for the ``j``-th) and
-        gets ``sweeps``. Each label is the word's maximum-likelihood topic after its
-        sweeps. Every step is the exact sampler of eq. 5; only the starting topics
-        differ.
+        The first checkpoint starts from uniformly random topics (stream ``seed``) and
+        gets ``sweeps`` frozen-Φ Gibbs sweeps; each later one starts from the topics the
+        one before left and gets ``warm_sweeps`` (a warm start), or, with
+        ``warm_sweeps`` None, starts from random topics again (stream ``seed + j`` for
+        the ``j``-th) with ``sweeps``. Each label is the word's maximum-likelihood topic
+        after its sweeps. Every step is the exact sampler of eq. 5; only the starting
+        topics differ.
 
         Parameters
         ----------
@@ -157,7 +160,7 @@ def label_with_phi(store: WordStore, phi: np.ndarray, model: ModelConfig, *, swe
     model : ModelConfig
         K, α, β and the neighbourhood.
     sweeps : int
-        Frozen-Φ Gibbs sweeps from placed topics before the maximum-likelihood topics.
+        Frozen-Φ Gibbs sweeps from uniformly random topics before the maximum-likelihood topics.
     seed : int
         Of the initial topics and the sweeps.
     threads : int

@@ -63,7 +63,7 @@ if TYPE_CHECKING:
     from curiosity_cli.words.map_stores import StoreInfo
     from curiosity_cli.words.store import WordStore
 
-LABEL_FORMAT = 2
+LABEL_FORMAT = 1
 #: A human class counts as found in a visited cell when it covers at least this share
 #: (percent) of the cell's pixels: enough to be seen, not a sliver at the cell's edge.
 CLASS_SHARE_PERCENT = 10

@@ -20,6 +20,18 @@ from curiosity_cli.topics._sampler import (
 _CHUNK = 4
 
 
+@njit(inline="always")
+def count_word(cell, k, ncz, ng, table):
+    """Count one more word of ``cell`` at topic ``k``: in its cell counts and in the
+    neighbourhood sums of the cell and of every neighbour."""
+    ncz[cell, k] += 1
+    ng[cell, k] += 1
+    for j in range(table.shape[1]):
+        d = table[cell, j]
+        if d >= 0:
+            ng[d, k] += 1
+
+
 @njit
 def add_cell_kernel(
     cell, first, count, words, topics, nwk, nk, inv, ncz, ng, table, n_topics, vbeta, key, counter, update_phi
@@ -30,17 +42,11 @@ def add_cell_kernel(
     ``nk`` and ``inv`` alone (a model whose word-topic counts are frozen).
     """
     state = stream_start(key, counter, cell)
-    width = table.shape[1]
     for i in range(first, first + count):
         state, bits = next_state(state)
         k = below(bits, n_topics)
         topics[i] = k
-        ncz[cell, k] += 1
-        ng[cell, k] += 1
-        for j in range(width):
-            d = table[cell, j]
-            if d >= 0:
-                ng[d, k] += 1
+        count_word(cell, k, ncz, ng, table)
         if update_phi:
             nwk[words[i], k] += 1
             nk[k] += 1
@@ -71,7 +77,6 @@ def place_frozen_kernel(cells, cell_first, cell_count, words, topics, phiw, ncz,
     over the counts of the words already placed, then counted. ``phiw`` is that
     function's.
     """
-    width = table.shape[1]
     p = np.zeros(phiw.shape[1], np.float32)
     for j in range(cells.shape[0]):
         cell = cells[j]
@@ -83,12 +88,7 @@ def place_frozen_kernel(cells, cell_first, cell_count, words, topics, phiw, ncz,
             state, bits = next_state(state)
             k = lane_draw(p, bits)
             topics[i] = k
-            ncz[cell, k] += 1
-            ng[cell, k] += 1
-            for jj in range(width):
-                d = table[cell, jj]
-                if d >= 0:
-                    ng[d, k] += 1
+            count_word(cell, k, ncz, ng, table)
 
 
 @njit

@@ -63,8 +63,8 @@ def test_a_phi_of_the_wrong_shape_is_refused():
         label_with_phi(store, np.zeros((3, 8)), small_config().model, sweeps=1, seed=0)
 
 
-def test_a_path_labelling_is_the_exact_sampler_placed_then_warm():
-    from naive import NaiveModel, ml_topics_naive, place_naive, refine_batch_naive
+def test_a_path_labelling_is_the_exact_sampler_cold_then_warm():
+    from naive import NaiveModel, ml_topics_naive, refine_batch_naive, restart_naive
 
     from curiosity_cli.evaluate.label_sampling import PathLabeller
 
@@ -78,7 +78,7 @@ def test_a_path_labelling_is_the_exact_sampler_placed_then_warm():
     twin = NaiveModel.of(labeller._model)
     cells = sorted(twin.topics)
     twin.frozen = phis[0]
-    place_naive(twin, 21)
+    restart_naive(twin, 21)
     refine_batch_naive(twin, 3)
     expected = [ml_topics_naive(twin, cells)]
     for phi in phis[1:]:

@@ -178,8 +178,8 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
     assert report.splitlines()[4] == "## Verdict"  # right after the title and one line of context
     assert "- own: no verdict: no 80-step checkpoint." in report
     # the labels' settings (the --set above) and the convergence rule are stated
-    assert "Labels: a run's first checkpoint's Z_p is 2 frozen-Φ Gibbs sweeps from a placed start" in report
-    assert "doubling the sweeps changes the mean MI" in report
+    assert "Labels: a run's first checkpoint's Z_p is 2 frozen-Φ Gibbs sweeps from random topics" in report
+    assert "end at the same mean MI" in report
     for section in ("## Paired effect sizes", "## Classes found at 12 steps", "## Mean recall at 12 steps"):
         assert section in report
     maps = pd.read_csv(folder / "maps.csv")
