@@ -89,6 +89,24 @@ def test_a_path_labelling_is_the_exact_sampler_cold_then_warm():
         np.testing.assert_array_equal(a, b)
 
 
+def test_the_placed_start_of_a_convergence_study_is_the_models_place():
+    from naive import NaiveModel, place_naive
+
+    from curiosity_cli.evaluate.label_sampling import PathLabeller
+
+    store = synthetic_store(np.arange(12).reshape(3, 4) % 3, words_per_cell=10)
+    model = dataclasses.replace(small_config().model, topics=5)
+    phi = np.random.default_rng(8).integers(0, 6, (store.vocabulary_size, 5))
+    labeller = PathLabeller(store, model)
+    labeller.start(phi, 2**64 + 9, placed=True)  # seeds wrap as label's path seeds do
+    twin = NaiveModel.of(labeller._model)
+    place_naive(twin, 9)
+    for cell in twin.order:
+        np.testing.assert_array_equal(labeller._model.topics([cell]), twin.topics[cell])
+    labeller.start(phi, 9)
+    assert not np.array_equal(labeller._model.topics(), np.concatenate([twin.topics[c] for c in twin.order]))
+
+
 def test_warm_started_checkpoints_reach_the_labels_of_a_long_cold_chain():
     from curiosity_cli.evaluate.information import contingency, mutual_information
     from curiosity_cli.evaluate.label_sampling import PathLabeller
