@@ -365,7 +365,7 @@ class TopicModel:
         """Take a new seed, reorder the observed cells by cell with times 0, 1, ..., and zero
         the cell counts; returns the cells, (n_observed,) int64, in that order."""
         self._seed = check_int("seed", seed, 0, 2**64 - 1)
-        cells = np.sort(self._order[: self._n_observed]).astype(np.int64)
+        cells = self._cells_in_order()
         self._order[: self._n_observed] = cells
         self._times[: self._n_observed] = np.arange(cells.size)
         self._ncz[:] = 0
@@ -534,7 +534,7 @@ class TopicModel:
 
     def _phases(self) -> list[np.ndarray]:
         """The phases of a batch sweep (see :meth:`refine_batch`): a list of (n,) int64 cell arrays."""
-        cells = np.sort(self._order[: self._n_observed]).astype(np.int64)
+        cells = self._cells_in_order()
         colour = self._colouring()[cells]
         most = -(-cells.size // _PHASES)
         phases = []
@@ -781,8 +781,12 @@ class TopicModel:
 
     def _cells_or_all(self, cells) -> np.ndarray:
         if cells is None:
-            return np.sort(self._order[: self._n_observed]).astype(np.int64)
+            return self._cells_in_order()
         return self._check_cells(cells, "cells")
+
+    def _cells_in_order(self) -> np.ndarray:
+        """(n_observed,) int64: the observed cells, by cell index."""
+        return np.sort(self._order[: self._n_observed]).astype(np.int64)
 
     def _in_order(self, per_word: np.ndarray, cells: np.ndarray) -> np.ndarray:
         """The entries of a per-word array for ``cells`` (observed), cell after cell."""
