@@ -138,7 +138,7 @@ main()
 
 
 @pytest.mark.parametrize("kind", ["value", "os", "library"])
-def test_an_error_from_clean_up_during_ctrl_c_is_still_the_one_interrupted_line(tmp_path, kind):
+def test_an_error_from_clean_up_during_ctrl_c_is_still_the_one_interrupted_line(kind):
     done = subprocess.run([sys.executable, "-c", _FAILING_CLEAN_UP, kind], capture_output=True, text=True, timeout=60)
     assert done.returncode == 130, done.stderr
     assert done.stderr == INTERRUPTED + "\n"

@@ -11,10 +11,10 @@ from naive import (
     distance2_colouring_naive,
     lane_draw,
     lda_gibbs_naive,
-    place_naive,
     log_likelihood_naive,
     mix,
     ml_topics_naive,
+    place_naive,
     recount,
     refine_batch_naive,
     refine_cells_naive,
@@ -291,7 +291,7 @@ def test_placed_start_and_the_sweeps_after_it_match_twin(threads):
 
 
 def test_a_placed_start_depends_on_the_seed_and_counts_only():
-    model, frozen = frozen_model(19, **BATCH_GRID)
+    model = frozen_model(19, **BATCH_GRID)[0]
     model.refine_batch(3)
     model.place(5)
     again = frozen_model(19, **BATCH_GRID)[0]
