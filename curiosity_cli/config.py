@@ -164,6 +164,7 @@ class LabelConfig:
 
     sweeps: int = _spec(min=1)
     warm_sweeps: int | None = _spec(min=1)
+    check_restarts: int = _spec(min=0)
     batch_sweeps: int = _spec(min=1)
 
 

@@ -43,6 +43,7 @@ from curiosity_cli.data import load_map
 from curiosity_cli.evaluate.information import contingency, mutual_information
 from curiosity_cli.evaluate.label_sampling import PathLabeller, pixel_labels
 from curiosity_cli.evaluate.label_stage import path_seed
+from curiosity_cli.evaluate.tables import CONVERGENCE_TOLERANCE, within_noise
 from curiosity_cli.explore.runs import read_run
 from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
 from curiosity_cli.words.store import load_store
@@ -99,12 +100,6 @@ def study_map(folder: Path, config, dataset: str, entry: str, store_file: Path, 
     return rows
 
 
-def passes(mean: float, sem: float, tolerance: float) -> bool:
-    """The study's one bound: a mean difference within ``tolerance`` bits, or within twice
-    its standard error over runs (not told apart from the chains' own noise)."""
-    return abs(mean) < tolerance or abs(mean) < 2 * sem
-
-
 def smallest_converged(table: pd.DataFrame, tolerance: float):
     """Per schedule: the smallest sweeps s whose doubling changes the mean MI by less than
     ``tolerance`` or by less than twice the change's standard error over runs (so is not
@@ -123,7 +118,7 @@ def smallest_converged(table: pd.DataFrame, tolerance: float):
             for against in ("mi_human", "mi_batch"):
                 change = (b[against] - a[against]).dropna().groupby(level=["dataset", "path_length"]).agg(["mean", "sem"])
                 for _, row in change.iterrows():
-                    if not passes(row["mean"], row["sem"], tolerance):
+                    if not within_noise(row["mean"], row["sem"], tolerance):
                         passed = False
                     if abs(row["mean"]) > abs(largest[0]):
                         largest = (row["mean"], row["sem"])
@@ -147,7 +142,7 @@ def main() -> None:
                         help="starts of the chains of each checkpoint")
     parser.add_argument("--first", type=int, default=64, help="sweeps of the first checkpoint of a warm chain")
     parser.add_argument("--warm", type=int, nargs="+", default=[1, 2, 4, 8, 16])
-    parser.add_argument("--tolerance", type=float, default=0.01)
+    parser.add_argument("--tolerance", type=float, default=CONVERGENCE_TOLERANCE)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--cache-dir", type=Path, default=DEFAULT_CACHE)
     parser.add_argument("--out", type=Path, help="CSV of every labelling (default EXPERIMENT/label-sweeps.csv)")
@@ -177,7 +172,7 @@ def main() -> None:
         return table[(table.schedule == schedule) & (table.sweeps == sweeps)].set_index(RUN_KEYS)[["mi_human", "mi_batch"]]
 
     def flag(mean, sem):
-        return "" if passes(mean, sem, args.tolerance) else "*"
+        return "" if within_noise(mean, sem, args.tolerance) else "*"
 
     ends = {start: chain(start, args.max_sweeps) for start in args.starts}
     reference = sum(ends.values()) / len(ends)

@@ -8,10 +8,11 @@ then used to compute topic labels for each pixel in the map in batch mode."
 
 - **Z_p** (:func:`label_with_phi`): every word of the map gets a topic from Gibbs
   sweeps with the word-topic counts frozen to Φ_p (cells and neighbourhoods as in the
-  model, initial topics uniformly random), then its maximum-likelihood topic. How many
-  sweeps that takes is measured by ``scripts/study_label_sweeps.py``, which also runs
-  chains from a placed start (:meth:`PathLabeller.start`) to see whether two far-apart
-  starts have met.
+  model, initial topics uniformly random), then its maximum-likelihood topic. Whether
+  the sweeps were enough is checked by a second chain from a placed start
+  (:meth:`PathLabeller.start`): ``label`` runs one for the restarts below
+  ``label.check_restarts``, and ``scripts/study_label_sweeps.py`` runs both for every
+  schedule it compares.
 - **Z_b** (:func:`batch_labels`): a model learned on all words of the map with random
   access (Algorithm 1), then each word's maximum-likelihood topic.
 - **Pixels** (:func:`pixel_labels`): the per-pixel texton words carry the labels; with a
@@ -109,7 +110,8 @@ class PathLabeller:
         return self._model.ml_topics().astype(np.int16)
 
     def label_path(
-        self, phis: list[np.ndarray], *, seed: int, sweeps: int, warm_sweeps: int | None, threads: int = 1
+        self, phis: list[np.ndarray], *, seed: int, sweeps: int, warm_sweeps: int | None, threads: int = 1,
+        placed: bool = False,
     ) -> list[np.ndarray]:
         """Z_p of every word for each of a path's checkpoints, in order.
 
@@ -119,7 +121,8 @@ class PathLabeller:
         ``warm_sweeps`` None, starts from random topics again (stream ``seed + j`` for
         the ``j``-th) with ``sweeps``. Each label is the word's maximum-likelihood topic
         after its sweeps. Every step is the exact sampler of eq. 5; only the starting
-        topics differ.
+        topics differ. With ``placed``, every start is a placed one instead
+        (:meth:`start`): the second chain of a convergence check.
 
         Parameters
         ----------
@@ -131,6 +134,8 @@ class PathLabeller:
             As above; ``warm_sweeps`` None for a cold start at every checkpoint.
         threads : int
             For the sweeps (the result does not depend on it).
+        placed : bool
+            Start from placed topics instead of uniformly random ones.
 
         Returns
         -------
@@ -143,7 +148,7 @@ class PathLabeller:
                 self.switch(phi)
                 self.sweep(warm_sweeps, threads)
             else:
-                self.start(phi, seed + j)
+                self.start(phi, seed + j, placed=placed)
                 self.sweep(sweeps, threads)
             out.append(self.labels())
         return out

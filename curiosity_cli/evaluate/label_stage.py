@@ -11,7 +11,11 @@ Written under ``results/<experiment>/``:
   length (``lengths``), the contingency tables of Z_p against the human labels
   (``human``, (n, K, C) int64, absent for a map without labels) and against Z_b
   (``batch``, (n, K, K) int64), and ``meta`` (JSON). Tables rather than label maps: MI and
-  NMI follow from them exactly, in kilobytes instead of a megabyte per checkpoint. For a
+  NMI follow from them exactly, in kilobytes instead of a megabyte per checkpoint. A
+  restart below ``label.check_restarts`` also has ``placed_batch`` and ``placed_human``:
+  the same tables for a second labelling chain from a placed start
+  (:meth:`~curiosity_cli.evaluate.label_sampling.PathLabeller.start`), which evaluation
+  compares with the first to check that Z_p has forgotten its start. For a
   map with human labels also ``class_first_step`` ((C,) int32): the step at which the
   path first stood in a cell where class ``h`` covers at least ``CLASS_SHARE_PERCENT`` %
   of the pixels, -1 if never (the classes found within ``n`` steps are those below
@@ -71,8 +75,12 @@ CLASS_SHARE_PERCENT = 10
 NOT_LABELLED = "not labelled yet"
 #: Path lengths whose Z_p maps are kept for restart 0 (besides the last checkpoint).
 EXAMPLE_LENGTHS = (80,)
-# tags that keep the label streams apart from the runs' own
-_PATH_TAG, _BATCH_TAG = 1, 2
+#: How the second labelling chain of a checked run (``label.check_restarts``) starts,
+#: and the prefix of its tables' names in the run's label file.
+SECOND_START = "placed"
+SECOND_PREFIX = f"{SECOND_START}_"
+# tags that keep the label streams apart from the runs' own and from each other
+_PATH_TAG, _BATCH_TAG, _SECOND_CHAIN_TAG = 1, 2, 3
 #: Whole-map labelling models a thread keeps, one per map.
 _LABELLERS_PER_THREAD = 4
 _per_thread = threading.local()
@@ -149,12 +157,21 @@ def batch_recipe(config: ExperimentConfig, info: StoreInfo) -> Recipe:
     })
 
 
-def label_recipe(run: str, batch: str, config: ExperimentConfig, human: str | None) -> Recipe:
-    """What a run's label file depends on: the digests of its ``run`` and ``batch`` reference, and of the ``human`` labels."""
-    return Recipe({
-        "format": LABEL_FORMAT, "run": run, "batch": batch, "label": to_dict(config.label),
+def label_recipe(run: str, batch: str, config: ExperimentConfig, human: str | None, restart: int) -> Recipe:
+    """What a run's label file depends on: the digests of its ``run`` and ``batch`` reference, and of the ``human`` labels.
+
+    ``label.check_restarts`` enters only as whether this ``restart`` is checked (a
+    second chain), so changing it relabels only the runs it adds or drops.
+    """
+    label = to_dict(config.label)
+    checked = restart < label.pop("check_restarts")
+    inputs = {
+        "format": LABEL_FORMAT, "run": run, "batch": batch, "label": label,
         "class_share_percent": CLASS_SHARE_PERCENT, "human": human,
-    })
+    }
+    if checked:
+        inputs["second_start"] = SECOND_START
+    return Recipe(inputs)
 
 
 #: What every label file's ``meta`` names: a file without one of these is corrupt.
@@ -225,9 +242,10 @@ def _write_batch(path: Path, recipe: Recipe, labels, word_labels, trace, seconds
             )
 
 
-def path_seed(run_seed) -> int:
-    """The seed of a run's labelling chain, from the run's own seed entropy."""
-    return int(np.random.SeedSequence((*run_seed, _PATH_TAG)).generate_state(1, np.uint64)[0])
+def path_seed(run_seed, *, second: bool = False) -> int:
+    """The seed of a run's labelling chain (``second``: of its checking chain), from the run's own seed entropy."""
+    tag = _SECOND_CHAIN_TAG if second else _PATH_TAG
+    return int(np.random.SeedSequence((*run_seed, tag)).generate_state(1, np.uint64)[0])
 
 
 def _labeller(store_path: str, model, store: WordStore) -> PathLabeller:
@@ -274,7 +292,8 @@ def label_run(run: RunInputs, inputs: MapInputs, arrays: MapArrays, config: Expe
     """Z_p of every checkpoint of one run, as contingency tables; ``(tables, examples, meta)``.
 
     ``inputs`` names the map's files, ``arrays`` holds their contents; the run was made
-    from the map's current word store (:func:`label_experiment` checks).
+    from the map's current word store (:func:`label_experiment` checks). A restart below
+    ``label.check_restarts`` is labelled a second time, from a placed start.
     """
     from curiosity_cli.evaluate.information import contingency
     from curiosity_cli.evaluate.label_sampling import pixel_labels
@@ -282,32 +301,36 @@ def label_run(run: RunInputs, inputs: MapInputs, arrays: MapArrays, config: Expe
     store, human, n_classes, batch, shape, cell_classes = arrays
     k = config.model.topics
     lengths = run.meta["checkpoints"]
-    tables = {"human": [], "batch": []}
+    phis = [run.phi(n) for n in lengths]
+    labeller = _labeller(inputs.store_path, config.model, store)
+    chains = {"": dict(seed=path_seed(run.meta["seed"]))}  # array-name prefix: how the chain starts
+    if run.meta["restart"] < config.label.check_restarts:
+        chains[SECOND_PREFIX] = dict(seed=path_seed(run.meta["seed"], second=True), placed=True)
+    out = {"lengths": np.array(lengths, np.int32)}
     examples = {}
-    last = lengths[-1]
-    labels = _labeller(inputs.store_path, config.model, store).label_path(
-        [run.phi(n) for n in lengths], seed=path_seed(run.meta["seed"]), sweeps=config.label.sweeps,
-        warm_sweeps=config.label.warm_sweeps, threads=threads,
-    )
-    for length, words in zip(lengths, labels):
-        pixels = pixel_labels(store, words, shape)
-        if human is not None:
-            tables["human"].append(contingency(pixels, human, k, n_classes))
-        tables["batch"].append(contingency(pixels, batch, k, k))
-        if run.meta["restart"] == 0 and (length in EXAMPLE_LENGTHS or length == last):
-            examples[length] = pixels
+    for prefix, start in chains.items():
+        labels = labeller.label_path(
+            phis, sweeps=config.label.sweeps, warm_sweeps=config.label.warm_sweeps, threads=threads, **start,
+        )
+        tables = {"human": [], "batch": []}
+        for length, words in zip(lengths, labels):
+            pixels = pixel_labels(store, words, shape)
+            if human is not None:
+                tables["human"].append(contingency(pixels, human, k, n_classes))
+            tables["batch"].append(contingency(pixels, batch, k, k))
+            if not prefix and run.meta["restart"] == 0 and (length in EXAMPLE_LENGTHS or length == lengths[-1]):
+                examples[length] = pixels
+        out.update({prefix + name: np.stack(table) for name, table in tables.items() if table})
     meta = {
         "format": LABEL_FORMAT, "dataset": inputs.name, "weight_function": run.meta["weight_function"],
         "restart": run.meta["restart"], "run_seed": run.meta["seed"], "store": run.meta["store"],
         "vocabulary_hashes": run.meta["vocabulary_hashes"], "sweeps": config.label.sweeps,
         "warm_sweeps": config.label.warm_sweeps, "batch": Path(inputs.batch_path).name,
     }
-    arrays = {"lengths": np.array(lengths, np.int32), "batch": np.stack(tables["batch"])}
-    if tables["human"]:
-        arrays["human"] = np.stack(tables["human"])
-        arrays["class_first_step"] = class_first_steps(run.path, cell_classes, store, inputs.store_path)
+    if human is not None:
+        out["class_first_step"] = class_first_steps(run.path, cell_classes, store, inputs.store_path)
         meta["class_share_percent"] = CLASS_SHARE_PERCENT
-    return arrays, examples, meta
+    return out, examples, meta
 
 
 def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordStore, store_path: str) -> np.ndarray:
@@ -457,7 +480,9 @@ def label_experiment(
         skipped, tasks, recipes, relabelled = 0, [], {}, []
         for run in finished:
             info = by_name[run.meta["dataset"]]
-            recipe = label_recipe(recorded_digest(run.meta), batch_recipes[info.name].digest, config, info.labels_digest)
+            recipe = label_recipe(
+                recorded_digest(run.meta), batch_recipes[info.name].digest, config, info.labels_digest, run.meta["restart"]
+            )
             path = layout.label_file(info.name, run.meta["weight_function"], run.meta["restart"])
             change = None if force else label_changes(path, recipe)
             if not force and change is None:

@@ -8,7 +8,10 @@ Written under ``results/<experiment>/``:
   :data:`~curiosity_cli.evaluate.label_stage.CLASS_SHARE_PERCENT`) of ``classes`` (the map's
   classes with pixels); ``mean_recall`` (mean per-class recall of Z_p under the best
   one-to-one topic-to-class matching, :func:`~curiosity_cli.evaluate.information.matched_recall`);
-  and the run's ``seed``. The human columns are NaN for a map without labels.
+  and the run's ``seed``. The human columns are NaN for a map without labels. A run
+  labelled twice (``label.check_restarts``) has ``placed_mi_human`` and
+  ``placed_mi_batch``: the MI of its second chain, from a placed start (NaN for the
+  others).
 - ``classes.csv``: one row per run, length and human class with pixels: the class's
   ``pixels``, whether the path ``found`` it, the ``first_step`` it did (NaN if never),
   its matched ``topic`` (-1 if none) and ``recall``; ``class_name`` from the map's legend
@@ -24,6 +27,11 @@ Written under ``results/<experiment>/``:
 - ``effects.csv``: per (dataset, path length, against), topic perplexity's MI minus each
   other walker's, paired by restart: the mean difference with its 95 % Student-t
   confidence interval, beside the Wilcoxon p of ``tests.csv``.
+- ``convergence.csv``: per (dataset, path length, against), over the runs labelled
+  twice: ``n``, the mean MI of each chain (``uniform``, ``placed``), their mean
+  difference with its standard error, and whether it is within
+  :data:`CONVERGENCE_TOLERANCE` bits or twice its standard error (``converged``): the
+  check that Z_p has forgotten how its chain started (:func:`label_convergence`).
 - ``headline.csv``: per dataset, topic-perplexity MI at 80 steps (against human labels,
   or against Z_b on a map without them: ``against``) divided by the next best walker's,
   the paired difference to it with its CI and Wilcoxon p, whether topic perplexity beats
@@ -58,6 +66,8 @@ HEADLINE_WEIGHT = "topic-perplexity"
 #: Significance level of "beats": a higher mean and a paired Wilcoxon p below it.
 ALPHA = 0.05
 CONFIDENCE = 0.95
+#: Bits within which two labelling chains from far-apart starts count as having met.
+CONVERGENCE_TOLERANCE = 0.01
 _KEYS = ["dataset", "weight_function", "restart", "path_length"]
 
 
@@ -78,6 +88,7 @@ class Evaluation:
     effects: pd.DataFrame | None = None
     classes: pd.DataFrame | None = None
     classes_summary: pd.DataFrame | None = None
+    convergence: pd.DataFrame | None = None
 
 
 @dataclass(frozen=True)
@@ -97,12 +108,13 @@ def _read_label_file(path: Path) -> tuple[dict, dict]:
     CorruptFileError
         The file cannot be read, or lacks an array a label file has.
     """
-    from curiosity_cli.evaluate.label_stage import LABEL_META_KEYS, read_meta
+    from curiosity_cli.evaluate.label_stage import LABEL_META_KEYS, SECOND_PREFIX, read_meta
 
     with open_npz(path) as npz:
         meta = read_meta(npz, LABEL_META_KEYS)
         arrays = {"lengths": npz["lengths"], "batch": npz["batch"]}  # a file without them is corrupt (KeyError)
-        arrays.update({name: npz[name] for name in ("human", "class_first_step") if name in npz.files})
+        optional = ("human", "class_first_step", SECOND_PREFIX + "human", SECOND_PREFIX + "batch")
+        arrays.update({name: npz[name] for name in optional if name in npz.files})
     return meta, arrays
 
 
@@ -114,8 +126,9 @@ def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None
     meta : dict
         The label file's ``meta``.
     arrays : dict of str to ndarray
-        ``lengths`` (n,), ``batch`` (n, K, K), optionally ``human`` (n, K, C) and
-        ``class_first_step`` (C,), as :func:`~curiosity_cli.evaluate.label_stage.label_run` writes them.
+        ``lengths`` (n,), ``batch`` (n, K, K), optionally ``human`` (n, K, C),
+        ``class_first_step`` (C,) and the second chain's ``placed_batch`` and
+        ``placed_human``, as :func:`~curiosity_cli.evaluate.label_stage.label_run` writes them.
     class_names : dict of int to str, optional
         The map's legend.
 
@@ -129,6 +142,7 @@ def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None
         mutual_information,
         normalised_mutual_information,
     )
+    from curiosity_cli.evaluate.label_stage import SECOND_PREFIX
 
     human, batch = arrays.get("human"), arrays["batch"]
     first = arrays.get("class_first_step")
@@ -141,7 +155,11 @@ def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None
             "nmi_human": np.nan, "nmi_batch": normalised_mutual_information(batch[i]),
             "classes_found": np.nan, "classes": np.nan, "mean_recall": np.nan,
             "seed": " ".join(map(str, meta["run_seed"])),
+            "placed_mi_human": np.nan, "placed_mi_batch": np.nan,
         }
+        for against in ("human", "batch"):
+            if SECOND_PREFIX + against in arrays:
+                row[f"placed_mi_{against}"] = mutual_information(arrays[SECOND_PREFIX + against][i])
         if human is not None:
             pixels = human[i].sum(axis=0)
             present = np.flatnonzero(pixels > 0)
@@ -221,7 +239,8 @@ def label_rows(folder: Path) -> LabelRows:
         if meta["dataset"] not in batch_digests:
             batch_digests[meta["dataset"]] = _batch_digest(layout.batch(meta["dataset"]))
         human = recorded_inputs(meta).get("human")  # evaluating reads no map: taken as recorded
-        change = label_recipe(recorded_digest(run.meta), batch_digests[meta["dataset"]], config, human).changes(meta)
+        recipe = label_recipe(recorded_digest(run.meta), batch_digests[meta["dataset"]], config, human, meta["restart"])
+        change = recipe.changes(meta)
         if change is not None:
             otherwise.append(f"{display_path(path)}: {change}")
             continue
@@ -306,6 +325,36 @@ def summarise_classes(mi):
     ).dropna(subset=["value"])
     grouped = long.groupby(["dataset", "weight_function", "path_length", "measure", "classes"], sort=False)["value"]
     return pd.DataFrame(_mean_ci(grouped), columns=columns)
+
+
+def within_noise(mean: float, sem: float, tolerance: float = CONVERGENCE_TOLERANCE) -> bool:
+    """Whether a mean difference in bits is within ``tolerance``, or within twice its
+    standard error over runs (not told apart from the chains' own noise)."""
+    return bool(abs(mean) < tolerance or abs(mean) < 2 * sem)
+
+
+def label_convergence(mi):
+    """The two-start check of Z_p, per (dataset, path length, against), over the runs labelled twice.
+
+    ``uniform`` and ``placed`` are the mean MI of the runs' two chains, ``difference``
+    the mean of uniform minus placed, ``sem`` its standard error (NaN for one run), and
+    ``converged`` :func:`within_noise`. Empty when no run was labelled twice.
+    """
+    import pandas as pd
+
+    columns = ["dataset", "path_length", "against", "n", "uniform", "placed", "difference", "sem", "converged"]
+    rows = []
+    for against in ("human", "batch"):
+        pairs = mi.dropna(subset=[f"mi_{against}", f"placed_mi_{against}"])
+        for (dataset, length), block in pairs.groupby(["dataset", "path_length"], sort=False):
+            diff = (block[f"mi_{against}"] - block[f"placed_mi_{against}"]).to_numpy()
+            sem = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else np.nan
+            rows.append({
+                "dataset": dataset, "path_length": int(length), "against": against, "n": int(diff.size),
+                "uniform": float(block[f"mi_{against}"].mean()), "placed": float(block[f"placed_mi_{against}"].mean()),
+                "difference": float(diff.mean()), "sem": sem, "converged": within_noise(diff.mean(), np.nan_to_num(sem)),
+            })
+    return pd.DataFrame(rows, columns=columns)
 
 
 def walkers_only(mi):
@@ -536,9 +585,10 @@ def evaluate_experiment(folder: Path) -> Evaluation:
     maps = read_maps(folder)
     stands_in_for = {} if maps is None else {r.dataset: r.stands_in_for for r in maps.itertuples() if isinstance(r.stands_in_for, str)}
     top = headline(summary, tests, stands_in_for, effects)
+    convergence = label_convergence(mi)
     tables = {
         "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
-        "effects": effects, "headline": top,
+        "effects": effects, "headline": top, "convergence": convergence,
     }
     for name, table in tables.items():
         with atomic_path(ExperimentFolder(folder).table(name)) as tmp:
@@ -547,4 +597,4 @@ def evaluate_experiment(folder: Path) -> Evaluation:
         mi.to_parquet(tmp, index=False)
     with atomic_path(ExperimentFolder(folder).skipped) as tmp:
         tmp.write_text(json.dumps(skipped, indent=2) + "\n")
-    return Evaluation(mi, summary, tests, top, skipped, maps, effects, classes, classes_summary)
+    return Evaluation(mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence)

@@ -200,7 +200,8 @@ def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
     assert bullets[2].startswith("- unlabelled (MI against Z_b")
     sections = [line for line in lines if line.startswith("## ")]
     assert sections == [
-        "## Verdict", "## Headline", "## Mutual information (bits, mean ± 95 % CI half-width)", "## Paired effect sizes",
+        "## Verdict", "## Headline", "## Mutual information (bits, mean ± 95 % CI half-width)", "## Label convergence",
+        "## Paired effect sizes",
         "## Classes found at 80 steps", "## Mean recall at 80 steps", "## Significance", "## Left out", "## Figures",
         "## Time", "## Config",
     ]

@@ -52,8 +52,17 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     mi = pd.read_csv(folder / "mi.csv")
     assert list(mi.columns) == [
         "dataset", "weight_function", "restart", "path_length", "mi_human", "mi_batch", "nmi_human", "nmi_batch",
-        "classes_found", "classes", "mean_recall", "seed",
+        "classes_found", "classes", "mean_recall", "seed", "placed_mi_human", "placed_mi_batch",
     ]
+    # label.check_restarts = 1: restart 0 of each walker is labelled a second time, from a placed start
+    checked = mi["restart"] == 0
+    assert mi.loc[checked, ["placed_mi_human", "placed_mi_batch"]].notna().all().all()
+    assert mi.loc[~checked, ["placed_mi_human", "placed_mi_batch"]].isna().all().all()
+    convergence = pd.read_csv(folder / "convergence.csv")
+    assert len(convergence) == 2 * 2 and (convergence["n"] == 4).all()
+    row = convergence[(convergence.path_length == 12) & (convergence.against == "batch")]
+    pairs = mi[checked & (mi.path_length == 12)]
+    assert row["difference"].item() == pytest.approx((pairs["mi_batch"] - pairs["placed_mi_batch"]).mean())
     assert len(mi) == 16 and (mi[["mi_human", "mi_batch"]] >= 0).all().all()
     assert (mi[["nmi_human", "nmi_batch"]] <= 1).all().all()
     pd.testing.assert_frame_equal(pd.read_parquet(folder / "mi.parquet"), mi, check_dtype=False)
@@ -69,6 +78,28 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     assert evaluation.headline.empty, "no 80-step checkpoint, so no headline ratio"
     effects = pd.read_csv(folder / "effects.csv")
     assert len(effects) == 2 * 2 * 3 and (effects["ci_low"] <= effects["mean_difference"]).all()
+
+
+def test_the_second_chain_of_a_checked_run_leaves_its_labels_as_they_were(own_map, tmp_path):
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
+    path = ExperimentFolder(folder).label_file("own", "word-perplexity", 0)
+    with np.load(path) as npz:
+        checked = {name: npz[name] for name in npz.files if name != "meta"}
+    assert {"placed_batch", "placed_human"} <= set(checked)
+    with np.load(ExperimentFolder(folder).label_file("own", "word-perplexity", 1)) as npz:
+        assert not {"placed_batch", "placed_human"} & set(npz.files)
+
+    unchecked = dataclasses.replace(config, label=dataclasses.replace(config.label, check_restarts=0))
+    done = label_experiment(unchecked, folder, cache_dir=tmp_path / "cache", jobs=1)
+    assert (done["labelled"], done["skipped"]) == (4, 4)  # only the checked runs are labelled again
+    assert len(done["relabelled"]) == 4 and all("second_start was 'placed', now absent" in r for r in done["relabelled"])
+    with np.load(path) as npz:
+        assert "placed_batch" not in npz.files
+        for name in ("lengths", "batch", "human", "class_first_step"):
+            np.testing.assert_array_equal(npz[name], checked[name])
+    # the two chains start far apart, and differ after the same sweeps
+    assert not np.array_equal(checked["placed_batch"], checked["batch"])
 
 
 def test_labels_record_the_classes_each_path_found(own_map, tmp_path):
