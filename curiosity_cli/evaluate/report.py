@@ -185,8 +185,8 @@ def _convergence_section(convergence, config: ExperimentConfig) -> list[str]:
     if convergence is None or convergence.empty:
         return lines + [
             f"Not checked: no run was labelled twice (label.check_restarts is {checked}). With "
-            "`--set label.check_restarts=1`, `curiosity label` labels restart 0 of every map and walker a second "
-            "time from a placed start and this section compares the two chains.", "",
+            "`--set label.check_restarts=1`, `curiosity label` labels restart 0 of every map and weight function a "
+            "second time from a placed start and this section compares the two chains.", "",
         ]
     failed = convergence[~convergence["converged"].astype(bool)]
     restarts = "restart 0" if checked == 1 else f"restarts 0-{checked - 1}"
@@ -194,9 +194,9 @@ def _convergence_section(convergence, config: ExperimentConfig) -> list[str]:
         f"Z_p counts as converged when two chains over the same Φ_p, one from uniformly random topics (the labels "
         f"above) and one from a placed start (each word drawn from eq. 5 given the words placed before it, so the "
         f"labels begin smooth instead of as noise), end at the same mean MI: within {CONVERGENCE_TOLERANCE} bits "
-        f"or within twice the standard error of their difference. {restarts.capitalize()} of every map and walker "
-        f"{'was' if checked == 1 else 'were'} labelled both ways with the schedule above. Cells: uniform minus placed, mean ± standard error "
-        f"over those runs; ✗ where the two have not met.", "",
+        f"or within twice the standard error of their difference. {restarts.capitalize()} of every map and weight "
+        f"function {'was' if checked == 1 else 'were'} labelled both ways with the schedule above. Cells: uniform "
+        "minus placed, mean ± standard error over those runs; ✗ where the two have not met.", "",
     ]
     lengths = sorted(convergence["path_length"].unique())
     lines += [

@@ -58,7 +58,7 @@ def test_the_report_marks_the_cells_where_the_chains_have_not_met():
     text = "\n".join(_convergence_section(table, config))
     assert "| a | Z_h | +0.100 ± 0.008 ✗ | +0.005 ± 0.012 |" in text
     assert "| a | Z_b | +0.000 ± 0.000 | +0.000 ± 0.000 |" in text
-    assert "Restart 0 of every map and walker was labelled both ways" in text
+    assert "Restart 0 of every map and weight function was labelled both ways" in text
     assert "have not met in 1 of 4 cells (largest: a at 10 steps against Z_h, +0.100 bits)" in text
     agreeing = label_convergence(checked_mi({("a", 80): [0.02, -0.02, 0.03, -0.01]}))
     assert "The two chains agree on every map and length" in "\n".join(_convergence_section(agreeing, config))
