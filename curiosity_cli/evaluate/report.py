@@ -145,6 +145,11 @@ def _cell(row) -> str:
     return f"{row['mean']:.3f} ± {(row['ci_high'] - row['ci_low']) / 2:.3f}"
 
 
+def _length_cells(rows, lengths: list[int], cell) -> list[str]:
+    """A table row's cells: ``cell(row)`` for each of ``lengths`` in ``rows`` (indexed by path length), else empty."""
+    return [cell(rows.loc[n]) if n in rows.index else "" for n in lengths]
+
+
 def _mi_table(summary, against: str, lengths: list[int]) -> list[str]:
     block = summary[(summary["against"] == against) & summary["path_length"].isin(lengths)]
     if block.empty:
@@ -155,8 +160,7 @@ def _mi_table(summary, against: str, lengths: list[int]) -> list[str]:
     ]
     for dataset, rows in block.groupby("dataset", sort=False):
         for weight in _order(rows["weight_function"]):
-            by_length = rows[rows["weight_function"] == weight].set_index("path_length")
-            values = [_cell(by_length.loc[n]) if n in by_length.index else "" for n in lengths]
+            values = _length_cells(rows[rows["weight_function"] == weight].set_index("path_length"), lengths, _cell)
             lines.append(f"| {dataset} | {_label(weight)} | " + " | ".join(values) + " |")
     if block["weight_function"].isin(CEILINGS).any():
         lines += ["", _CEILING_NOTE.format(names=", ".join(c for c in CEILINGS if c in set(block["weight_function"])))]
@@ -203,16 +207,12 @@ def _convergence_section(convergence, config: ExperimentConfig) -> list[str]:
         "| dataset | against | " + " | ".join(f"{n} steps" for n in lengths) + " |",
         "|---|---|" + "---|" * len(lengths),
     ]
+    def gap(row) -> str:
+        sem = "" if not np.isfinite(row["sem"]) else f" ± {row['sem']:.3f}"
+        return f"{_signed(row['difference'], 3)}{sem}{'' if row['converged'] else ' ✗'}"
+
     for (dataset, against), block in convergence.groupby(["dataset", "against"], sort=False):
-        by_length = block.set_index("path_length")
-        cells = []
-        for n in lengths:
-            if n not in by_length.index:
-                cells.append("")
-                continue
-            row = by_length.loc[n]
-            sem = "" if not np.isfinite(row["sem"]) else f" ± {row['sem']:.3f}"
-            cells.append(f"{_signed(row['difference'], 3)}{sem}{'' if row['converged'] else ' ✗'}")
+        cells = _length_cells(block.set_index("path_length"), lengths, gap)
         lines.append(f"| {dataset} | {'Z_h' if against == 'human' else 'Z_b'} | " + " | ".join(cells) + " |")
     lines.append("")
     if failed.empty:
@@ -228,6 +228,11 @@ def _convergence_section(convergence, config: ExperimentConfig) -> list[str]:
             "\"Reproducing the paper\") close the gap at about ten times the labelling time."
         )
     return lines + [""]
+
+
+def _effect_cell(row) -> str:
+    ci = f" [{_signed(row['ci_low'])}, {_signed(row['ci_high'])}]" if np.isfinite(row["ci_low"]) else ""
+    return f"{_signed(row['mean_difference'])}{ci}, {_p(row['p_value'])}"
 
 
 def _effects_table(effects, lengths: list[int]) -> list[str]:
@@ -246,15 +251,7 @@ def _effects_table(effects, lengths: list[int]) -> list[str]:
     for dataset, against in itertools.product(dict.fromkeys(block["dataset"]), ("human", "batch")):
         rows = block[(block["dataset"] == dataset) & (block["against"] == against)]
         for other in _order(rows["other"]):
-            by_length = rows[rows["other"] == other].set_index("path_length")
-            cells = []
-            for n in lengths:
-                if n not in by_length.index:
-                    cells.append("")
-                    continue
-                r = by_length.loc[n]
-                ci = f" [{_signed(r['ci_low'])}, {_signed(r['ci_high'])}]" if np.isfinite(r["ci_low"]) else ""
-                cells.append(f"{_signed(r['mean_difference'])}{ci}, {_p(r['p_value'])}")
+            cells = _length_cells(rows[rows["other"] == other].set_index("path_length"), lengths, _effect_cell)
             lines.append(f"| {dataset} | {against} | {other} | " + " | ".join(cells) + " |")
     return lines + [""]
 
