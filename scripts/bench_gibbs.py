@@ -48,7 +48,8 @@ ALPHA = 0.1
 BETA = 0.1
 SYNTHETIC = dict(grid=64, vocabulary_size=6000, words_per_cell=400)
 QUICK_GRID = 32
-GOALS = {"a/c": 1.0, "b/c": 0.8, "speed-up": 1.7}
+# the floors issue 14 asks to hold on every corpus (its aim is 1.5 for both ratios)
+GOALS = {"a/c": 1.0, "b/c": 0.9, "speed-up": 1.7}
 THREAD_VARIABLES = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 # (label, sampler, spatial, threads); "ours-seq" sweeps with refine_cells (exactly sequential)
@@ -434,7 +435,8 @@ def main(argv: list[str] | None = None) -> None:
         print("\nWARNING: the topic model's sources changed during the run; rows may mix versions")
     print(f"\nload average (1 min) after the runs: {os.getloadavg()[0]:.2f} (about 1 while one process runs)")
     print(FOOTER.format(warmup=warmup, sweeps=sweeps))
-    print("\ngoals: a/c >= 1.0, b/c >= 0.8, 2-thread speed-up >= 1.7x (reported, not asserted)")
+    print("\ngoals: " + ", ".join(f"{key} >= {value}" for key, value in GOALS.items())
+          + " (2-thread over 1-thread; reported, not asserted)")
     for name, ratios in summary.items():
         parts = []
         for key, value in ratios.items():
