@@ -436,7 +436,7 @@ def main(argv: list[str] | None = None) -> None:
     print(f"\nload average (1 min) after the runs: {os.getloadavg()[0]:.2f} (about 1 while one process runs)")
     print(FOOTER.format(warmup=warmup, sweeps=sweeps))
     print("\ngoals: " + ", ".join(f"{key} >= {value}" for key, value in GOALS.items())
-          + " (2-thread over 1-thread; reported, not asserted)")
+          + " (speed-up: 2 threads over 1; reported, not asserted)")
     for name, ratios in summary.items():
         parts = []
         for key, value in ratios.items():
