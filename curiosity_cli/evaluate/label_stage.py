@@ -163,15 +163,19 @@ def label_recipe(run: str, batch: str, config: ExperimentConfig, human: str | No
     ``label.check_restarts`` enters only as whether this ``restart`` is checked (a
     second chain), so changing it relabels only the runs it adds or drops.
     """
-    label = to_dict(config.label)
-    checked = restart < label.pop("check_restarts")
+    label = {key: value for key, value in to_dict(config.label).items() if key != "check_restarts"}
     inputs = {
         "format": LABEL_FORMAT, "run": run, "batch": batch, "label": label,
         "class_share_percent": CLASS_SHARE_PERCENT, "human": human,
     }
-    if checked:
+    if is_checked(config, restart):
         inputs["second_start"] = SECOND_START
     return Recipe(inputs)
+
+
+def is_checked(config: ExperimentConfig, restart: int) -> bool:
+    """Whether a run of this ``restart`` is labelled a second time, from a placed start (``label.check_restarts``)."""
+    return restart < config.label.check_restarts
 
 
 #: What every label file's ``meta`` names: a file without one of these is corrupt.
@@ -304,7 +308,7 @@ def label_run(run: RunInputs, inputs: MapInputs, arrays: MapArrays, config: Expe
     phis = [run.phi(n) for n in lengths]
     labeller = _labeller(inputs.store_path, config.model, store)
     chains = {"": dict(seed=path_seed(run.meta["seed"]))}  # array-name prefix: how the chain starts
-    if run.meta["restart"] < config.label.check_restarts:
+    if is_checked(config, run.meta["restart"]):
         chains[SECOND_PREFIX] = dict(seed=path_seed(run.meta["seed"], second=True), placed=True)
     out = {"lengths": np.array(lengths, np.int32)}
     examples = {}

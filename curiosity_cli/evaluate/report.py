@@ -28,6 +28,8 @@ from curiosity_cli.layout import ExperimentFolder
 # the paper: "For short path lengths (40 steps or less), we do not see any statistical difference"
 _SHORT = 40
 _MINUS = "\u2212"
+#: What each ``against`` of the tables is called in the report's tables.
+_TARGETS = {"human": "Z_h", "batch": "Z_b"}
 _CEILING_NOTE = (
     "Ceilings ({names}) are not walkers: the MI of a model learned from L scattered cells / an L-cell block "
     "around the start, the room a path of L steps leaves; they take no part in the tests, the effect sizes or "
@@ -214,7 +216,7 @@ def _convergence_section(convergence, config: ExperimentConfig) -> list[str]:
 
     for (dataset, against), block in convergence.groupby(["dataset", "against"], sort=False):
         cells = _length_cells(block.set_index("path_length"), lengths, gap)
-        lines.append(f"| {dataset} | {'Z_h' if against == 'human' else 'Z_b'} | " + " | ".join(cells) + " |")
+        lines.append(f"| {dataset} | {_TARGETS[against]} | " + " | ".join(cells) + " |")
     lines.append("")
     if failed.empty:
         lines.append("The two chains agree on every map and length: the labels no longer show how their chain started.")
@@ -222,7 +224,7 @@ def _convergence_section(convergence, config: ExperimentConfig) -> list[str]:
         worst = failed.loc[failed["difference"].abs().idxmax()]
         lines.append(
             f"The two chains have not met in {len(failed)} of {len(convergence)} cells (largest: {worst['dataset']} "
-            f"at {worst['path_length']} steps against {'Z_h' if worst['against'] == 'human' else 'Z_b'}, "
+            f"at {worst['path_length']} steps against {_TARGETS[worst['against']]}, "
             f"{_signed(worst['difference'], 3)} bits): absolute MI there depends on how the labelling chain started, "
             "by about that much. Comparisons between walkers remain like for like, as every run is labelled the "
             "same way. More sweeps narrow it: on the embedded maps, 256 at every checkpoint (`curiosity label --set "
