@@ -370,15 +370,39 @@ def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None
             np.savez_compressed(handle, **arrays, meta=json.dumps(meta, sort_keys=True))
 
 
+def read_label_file(path: Path) -> tuple[dict, dict]:
+    """``(meta, arrays)`` of a run's label file, as :func:`label_run` makes it.
+
+    Raises
+    ------
+    FileNotFoundError, OSError
+        As :func:`~curiosity_cli.files.open_npz`.
+    CorruptFileError
+        The file cannot be read, lacks an array a label file has, or has a table array
+        without one table per checkpoint length.
+    """
+    tables = ("batch", "human", SECOND_PREFIX + "batch", SECOND_PREFIX + "human")
+    with open_npz(path) as npz:
+        meta = read_meta(npz, LABEL_META_KEYS)
+        arrays = {"lengths": npz["lengths"], "batch": npz["batch"]}  # a file without them is corrupt (KeyError)
+        arrays.update({name: npz[name] for name in (*tables, "class_first_step") if name in npz.files})
+        for name in tables:
+            if name in arrays and (arrays[name].ndim != 3 or len(arrays[name]) != len(arrays["lengths"])):
+                # raised inside open_npz: reported as a corrupt file, not as an IndexError later
+                raise ValueError(
+                    f"{name} has shape {arrays[name].shape}, expected one table for each of {len(arrays['lengths'])} lengths"
+                )
+    return meta, arrays
+
+
 def label_changes(path: Path, recipe: Recipe) -> str | None:
     """Why a run's label file at ``path`` must be made again, in words; ``None`` when it was made from ``recipe``.
 
-    A missing file gives :data:`NOT_LABELLED`; a corrupt one is noted on stderr as
-    labelled again.
+    A missing file gives :data:`NOT_LABELLED`; a corrupt one (:func:`read_label_file`)
+    is noted on stderr as labelled again.
     """
     try:
-        with open_npz(path) as npz:
-            return recipe.changes(read_meta(npz, LABEL_META_KEYS))
+        return recipe.changes(read_label_file(path)[0])
     except FileNotFoundError:
         return NOT_LABELLED
     except CorruptFileError as exc:

@@ -100,24 +100,6 @@ class LabelRows:
     skipped: list[str]  # files left out, runs without a label file; each with why
 
 
-def _read_label_file(path: Path) -> tuple[dict, dict]:
-    """``(meta, arrays)`` of a run's label file.
-
-    Raises
-    ------
-    CorruptFileError
-        The file cannot be read, or lacks an array a label file has.
-    """
-    from curiosity_cli.evaluate.label_stage import LABEL_META_KEYS, SECOND_PREFIX, read_meta
-
-    with open_npz(path) as npz:
-        meta = read_meta(npz, LABEL_META_KEYS)
-        arrays = {"lengths": npz["lengths"], "batch": npz["batch"]}  # a file without them is corrupt (KeyError)
-        optional = ("human", "class_first_step", SECOND_PREFIX + "human", SECOND_PREFIX + "batch")
-        arrays.update({name: npz[name] for name in optional if name in npz.files})
-    return meta, arrays
-
-
 def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None) -> tuple[list[dict], list[dict]]:
     """The mi.csv rows (one per checkpoint) and classes.csv rows of one run's label file.
 
@@ -204,7 +186,7 @@ def label_rows(folder: Path) -> LabelRows:
         runs made otherwise (naming them and what changed).
     """
     from curiosity_cli.config import load_saved_config
-    from curiosity_cli.evaluate.label_stage import label_recipe
+    from curiosity_cli.evaluate.label_stage import label_recipe, read_label_file
     from curiosity_cli.explore.grid import run_recipe
     from curiosity_cli.explore.runs import RunError, read_run
 
@@ -219,7 +201,7 @@ def label_rows(folder: Path) -> LabelRows:
     batch_digests = {}
     for path in files:
         try:
-            meta, arrays = _read_label_file(path)
+            meta, arrays = read_label_file(path)
         except CorruptFileError as exc:
             skipped.append(f"{exc}; run `curiosity label` to redo it")
             continue

@@ -137,6 +137,26 @@ def test_a_corrupt_label_file_is_reported_and_left_out(own_map, tmp_path):
     assert json.loads((folder / "skipped.json").read_text()) == evaluation.skipped
 
 
+@pytest.mark.parametrize("table", ["batch", "placed_batch"])
+def test_a_label_file_with_a_table_short_of_its_lengths_is_reported_and_left_out(own_map, tmp_path, table):
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
+    path = ExperimentFolder(folder).label_file("own", "word-perplexity", 0)
+    with np.load(path) as npz:
+        arrays = {name: npz[name] for name in npz.files}
+    arrays[table] = arrays[table][:1]  # 1 table, 2 checkpoint lengths
+    with open(path, "wb") as handle:
+        np.savez_compressed(handle, **arrays)
+    evaluation = evaluate_experiment(folder)
+    assert len(evaluation.skipped) == 1 and "word-perplexity/restart-000.npz: corrupt or truncated" in evaluation.skipped[0]
+    assert f"{table} has shape (1, 8, 8), expected one table for each of 2 lengths" in evaluation.skipped[0]
+    assert len(evaluation.mi) == 14
+    # and label, as the note advises, makes it again
+    done = label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
+    assert (done["labelled"], done["skipped"]) == (1, 7)
+    assert not evaluate_experiment(folder).skipped
+
+
 def test_labels_of_a_run_made_again_from_other_words_are_refused_naming_what_changed(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
