@@ -37,6 +37,10 @@ def cache_dir() -> Path:
 
 if "NUMBA_CACHE_DIR" not in os.environ:
     os.environ["NUMBA_CACHE_DIR"] = str(cache_dir())
+# LLVM's SLP vectoriser, which numba turns off by default: the lock-step labelling kernels
+# (_chain_kernels.py) step over many chains at once and only become vector code with it.
+# It left the single-chain sampler's speed unchanged (../shared/PERFORMANCE.md).
+os.environ.setdefault("NUMBA_SLP_VECTORIZE", "1")
 
 import numba  # noqa: E402  (after the cache folder is chosen)
 import numba.core.config  # noqa: E402

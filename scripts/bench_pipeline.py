@@ -37,7 +37,7 @@ from pathlib import Path
 from curiosity_cli.config import CONFIG_DIR, dataset_path, load_config, load_dataset_config
 from curiosity_cli.data import load_map
 from curiosity_cli.evaluate.information import contingency
-from curiosity_cli.evaluate.label_sampling import PathLabeller, batch_labels, pixel_labels, whole_map_model
+from curiosity_cli.evaluate.label_sampling import batch_labels, label_paths, pixel_labels, whole_map_model
 from curiosity_cli.explore.walker import explore
 from curiosity_cli.words.extract import extract_words
 
@@ -102,8 +102,8 @@ def part_one(config, args) -> None:
     # a path's checkpoints to label: 320 steps of topic-perplexity exploration
     run = explore(store, "topic-perplexity", 0, model=config.model, settings=config.explore, seed=0)
     phis = [run.checkpoints[n].dense() for n in config.explore.checkpoints]
-    labeller = PathLabeller(store, config.model)
-    labeller.label_path(phis[:1], seed=0, sweeps=1, warm_sweeps=None)
+    for _ in label_paths(store, config.model, [phis[:1]], [0], sweeps=1, warm_sweeps=None):
+        pass  # compiled
     n_classes = int(map_data.labels.max()) + 1
 
     def tables(words):
@@ -113,8 +113,9 @@ def part_one(config, args) -> None:
     ours, rebuilt, alone = [], [], []
     for repeat in range(args.repeats):
         began = time.perf_counter()
-        for words in labeller.label_path(phis, seed=repeat, sweeps=label.sweeps, warm_sweeps=label.warm_sweeps):
-            tables(words)
+        for _, _, labels in label_paths(store, config.model, [phis], [repeat], sweeps=label.sweeps,
+                                        warm_sweeps=label.warm_sweeps):
+            tables(labels[:, 0])
         ours.append(time.perf_counter() - began)
         began = time.perf_counter()
         for j, phi in enumerate(phis):
@@ -130,7 +131,7 @@ def part_one(config, args) -> None:
     warm = "random start each" if label.warm_sweeps is None else f"then {label.warm_sweeps} warm"
     print(f"{args.map}: {n:,} words; one run of {len(phis)} checkpoints, label.sweeps = {label.sweeps} ({warm}); "
           f"one core, median of {args.repeats}")
-    print(f"  labelling the run, one model               {median(ours):6.2f} s")
+    print(f"  labelling the run, one chain               {median(ours):6.2f} s")
     print(f"  a model per checkpoint, {label.sweeps} sweeps each      {median(rebuilt):6.2f} s  (x {median(rebuilt) / median(ours):.2f})")
     print(f"  {label.sweeps} frozen sweeps alone                     {median(alone):6.2f} s  "
           f"({label.sweeps * n / median(alone) / 1e6:.1f} M words/s)")

@@ -41,7 +41,7 @@ import pandas as pd
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.data import load_map
 from curiosity_cli.evaluate.information import contingency, mutual_information
-from curiosity_cli.evaluate.label_sampling import PathLabeller, pixel_labels
+from curiosity_cli.evaluate.label_sampling import label_paths, map_chains, pixel_labels
 from curiosity_cli.evaluate.label_stage import path_seed
 from curiosity_cli.evaluate.tables import CONVERGENCE_TOLERANCE, within_noise
 from curiosity_cli.explore.runs import read_run
@@ -68,7 +68,7 @@ def study_map(folder: Path, config, dataset: str, entry: str, store_file: Path, 
     with np.load(ExperimentFolder(folder).batch(dataset)) as npz:
         batch = npz["labels"]
     shape, k = map_data.image.shape[:2], config.model.topics
-    labeller = PathLabeller(store, config.model)
+    chains = map_chains(store, config.model)
     record = [0] + [2**i for i in range(int(np.log2(args.max_sweeps)) + 1)]
     rows = []
     for weight in config.explore.weight_functions:
@@ -78,23 +78,28 @@ def study_map(folder: Path, config, dataset: str, entry: str, store_file: Path, 
             phis = [run.phi(n) for n in lengths]
             seed = path_seed(run.meta["seed"])
             base = {"dataset": dataset, "weight_function": weight, "restart": restart}
-            for j, (length, phi) in enumerate(zip(lengths, phis)):
-                if args.cold_lengths and length not in args.cold_lengths:
-                    continue
-                for schedule in args.starts:
-                    labeller.start(phi, seed + j, placed=schedule == "placed")
-                    done = 0
-                    for s in record:
-                        labeller.sweep(s - done, args.threads)
-                        done = s
-                        human_mi, batch_mi = mi_pair(store, labeller.labels(), shape, human, n_classes, batch, k)
+            # every cold start of the run (checkpoint x schedule) in lock-step
+            cold = [
+                (length, schedule, phi, (seed + j) % 2**64)
+                for j, (length, phi) in enumerate(zip(lengths, phis))
+                if not args.cold_lengths or length in args.cold_lengths
+                for schedule in args.starts
+            ]
+            if cold:
+                chains.start([c[2] for c in cold], [c[3] for c in cold], [c[1] == "placed" for c in cold])
+                done = 0
+                for s in record:
+                    chains.sweep(s - done)
+                    done = s
+                    labels = chains.ml_topics()
+                    for column, (length, schedule, _, _) in enumerate(cold):
+                        human_mi, batch_mi = mi_pair(store, labels[:, column], shape, human, n_classes, batch, k)
                         rows.append({**base, "path_length": length, "schedule": schedule, "sweeps": s,
                                      "mi_human": human_mi, "mi_batch": batch_mi})
             for w in args.warm:
-                labels = labeller.label_path(phis, seed=seed, sweeps=args.first, warm_sweeps=w, threads=args.threads)
-                for length, words in zip(lengths, labels):
-                    human_mi, batch_mi = mi_pair(store, words, shape, human, n_classes, batch, k)
-                    rows.append({**base, "path_length": length, "schedule": "warm", "sweeps": w,
+                for j, _, labels in label_paths(store, config.model, [phis], [seed], sweeps=args.first, warm_sweeps=w):
+                    human_mi, batch_mi = mi_pair(store, labels[:, 0], shape, human, n_classes, batch, k)
+                    rows.append({**base, "path_length": lengths[j], "schedule": "warm", "sweeps": w,
                                  "mi_human": human_mi, "mi_batch": batch_mi})
             print(f"  {dataset} {weight} restart {restart}: done", flush=True)
     return rows
@@ -143,7 +148,6 @@ def main() -> None:
     parser.add_argument("--first", type=int, default=64, help="sweeps of the first checkpoint of a warm chain")
     parser.add_argument("--warm", type=int, nargs="+", default=[1, 2, 4, 8, 16])
     parser.add_argument("--tolerance", type=float, default=CONVERGENCE_TOLERANCE)
-    parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--cache-dir", type=Path, default=DEFAULT_CACHE)
     parser.add_argument("--out", type=Path, help="CSV of every labelling (default EXPERIMENT/label-sweeps.csv)")
     args = parser.parse_args()

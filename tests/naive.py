@@ -514,6 +514,57 @@ def recount(model) -> dict:
     return {"nwk": nwk, "nk": nk, "ncz": ncz, "ng": ng}
 
 
+# --------------------------------------------------------------------------- chains in lock-step
+# Twins of curiosity_cli/topics/_chain_kernels.py, one chain at a time, on a frozen NaiveModel
+# (state.frozen set): the kernels advance many chains together, and each must be this.
+
+
+def running_sum_draw(p: np.ndarray, bits: int) -> int:
+    """Inverse-CDF draw over the float32 running sum of ``p`` in topic order.
+
+    The first topic whose running sum exceeds ``unit32(bits) * total``; if rounding
+    leaves none, the last topic with a positive weight.
+    """
+    running, total = [], np.float32(0.0)
+    for x in np.asarray(p, np.float32):
+        total = np.float32(total + x)
+        running.append(total)
+    target = np.float32(unit32(bits) * total)
+    for k, s in enumerate(running):
+        if s > target:
+            return k
+    return max(k for k, x in enumerate(p) if x > 0)
+
+
+def start_chain_naive(state: NaiveModel, seed: int, placed: bool) -> None:
+    """Twin of ``start_chain_kernel``: uniform topics as ``restart_naive``, or placed ones
+    (each word drawn from eq. 5 over the words placed before it, cell c from stream (0, c))."""
+    if not placed:
+        restart_naive(state, seed)
+        return
+    state.key = mix(seed)
+    cells = sorted(state.topics)
+    for c in cells:
+        state.topics[c] = np.full(state.words[c].size, -1, np.int64)
+    for c in cells:
+        stream = Stream(state.key, 0, c)
+        for i, w in enumerate(state.words[c]):
+            _, _, ncz = count_topics(state)
+            state.topics[c][i] = running_sum_draw(eq5_weights(state, None, None, neighbourhood(state, ncz, c), w), stream.bits())
+
+
+def sweep_chain_naive(state: NaiveModel, counter: int) -> None:
+    """Twin of ``sweep_chains_kernel`` for one chain: cells in order, cell c from stream
+    (counter, c), each word drawn from eq. 5 with every count recounted without it."""
+    for c in sorted(state.topics):
+        stream = Stream(state.key, counter, c)
+        zs = state.topics[c]
+        for i, w in enumerate(state.words[c]):
+            zs[i] = -1
+            _, _, ncz = count_topics(state)
+            zs[i] = running_sum_draw(eq5_weights(state, None, None, neighbourhood(state, ncz, c), w), stream.bits())
+
+
 # --------------------------------------------------------------------------- mutual information
 
 

@@ -6,13 +6,13 @@ tasks of the ``label`` stage, are in :mod:`~curiosity_cli.evaluate.label_stage`.
 Paper section 5.1: "Each of these exploration runs returned a topic model Φ_p, which we
 then used to compute topic labels for each pixel in the map in batch mode."
 
-- **Z_p** (:func:`label_with_phi`): every word of the map gets a topic from Gibbs
+- **Z_p** (:func:`label_paths`): every word of the map gets a topic from Gibbs
   sweeps with the word-topic counts frozen to Φ_p (cells and neighbourhoods as in the
-  model, initial topics uniformly random), then its maximum-likelihood topic. Whether
-  the sweeps were enough is checked by a second chain from a placed start
-  (:meth:`PathLabeller.start`): ``label`` runs one for the restarts below
-  ``label.check_restarts``, and ``scripts/study_label_sweeps.py`` runs both for every
-  schedule it compares.
+  model, initial topics uniformly random), then its maximum-likelihood topic; the
+  chains of many paths of a map advance in lock-step. Whether the sweeps were enough is
+  checked by a second chain from a placed start: ``label`` runs one for the restarts
+  below ``label.check_restarts``, and ``scripts/study_label_sweeps.py`` runs both for
+  every schedule it compares.
 - **Z_b** (:func:`batch_labels`): a model learned on all words of the map with random
   access (Algorithm 1), then each word's maximum-likelihood topic.
 - **Pixels** (:func:`pixel_labels`): the per-pixel texton words carry the labels; with a
@@ -21,6 +21,8 @@ then used to compute topic labels for each pixel in the map in batch mode."
 """
 
 from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 
@@ -61,100 +63,82 @@ def whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_coun
     return topic_model
 
 
-class PathLabeller:
-    """Z_p of a map for path models, on one whole-map model built once.
+def map_chains(store: WordStore, model: ModelConfig):
+    """Frozen-Φ Gibbs chains over every word of a map (:class:`~curiosity_cli.topics.chains.FrozenChains`), none started.
 
-    The model holds every word of the map with Φ frozen; labelling a path's checkpoints
-    swaps the frozen counts in turn instead of building a model per checkpoint.
+    What Z_p is sampled on: the map's cells and neighbour table, each cell's words in
+    the store's order, as :func:`whole_map_model` holds them.
+    """
+    from curiosity_cli.topics.chains import FrozenChains
+
+    return FrozenChains(
+        store.words, np.repeat(np.arange(store.n_cells), store.words_per_cell()),
+        store.grid.neighbour_table(model.spatial_neighbours), n_topics=model.topics,
+        vocabulary_size=store.vocabulary_size, alpha=model.alpha, beta=model.beta,
+    )
+
+
+def label_paths(
+    store: WordStore, model: ModelConfig, paths: Sequence[Sequence[np.ndarray]], seeds: Sequence[int], *,
+    sweeps: int, warm_sweeps: int | None, placed: Sequence[bool] | None = None,
+) -> Iterator[tuple[int, list[int], np.ndarray]]:
+    """Z_p of every word for each checkpoint of several paths, their chains in lock-step.
+
+    Each path gets its own frozen-Φ Gibbs chain over the whole map
+    (:class:`~curiosity_cli.topics.chains.FrozenChains`, all of them advanced together).
+    At a path's first checkpoint its chain starts from uniformly random topics (stream
+    ``seeds[c]``) and gets ``sweeps`` sweeps; each later checkpoint starts from the
+    topics the one before left and gets ``warm_sweeps`` (a warm start), or, with
+    ``warm_sweeps`` None, starts again (stream ``seeds[c] + j`` for the ``j``-th) with
+    ``sweeps``. Each label is the word's maximum-likelihood topic after its sweeps. A
+    path's labels depend only on its own checkpoints, seed and start, never on the
+    other paths labelled with it.
 
     Parameters
     ----------
     store : WordStore
     model : ModelConfig
         K, α, β and the neighbourhood.
+    paths : sequence of sequences of (V, K) int ndarrays
+        Each path's word-topic counts at its checkpoints, shortest path first; paths may
+        have different numbers of checkpoints.
+    seeds : sequence of int
+        One per path; any integer (taken modulo 2**64).
+    sweeps, warm_sweeps : int
+        As above; ``warm_sweeps`` None for a cold start at every checkpoint.
+    placed : sequence of bool, optional
+        Per path, start from placed topics instead of uniformly random ones
+        (:meth:`~curiosity_cli.topics.chains.FrozenChains.start`): the second chain of a
+        convergence check.
+
+    Yields
+    ------
+    j : int
+        The checkpoint.
+    chains : list of int
+        The paths that have a ``j``-th checkpoint, in order.
+    labels : (N, len(chains)) int16 ndarray
+        Their labels, each word of the store in the store's order.
     """
-
-    def __init__(self, store: WordStore, model: ModelConfig):
-        self._store = store
-        self._config = model
-        zeros = np.zeros((store.vocabulary_size, model.topics), np.int32)
-        self._model = whole_map_model(store, model, 0, frozen_counts=zeros)
-
-    def start(self, phi: np.ndarray, seed: int, *, placed: bool = False) -> None:
-        """Freeze Φ to ``phi`` (V, K) and give every word a uniformly random topic (stream ``seed``).
-
-        With ``placed``, draw each word from eq. 5 given the words drawn before it
-        instead (:meth:`~curiosity_cli.topics.model.TopicModel.place`): a start on the
-        far side of the chain's fixed point from the uniform one (its labels begin
-        smooth, the uniform ones begin as noise), which a convergence study checks the
-        uniform start against.
-        """
-        self.switch(phi)
-        if placed:
-            self._model.place(seed % 2**64)
+    placed = [False] * len(paths) if placed is None else list(placed)
+    chains = map_chains(store, model)
+    active = list(range(len(paths)))
+    for j in range(max(len(path) for path in paths)):
+        still = [c for c in active if len(paths[c]) > j]
+        if j > 0 and still != active:
+            chains.keep([active.index(c) for c in still])
+        active = still
+        phis = [paths[c][j] for c in active]
+        if j > 0 and warm_sweeps is not None:
+            chains.switch(phis)
+            chains.sweep(warm_sweeps)
         else:
-            self._model.restart(seed % 2**64)
-
-    def switch(self, phi: np.ndarray) -> None:
-        """Freeze Φ to ``phi`` (V, K), keeping every word's topic (a warm start)."""
-        if phi.shape != (self._store.vocabulary_size, self._config.topics):
-            raise ParameterError(f"phi: shape {phi.shape}, expected (V, K) = {(self._store.vocabulary_size, self._config.topics)}")
-        self._model.set_frozen_counts(phi)
-
-    def sweep(self, sweeps: int, threads: int = 1) -> None:
-        """``sweeps`` frozen-Φ Gibbs sweeps over the whole map (the result does not depend on ``threads``)."""
-        self._model.refine_batch(sweeps, threads=threads)
-
-    def labels(self) -> np.ndarray:
-        """(N,) int16: each word's maximum-likelihood topic now, in the store's order."""
-        return self._model.ml_topics().astype(np.int16)
-
-    def label_path(
-        self, phis: list[np.ndarray], *, seed: int, sweeps: int, warm_sweeps: int | None, threads: int = 1,
-        placed: bool = False,
-    ) -> list[np.ndarray]:
-        """Z_p of every word for each of a path's checkpoints, in order.
-
-        The first checkpoint starts from uniformly random topics (stream ``seed``) and
-        gets ``sweeps`` frozen-Φ Gibbs sweeps; each later one starts from the topics the
-        one before left and gets ``warm_sweeps`` (a warm start), or, with
-        ``warm_sweeps`` None, starts from random topics again (stream ``seed + j`` for
-        the ``j``-th) with ``sweeps``. Each label is the word's maximum-likelihood topic
-        after its sweeps. Every step is the exact sampler of eq. 5; only the starting
-        topics differ. With ``placed``, every start is a placed one instead
-        (:meth:`start`): the second chain of a convergence check.
-
-        Parameters
-        ----------
-        phis : list of (V, K) int ndarrays
-            The word-topic counts of the path's checkpoints, shortest path first.
-        seed : int
-            0 .. 2**64 - 1.
-        sweeps, warm_sweeps : int
-            As above; ``warm_sweeps`` None for a cold start at every checkpoint.
-        threads : int
-            For the sweeps (the result does not depend on it).
-        placed : bool
-            Start from placed topics instead of uniformly random ones.
-
-        Returns
-        -------
-        list of (N,) int16 ndarrays
-            The topic of each word of the store, in the store's order, per checkpoint.
-        """
-        out = []
-        for j, phi in enumerate(phis):
-            if j > 0 and warm_sweeps is not None:
-                self.switch(phi)
-                self.sweep(warm_sweeps, threads)
-            else:
-                self.start(phi, seed + j, placed=placed)
-                self.sweep(sweeps, threads)
-            out.append(self.labels())
-        return out
+            chains.start(phis, [(seeds[c] + j) % 2**64 for c in active], [placed[c] for c in active])
+            chains.sweep(sweeps)
+        yield j, active, chains.ml_topics()
 
 
-def label_with_phi(store: WordStore, phi: np.ndarray, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1) -> np.ndarray:
+def label_with_phi(store: WordStore, phi: np.ndarray, model: ModelConfig, *, sweeps: int, seed: int) -> np.ndarray:
     """Z_p of every word of the map, given one path model's word-topic counts.
 
     Parameters
@@ -168,15 +152,14 @@ def label_with_phi(store: WordStore, phi: np.ndarray, model: ModelConfig, *, swe
         Frozen-Φ Gibbs sweeps from uniformly random topics before the maximum-likelihood topics.
     seed : int
         Of the initial topics and the sweeps.
-    threads : int
-        For the sweeps (the result does not depend on it).
 
     Returns
     -------
     (N,) int16 ndarray
         The topic of each word of ``store``, in the store's order.
     """
-    return PathLabeller(store, model).label_path([phi], seed=seed, sweeps=sweeps, warm_sweeps=None, threads=threads)[0]
+    _, _, labels = next(label_paths(store, model, [[phi]], [seed], sweeps=sweeps, warm_sweeps=None))
+    return labels[:, 0]
 
 
 def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1, on_sweep=None):

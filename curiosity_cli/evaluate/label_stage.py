@@ -44,7 +44,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -67,7 +66,10 @@ if TYPE_CHECKING:
     from curiosity_cli.words.map_stores import StoreInfo
     from curiosity_cli.words.store import WordStore
 
-LABEL_FORMAT = 1
+#: Label files: 2 since the chains of a map's runs advance in lock-step (their draws changed).
+LABEL_FORMAT = 2
+#: Batch references, whose draws did not change with the label files'.
+BATCH_FORMAT = 1
 #: A human class counts as found in a visited cell when it covers at least this share
 #: (percent) of the cell's pixels: enough to be seen, not a sliver at the cell's edge.
 CLASS_SHARE_PERCENT = 10
@@ -81,9 +83,9 @@ SECOND_START = "placed"
 SECOND_PREFIX = f"{SECOND_START}_"
 # tags that keep the label streams apart from the runs' own and from each other
 _PATH_TAG, _BATCH_TAG, _SECOND_CHAIN_TAG = 1, 2, 3
-#: Whole-map labelling models a thread keeps, one per map.
-_LABELLERS_PER_THREAD = 4
-_per_thread = threading.local()
+#: Chains labelled in lock-step in one task: enough to keep the vector units busy
+#: (``scripts/bench_label.py``), few enough that a map's runs fill both cores.
+CHAINS_PER_BLOCK = 16
 
 
 class LabelError(CuriosityError):
@@ -132,17 +134,28 @@ class RunInputs:
     path: np.ndarray
 
     @classmethod
-    def of(cls, run: Run) -> RunInputs:
-        """Read a run's checkpoints.
+    def of(cls, run: Run, shape: tuple[int, int]) -> RunInputs:
+        """Read a run's checkpoints, which must be (V, K) = ``shape``, the map's vocabulary and the model's topics.
+
+        Checked here, not in the worker: a run is labelled in a block with others, and
+        one that cannot be labelled must not take the block with it.
 
         Raises
         ------
         RunError
-            A missing or corrupt ``checkpoints.npz``, naming it.
+            A missing or corrupt ``checkpoints.npz``, or counts of another shape, naming it.
         """
+        from curiosity_cli.explore.runs import RunError
         from curiosity_cli.explore.walker import SparseCounts
 
-        return cls(run.folder, run.meta, {n: SparseCounts.of(run.phi(n)) for n in run.meta["checkpoints"]}, run.path)
+        checkpoints = {n: SparseCounts.of(run.phi(n)) for n in run.meta["checkpoints"]}
+        for length, counts in checkpoints.items():
+            if counts.shape != tuple(shape):
+                raise RunError(
+                    f"{display_path(run.folder / 'checkpoints.npz')}: the counts at {length} steps are {counts.shape}, "
+                    f"expected (V, K) = {tuple(shape)} for the map's words and model.topics; run `curiosity explore --force`"
+                )
+        return cls(run.folder, run.meta, checkpoints, run.path)
 
     def phi(self, length: int) -> np.ndarray:
         """(V, K) int32 ndarray: the word-topic counts Φ_p after ``length`` steps."""
@@ -152,7 +165,7 @@ class RunInputs:
 def batch_recipe(config: ExperimentConfig, info: StoreInfo) -> Recipe:
     """What a map's batch reference depends on (:mod:`curiosity_cli.recipes`)."""
     return Recipe({
-        "format": LABEL_FORMAT, "store": info.path.name, "vocabulary_hashes": info.vocabulary_hashes,
+        "format": BATCH_FORMAT, "store": info.path.name, "vocabulary_hashes": info.vocabulary_hashes,
         "seed": config.seed, "sweeps": config.label.batch_sweeps, "model": to_dict(config.model),
     })
 
@@ -252,23 +265,6 @@ def path_seed(run_seed, *, second: bool = False) -> int:
     return int(np.random.SeedSequence((*run_seed, tag)).generate_state(1, np.uint64)[0])
 
 
-def _labeller(store_path: str, model, store: WordStore) -> PathLabeller:
-    """One whole-map labelling model per map and thread, reused for every run.
-
-    Per thread, not per process: a labeller holds its chain's topics, and a Dask worker
-    runs tasks on several threads. ``store`` is the map's words, named by ``store_path``.
-    """
-    from curiosity_cli.evaluate.label_sampling import PathLabeller
-
-    cache = _per_thread.__dict__.setdefault("labellers", {})
-    key = (store_path, model)
-    if key not in cache:
-        if len(cache) == _LABELLERS_PER_THREAD:
-            del cache[next(iter(cache))]  # the oldest
-        cache[key] = PathLabeller(store, model)
-    return cache[key]
-
-
 def _map_references(entry: str, batch_file: str) -> tuple:
     """A map's (human labels or None, number of classes, batch pixel labels, image shape, class pixels per cell or None)."""
     from curiosity_cli.data import load_map
@@ -292,49 +288,82 @@ def _map_arrays(entry: str, store_path: str, batch_file: str) -> MapArrays:
     return MapArrays(load_store(Path(store_path)), *_map_references(entry, batch_file))
 
 
-def label_run(run: RunInputs, inputs: MapInputs, arrays: MapArrays, config: ExperimentConfig, threads: int = 1):
-    """Z_p of every checkpoint of one run, as contingency tables; ``(tables, examples, meta)``.
+def label_block(runs: list[RunInputs], inputs: MapInputs, arrays: MapArrays, config: ExperimentConfig) -> list[tuple]:
+    """Z_p of every checkpoint of some runs of one map, as contingency tables; ``(tables, examples, meta)`` per run.
 
-    ``inputs`` names the map's files, ``arrays`` holds their contents; the run was made
-    from the map's current word store (:func:`label_experiment` checks). A restart below
-    ``label.check_restarts`` is labelled a second time, from a placed start.
+    ``inputs`` names the map's files, ``arrays`` holds their contents; the runs were made
+    from the map's current word store (:func:`label_experiment` checks). Their chains,
+    and the second chain of each restart below ``label.check_restarts`` (from a placed
+    start), advance in lock-step (:func:`~curiosity_cli.evaluate.label_sampling.label_paths`);
+    a run's labels depend only on the run, never on the runs labelled with it.
     """
     from curiosity_cli.evaluate.information import contingency
-    from curiosity_cli.evaluate.label_sampling import pixel_labels
+    from curiosity_cli.evaluate.label_sampling import label_paths, pixel_labels
 
     store, human, n_classes, batch, shape, cell_classes = arrays
     k = config.model.topics
-    lengths = run.meta["checkpoints"]
-    phis = [run.phi(n) for n in lengths]
-    labeller = _labeller(inputs.store_path, config.model, store)
-    chains = {"": dict(seed=path_seed(run.meta["seed"]))}  # array-name prefix: how the chain starts
-    if is_checked(config, run.meta["restart"]):
-        chains[SECOND_PREFIX] = dict(seed=path_seed(run.meta["seed"], second=True), placed=True)
-    out = {"lengths": np.array(lengths, np.int32)}
-    examples = {}
-    for prefix, start in chains.items():
-        labels = labeller.label_path(
-            phis, sweeps=config.label.sweeps, warm_sweeps=config.label.warm_sweeps, threads=threads, **start,
-        )
-        tables = {"human": [], "batch": []}
-        for length, words in zip(lengths, labels):
-            pixels = pixel_labels(store, words, shape)
+    chains = []  # (run index, array-name prefix: how the chain starts)
+    for index, run in enumerate(runs):
+        chains.append((index, ""))
+        if is_checked(config, run.meta["restart"]):
+            chains.append((index, SECOND_PREFIX))
+    lengths = [run.meta["checkpoints"] for run in runs]
+    phis = [[run.phi(n) for n in run.meta["checkpoints"]] for run in runs]
+    tables = [{} for _ in runs]
+    examples = [{} for _ in runs]
+    labelled = label_paths(
+        store, config.model, [phis[index] for index, _ in chains],
+        [path_seed(runs[index].meta["seed"], second=bool(prefix)) for index, prefix in chains],
+        placed=[bool(prefix) for _, prefix in chains], sweeps=config.label.sweeps, warm_sweeps=config.label.warm_sweeps,
+    )
+    for j, active, labels in labelled:
+        for column, c in enumerate(active):
+            index, prefix = chains[c]
+            pixels = pixel_labels(store, labels[:, column], shape)
             if human is not None:
-                tables["human"].append(contingency(pixels, human, k, n_classes))
-            tables["batch"].append(contingency(pixels, batch, k, k))
-            if not prefix and run.meta["restart"] == 0 and (length in EXAMPLE_LENGTHS or length == lengths[-1]):
-                examples[length] = pixels
-        out.update({prefix + name: np.stack(table) for name, table in tables.items() if table})
-    meta = {
-        "format": LABEL_FORMAT, "dataset": inputs.name, "weight_function": run.meta["weight_function"],
-        "restart": run.meta["restart"], "run_seed": run.meta["seed"], "store": run.meta["store"],
-        "vocabulary_hashes": run.meta["vocabulary_hashes"], "sweeps": config.label.sweeps,
-        "warm_sweeps": config.label.warm_sweeps, "batch": Path(inputs.batch_path).name,
-    }
-    if human is not None:
-        out["class_first_step"] = class_first_steps(run.path, cell_classes, store, inputs.store_path)
-        meta["class_share_percent"] = CLASS_SHARE_PERCENT
-    return out, examples, meta
+                tables[index].setdefault(prefix + "human", []).append(contingency(pixels, human, k, n_classes))
+            tables[index].setdefault(prefix + "batch", []).append(contingency(pixels, batch, k, k))
+            length = lengths[index][j]
+            if not prefix and runs[index].meta["restart"] == 0 and (
+                length in EXAMPLE_LENGTHS or length == lengths[index][-1]
+            ):
+                examples[index][length] = pixels
+    out = []
+    for index, run in enumerate(runs):
+        arrays_out = {"lengths": np.array(lengths[index], np.int32)}
+        arrays_out.update({name: np.stack(table) for name, table in tables[index].items()})
+        meta = {
+            "format": LABEL_FORMAT, "dataset": inputs.name, "weight_function": run.meta["weight_function"],
+            "restart": run.meta["restart"], "run_seed": run.meta["seed"], "store": run.meta["store"],
+            "vocabulary_hashes": run.meta["vocabulary_hashes"], "sweeps": config.label.sweeps,
+            "warm_sweeps": config.label.warm_sweeps, "batch": Path(inputs.batch_path).name,
+        }
+        if human is not None:
+            arrays_out["class_first_step"] = class_first_steps(run.path, cell_classes, store, inputs.store_path)
+            meta["class_share_percent"] = CLASS_SHARE_PERCENT
+        out.append((arrays_out, examples[index], meta))
+    return out
+
+
+def blocks(chain_counts: list[int], most: int, jobs: int) -> list[list[int]]:
+    """Cut a map's runs into blocks labelled in lock-step: the indices of each block's runs, in order.
+
+    ``chain_counts[i]`` is run ``i``'s chains (2 for a checked restart). The blocks are
+    as equal in chains as runs allow, each at most ``most`` chains (or a single run),
+    and, where there are runs enough, a multiple of ``jobs`` of them, so that no worker
+    idles while another labels the map's last block. Which block a run is in never
+    changes its labels.
+    """
+    total = sum(chain_counts)
+    # a run of 2 chains can push a block one chain past its even share
+    n_blocks = -(-total // max(most - 1, 1))
+    n_blocks = min(-(-n_blocks // jobs) * jobs, len(chain_counts))
+    out = [[] for _ in range(n_blocks)]
+    first = 0
+    for index, count in enumerate(chain_counts):
+        out[int((first + count / 2) * n_blocks // total)].append(index)
+        first += count
+    return [block for block in out if block]
 
 
 def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordStore, store_path: str) -> np.ndarray:
@@ -422,6 +451,7 @@ def label_experiment(
     backend: str = "loky",
     scheduler: str | None = None,
     workers: Workers | None = None,
+    chains_per_block: int = CHAINS_PER_BLOCK,
 ) -> dict:
     """Label every finished run of an experiment (and each map's batch reference).
 
@@ -451,6 +481,9 @@ def label_experiment(
     workers : Workers, optional
         Where to compute instead of new workers from ``backend``, ``scheduler`` and
         ``jobs``: open ones another stage shares (``curiosity reproduce``).
+    chains_per_block : int
+        At most this many labelling chains advance in lock-step in one task
+        (:func:`blocks`); the labels do not depend on it.
 
     Returns
     -------
@@ -505,7 +538,7 @@ def label_experiment(
             info.name: MapInputs(info.name, entry, str(info.path), str(batch_files[info.name]))
             for entry, info in stores.items() if info.name in batch_files
         }
-        skipped, tasks, recipes, relabelled = 0, [], {}, []
+        skipped, to_label, recipes, relabelled = 0, {}, {}, []
         for run in finished:
             info = by_name[run.meta["dataset"]]
             recipe = label_recipe(
@@ -520,13 +553,18 @@ def label_experiment(
                 relabelled.append(f"{display_path(path)}: {change}")
             if info.name in inputs:  # else its batch reference failed, named in problems
                 try:
-                    tasks.append((RunInputs.of(run), inputs[info.name]))
+                    to_label.setdefault(info.name, []).append(RunInputs.of(run, (info.vocabulary_size, config.model.topics)))
                     recipes[run.folder] = recipe
                 except RunError as exc:
                     problems.append(str(exc))
         if relabelled:
             note(f"labelling {len(relabelled)} runs again whose label files were made otherwise, e.g. {relabelled[0]}")
         todo = len(runs) - skipped
+        tasks = []  # (runs, map inputs): blocks labelled in lock-step
+        for name, map_runs in to_label.items():
+            counts = [1 + is_checked(config, run.meta["restart"]) for run in map_runs]
+            for block in blocks(counts, chains_per_block, workers.jobs):
+                tasks.append(([map_runs[i] for i in block], inputs[name]))
         shipped = {}  # loky workers read the maps' files themselves
         if workers.ships:  # before the stage starts: an unusable cluster is the only message
             for name, map_inputs in {m.name: m for _, m in tasks}.items():
@@ -535,22 +573,24 @@ def label_experiment(
                     MapArrays, store, *_map_references(map_inputs.entry, map_inputs.batch_path), key=f"map-{name}"
                 )
         if on_stage is not None:
-            on_stage("labelling runs", len(tasks))
+            on_stage("labelling runs", sum(len(block) for block, _ in tasks))
         labelled = 0
         computed = workers.compute(
-            _label_task, tasks, args=lambda task: (config, shipped.get(task[1].name)),
-            key=lambda task: "label-{dataset}/{weight_function}/restart-{restart:03d}".format(**task[0].meta),
+            _label_task, tasks, args=lambda task: (config, shipped.get(task[1].name)), threads=1,
+            key=lambda task: "label-{dataset}/{weight_function}/restart-{restart:03d}".format(**task[0][0].meta)
+            + f"+{len(task[0]) - 1}",
         )
         with computed as results:
-            for (run, _), outcome in results:
-                if isinstance(outcome, str):
-                    problems.append("{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome)
-                else:
-                    arrays, examples, meta = outcome
-                    write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
-                    labelled += 1
-                if on_done is not None:
-                    on_done()
+            for (block, _), outcome in results:
+                for index, run in enumerate(block):
+                    if isinstance(outcome, str):
+                        problems.append("{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome)
+                    else:
+                        arrays, examples, meta = outcome[index]
+                        write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
+                        labelled += 1
+                    if on_done is not None:
+                        on_done()
     if problems:
         raise LabelError(
             f"{todo - labelled} of {todo} runs could not be labelled (the others are written): "
@@ -685,10 +725,12 @@ def _batch_references(
 
 
 def _label_task(
-    task: tuple[RunInputs, MapInputs], config: ExperimentConfig, arrays: MapArrays | None = None, *, threads: int = 1,
-):
-    """Label one run in a worker: ``(arrays, examples, meta)``; ``arrays`` are its map's when shipped (Dask), else read once."""
-    run, inputs = task
+    task: tuple[list[RunInputs], MapInputs], config: ExperimentConfig, arrays: MapArrays | None = None, *,
+    threads: int = 1,
+) -> list[tuple]:
+    """Label a block of runs in a worker: ``(arrays, examples, meta)`` per run; ``arrays`` are its map's when shipped
+    (Dask), else read once. One thread, whatever ``threads`` is: the blocks keep the workers busy."""
+    runs, inputs = task
     if arrays is None:
         arrays = _map_arrays(inputs.entry, inputs.store_path, inputs.batch_path)
-    return label_run(run, inputs, arrays, config, threads)
+    return label_block(runs, inputs, arrays, config)

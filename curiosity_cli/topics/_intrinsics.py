@@ -32,3 +32,30 @@ def fetch_add(typingctx, array, index, value):
         return builder.atomic_rmw("add", pointer, v, "seq_cst")
 
     return signature, codegen
+
+
+@intrinsic
+def stack_array(typingctx, like, dtype):
+    """A 1-D array of ``len(like)`` (a tuple) items of ``dtype`` on the stack, uninitialised.
+
+    A heap array (``np.empty``) may alias every other array, so LLVM keeps its items in
+    memory; a stack array of a length known when compiling is split into registers.
+    """
+    if not isinstance(like, types.BaseTuple) or not isinstance(dtype, (types.DType, types.NumberClass)):
+        return None
+    item = dtype.dtype if isinstance(dtype, types.DType) else dtype.instance_type
+    n = len(like)
+    array_type = types.Array(item, 1, "C")
+
+    def codegen(context, builder, sig, args):
+        from numba.np.arrayobj import populate_array
+
+        data_type = context.get_data_type(item)
+        data = cgutils.alloca_once(builder, data_type, size=n)
+        array = context.make_array(array_type)(context, builder)
+        size = context.get_constant(types.intp, n)
+        step = context.get_constant(types.intp, context.get_abi_sizeof(data_type))
+        populate_array(array, data=data, shape=[size], strides=[step], itemsize=step, meminfo=None)
+        return array._getvalue()
+
+    return array_type(like, dtype), codegen

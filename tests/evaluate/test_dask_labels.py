@@ -63,14 +63,15 @@ def test_labels_on_a_cluster_equal_the_loky_labels_byte_for_byte(own_map, tmp_pa
 
 
 @pytest.mark.parametrize("backend", ["loky", "dask"])
-def test_a_label_task_that_raises_is_named_and_the_others_are_written(own_map, tmp_path, scheduler, backend):
+def test_a_run_that_cannot_be_labelled_is_named_and_the_others_are_written(own_map, tmp_path, scheduler, backend):
     config, folder = small_experiment(own_map, tmp_path)
     meta_path = ExperimentFolder(folder).run("own", "random-walk", 1) / "run.json"
     meta = json.loads(meta_path.read_text())
-    meta_path.write_text(json.dumps({**meta, "n_topics": 9}))  # its checkpoints do not fit the model: labelling raises
+    meta_path.write_text(json.dumps({**meta, "n_topics": 9}))  # its checkpoints do not fit the model
     where = {"jobs": 2} if backend == "loky" else {"backend": "dask", "scheduler": scheduler}
     with pytest.raises(LabelError, match=r"^1 of 8 runs could not be labelled \(the others are written\): "
-                                         r"own / random-walk / restart 1: ParameterError: phi: shape \(\d+, 9\)"):
+                                         r".*random-walk/restart-001/checkpoints.npz: the counts at 5 steps are \(\d+, 9\), "
+                                         r"expected \(V, K\) = \(\d+, 8\)"):
         label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", **where)
     assert len(list((folder / "labels" / "own").glob("*/restart-*.npz"))) == 7
     assert not (folder / "labels" / "own" / "random-walk" / "restart-001.npz").exists()
@@ -115,3 +116,18 @@ def test_label_backend_mistakes_and_an_unreachable_scheduler(own_map, tmp_path):
     assert result.stderr.startswith("Error: cannot reach the Dask scheduler at tcp://127.0.0.1:1")
     assert result.stderr.count("\n") == 1 and "Traceback" not in result.output
     assert not (folder / "labels").exists()
+
+
+def test_a_runs_labels_do_not_depend_on_the_block_it_was_labelled_in(own_map, tmp_path):
+    """Blocks of 1, 3 and 16 chains, on 1 and 2 workers, write the same label files byte for byte
+    (the 8 runs' chains, the 4 second chains of restart 0 included, grouped three ways)."""
+    config, folder = small_experiment(own_map, tmp_path / "first")
+    contents = []
+    for chains_per_block, jobs in ((16, 2), (1, 1), (3, 2)):
+        copy = tmp_path / f"block-{chains_per_block}"
+        shutil.copytree(folder, copy / config.name)
+        label_experiment(config, copy / config.name, cache_dir=tmp_path / "first" / "cache", jobs=jobs,
+                         chains_per_block=chains_per_block)
+        contents.append(label_contents(copy / config.name))
+    assert len([key for key in contents[0] if "/examples/" not in key and key.startswith("labels/")]) == 8
+    assert contents[1] == contents[0] and contents[2] == contents[0]

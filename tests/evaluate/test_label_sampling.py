@@ -49,67 +49,57 @@ def test_labelling_with_the_batch_models_own_phi_gives_back_the_batch_labels():
     assert np.mean(again == batch) > 0.9
 
 
-def test_labels_do_not_depend_on_threads_and_follow_the_seed():
+def test_labels_follow_the_seed():
     store = synthetic_store(np.arange(16).reshape(4, 4) % 3)
     model = dataclasses.replace(small_config().model, topics=4)
     phi = np.random.default_rng(0).integers(0, 5, (store.vocabulary_size, 4))
-    one = label_with_phi(store, phi, model, sweeps=3, seed=1, threads=1)
-    np.testing.assert_array_equal(one, label_with_phi(store, phi, model, sweeps=3, seed=1, threads=2))
+    one = label_with_phi(store, phi, model, sweeps=3, seed=1)
+    np.testing.assert_array_equal(one, label_with_phi(store, phi, model, sweeps=3, seed=1))
+    assert not np.array_equal(one, label_with_phi(store, phi, model, sweeps=3, seed=2))
 
 
 def test_a_phi_of_the_wrong_shape_is_refused():
     store = synthetic_store(np.zeros((2, 2), int))
-    with pytest.raises(ParameterError, match=r"phi: shape \(3, 8\), expected \(V, K\) = \(100, 8\)"):
+    with pytest.raises(ParameterError, match=r"phis: chain 0 has shape \(3, 8\), expected \(V, K\) = \(100, 8\)"):
         label_with_phi(store, np.zeros((3, 8)), small_config().model, sweeps=1, seed=0)
 
 
-def test_a_path_labelling_is_the_exact_sampler_cold_then_warm():
-    from naive import NaiveModel, ml_topics_naive, refine_batch_naive, restart_naive
+@pytest.mark.parametrize("warm_sweeps", [2, None])
+def test_paths_are_labelled_by_their_own_chains_cold_then_warm(warm_sweeps):
+    from naive import NaiveModel, ml_topics_naive, start_chain_naive, sweep_chain_naive
 
-    from curiosity_cli.evaluate.label_sampling import PathLabeller
+    from curiosity_cli.evaluate.label_sampling import label_paths, whole_map_model
 
     store = synthetic_store(np.arange(12).reshape(3, 4) % 3, words_per_cell=10)
     model = dataclasses.replace(small_config().model, topics=5)
     rng = np.random.default_rng(4)
-    phis = [rng.integers(0, 6, (store.vocabulary_size, 5)) for _ in range(3)]
-    labeller = PathLabeller(store, model)
-    got = labeller.label_path(phis, seed=21, sweeps=3, warm_sweeps=2, threads=2)
+    paths = [[rng.integers(0, 6, (store.vocabulary_size, 5)) for _ in range(n)] for n in (3, 1, 2)]
+    seeds, placed = [21, 2**64 - 1, 8], [False, False, True]
+    got = {}
+    for j, active, labels in label_paths(store, model, paths, seeds, placed=placed, sweeps=3, warm_sweeps=warm_sweeps):
+        for column, c in enumerate(active):
+            got[c, j] = labels[:, column]
+    assert sorted(got) == [(0, 0), (0, 1), (0, 2), (1, 0), (2, 0), (2, 1)]
 
-    twin = NaiveModel.of(labeller._model)
-    cells = sorted(twin.topics)
-    twin.frozen = phis[0]
-    restart_naive(twin, 21)
-    refine_batch_naive(twin, 3)
-    expected = [ml_topics_naive(twin, cells)]
-    for phi in phis[1:]:
-        twin.frozen = phi  # warm: the topics stay, only Φ changes
-        refine_batch_naive(twin, 2)
-        expected.append(ml_topics_naive(twin, cells))
-    for a, b in zip(got, expected):
-        np.testing.assert_array_equal(a, b)
-
-
-def test_the_placed_start_of_a_convergence_study_is_the_models_place():
-    from naive import NaiveModel, place_naive
-
-    from curiosity_cli.evaluate.label_sampling import PathLabeller
-
-    store = synthetic_store(np.arange(12).reshape(3, 4) % 3, words_per_cell=10)
-    model = dataclasses.replace(small_config().model, topics=5)
-    phi = np.random.default_rng(8).integers(0, 6, (store.vocabulary_size, 5))
-    labeller = PathLabeller(store, model)
-    labeller.start(phi, 2**64 + 9, placed=True)  # seeds wrap as label's path seeds do
-    twin = NaiveModel.of(labeller._model)
-    place_naive(twin, 9)
-    for cell in twin.order:
-        np.testing.assert_array_equal(labeller._model.topics([cell]), twin.topics[cell])
-    labeller.start(phi, 9)
-    assert not np.array_equal(labeller._model.topics(), np.concatenate([twin.topics[c] for c in twin.order]))
+    for c, path in enumerate(paths):
+        twin = NaiveModel.of(whole_map_model(store, model, 0, frozen_counts=path[0]))
+        cells = sorted(twin.topics)
+        for j, phi in enumerate(path):
+            twin.frozen = phi
+            if j > 0 and warm_sweeps is not None:
+                todo = warm_sweeps  # warm: the topics stay, only Φ changes
+            else:
+                start_chain_naive(twin, (seeds[c] + j) % 2**64, placed[c])
+                todo, sweeps = 3, 0
+            for _ in range(todo):
+                sweep_chain_naive(twin, store.n_cells + sweeps)
+                sweeps += 1
+            np.testing.assert_array_equal(got[c, j], ml_topics_naive(twin, cells))
 
 
 def test_warm_started_checkpoints_reach_the_labels_of_a_long_cold_chain():
     from curiosity_cli.evaluate.information import contingency, mutual_information
-    from curiosity_cli.evaluate.label_sampling import PathLabeller
+    from curiosity_cli.evaluate.label_sampling import label_paths
 
     regions = np.zeros((8, 8), int)
     regions[:, 4:] = 1
@@ -125,12 +115,11 @@ def test_warm_started_checkpoints_reach_the_labels_of_a_long_cold_chain():
         phi = np.zeros((store.vocabulary_size, model.topics), np.int64)
         np.add.at(phi, (store.words[keep].astype(np.int64), batch[keep].astype(np.int64)), 1)
         phis.append(phi)
-    labeller = PathLabeller(store, model)
 
-    def mi(words):
-        return mutual_information(contingency(words, truth, model.topics, 3))
+    def mi(labels):
+        return np.array([mutual_information(contingency(labels[:, c], truth, model.topics, 3)) for c in range(4)])
 
-    cold = [np.mean([mi(labeller.label_path([phi], seed=s, sweeps=64, warm_sweeps=None)[0]) for s in range(4)]) for phi in phis]
-    warm = np.mean([[mi(w) for w in labeller.label_path(phis, seed=s, sweeps=64, warm_sweeps=4)] for s in range(4)], axis=0)
+    cold = [np.mean(mi(next(label_paths(store, model, [[phi]] * 4, range(4), sweeps=64, warm_sweeps=None))[2])) for phi in phis]
+    warm = [np.mean(mi(labels)) for _, _, labels in label_paths(store, model, [phis] * 4, range(4), sweeps=64, warm_sweeps=4)]
     assert cold[-1] > 1.0  # the planted regions are found
     np.testing.assert_allclose(warm, cold, atol=0.02)
