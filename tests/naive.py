@@ -321,24 +321,6 @@ def restart_naive(state: NaiveModel, seed: int) -> None:
     state.counter = len(cells)
 
 
-def place_naive(state: NaiveModel, seed: int) -> None:
-    """Twin of ``TopicModel.place``: a new key, every topic forgotten, then each word of
-    the cells in cell order drawn from eq. 5 over the words already placed (cell c from
-    stream (0, c))."""
-    state.key = mix(seed)
-    cells = sorted(state.topics)
-    for c in cells:
-        state.topics[c] = np.full(state.words[c].size, -1, np.int64)
-    for c in cells:
-        stream = Stream(state.key, 0, c)
-        for i, w in enumerate(state.words[c]):
-            _, _, ncz = count_topics(state)
-            state.topics[c][i] = lane_draw(eq5_weights(state, None, None, neighbourhood(state, ncz, c), w), stream.bits())
-    state.order = cells
-    state.times = list(range(len(cells)))
-    state.counter = 1
-
-
 def gibbs_cell_naive(state: NaiveModel, cell: int, stream: Stream, stale_topics: dict | None = None) -> None:
     """One Gibbs pass over a cell's words, every count recounted without the word.
 

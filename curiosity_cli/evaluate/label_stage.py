@@ -29,13 +29,17 @@ Written under ``results/<experiment>/``:
 
 Every file is written atomically; a killed ``label`` resumes with the runs not yet done.
 
-Batch references and runs are tasks of :class:`~curiosity_cli.parallel.Workers`. With
-loky, batch references are computed in this process, one map after the other on ``jobs``
-threads, and a worker reads each map's word store, human labels and Z_b once. On a Dask
-cluster, batch references are tasks too, each map's word store goes to the cluster once
-and its human labels and Z_b pixel labels once; each run's ``run.json`` and checkpoint
-counts Φ_p (a few kilobytes) travel with its task, so workers need no copy of the maps,
-stores or results. Either way this process writes every file, and the same functions
+Batch references and blocks of runs are tasks of :class:`~curiosity_cli.parallel.Workers`.
+A map's runs to label are cut into blocks (:func:`blocks`) of up to
+:data:`CHAINS_PER_BLOCK` chains (a run's, and a checked run's second chain), whose chains
+advance in lock-step in one task; a run's labels depend only on the run, never on its
+block, so a killed ``label`` relabels what it lost to the same bytes. With loky, batch
+references are computed in this process, one map after the other on ``jobs`` threads,
+and a worker reads each map's word store, human labels and Z_b once. On a Dask cluster,
+batch references are tasks too, each map's word store goes to the cluster once and its
+human labels and Z_b pixel labels once; each run's ``run.json`` and checkpoint counts Φ_p
+(a few kilobytes) travel with its block, so workers need no copy of the maps, stores or
+results. Either way this process writes every file, and the same functions
 (:mod:`~curiosity_cli.evaluate.label_sampling`) compute the labels, so the results are
 identical.
 """
@@ -83,8 +87,8 @@ SECOND_START = "placed"
 SECOND_PREFIX = f"{SECOND_START}_"
 # tags that keep the label streams apart from the runs' own and from each other
 _PATH_TAG, _BATCH_TAG, _SECOND_CHAIN_TAG = 1, 2, 3
-#: Chains labelled in lock-step in one task: enough to keep the vector units busy
-#: (``scripts/bench_label.py``), few enough that a map's runs fill both cores.
+#: Chains labelled in lock-step in one task: past 16 they gained no more on the 2-core
+#: AVX2 machine (``scripts/bench_label.py``), and smaller blocks share out better.
 CHAINS_PER_BLOCK = 16
 
 
@@ -345,25 +349,23 @@ def label_block(runs: list[RunInputs], inputs: MapInputs, arrays: MapArrays, con
     return out
 
 
-def blocks(chain_counts: list[int], most: int, jobs: int) -> list[list[int]]:
+def blocks(chain_counts: list[int], most: int) -> list[list[int]]:
     """Cut a map's runs into blocks labelled in lock-step: the indices of each block's runs, in order.
 
-    ``chain_counts[i]`` is run ``i``'s chains (2 for a checked restart). The blocks are
-    as equal in chains as runs allow, each at most ``most`` chains (or a single run),
-    and, where there are runs enough, a multiple of ``jobs`` of them, so that no worker
-    idles while another labels the map's last block. Which block a run is in never
-    changes its labels.
+    ``chain_counts[i]`` is run ``i``'s chains (2 for a checked restart). Each block is
+    filled up to ``most`` chains (a run's chains stay together; a run alone may have
+    more), so every block but the map's last is full: the kernels hold chains in
+    multiples of 8 (:data:`~curiosity_cli.topics.chains.LANES`), and a block short of one
+    pays for the chains it lacks. Which block a run is in never changes its labels.
     """
-    total = sum(chain_counts)
-    # a run of 2 chains can push a block one chain past its even share
-    n_blocks = -(-total // max(most - 1, 1))
-    n_blocks = min(-(-n_blocks // jobs) * jobs, len(chain_counts))
-    out = [[] for _ in range(n_blocks)]
-    first = 0
+    out, size = [], most
     for index, count in enumerate(chain_counts):
-        out[int((first + count / 2) * n_blocks // total)].append(index)
-        first += count
-    return [block for block in out if block]
+        if size + count > most:
+            out.append([])
+            size = 0
+        out[-1].append(index)
+        size += count
+    return out
 
 
 def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordStore, store_path: str) -> np.ndarray:
@@ -563,7 +565,7 @@ def label_experiment(
         tasks = []  # (runs, map inputs): blocks labelled in lock-step
         for name, map_runs in to_label.items():
             counts = [1 + is_checked(config, run.meta["restart"]) for run in map_runs]
-            for block in blocks(counts, chains_per_block, workers.jobs):
+            for block in blocks(counts, chains_per_block):
                 tasks.append(([map_runs[i] for i in block], inputs[name]))
         shipped = {}  # loky workers read the maps' files themselves
         if workers.ships:  # before the stage starts: an unusable cluster is the only message

@@ -13,7 +13,7 @@ from curiosity_cli._numba import njit
 from curiosity_cli.topics._intrinsics import fetch_add
 from curiosity_cli.topics._rng import below, next_state, stream_start, unit64
 from curiosity_cli.topics._sampler import (
-    gibbs_cell, gibbs_cell_frozen, lane_draw, refresh_inverse, row_dot, weights_scratch,
+    gibbs_cell, gibbs_cell_frozen, refresh_inverse, row_dot, weights_scratch,
 )
 
 # threads refining a batch phase take cells in chunks of this many
@@ -65,30 +65,6 @@ def redraw_topics_kernel(cells, cell_first, cell_count, words, topics, nwk, nk, 
             cell, cell_first[cell], cell_count[cell], words, topics, nwk, nk, inv, ncz, ng, table, n_topics, vbeta,
             key, np.uint64(j), update_phi,
         )
-
-
-@njit
-def place_frozen_kernel(cells, cell_first, cell_count, words, topics, phiw, ncz, ng, table, alpha, key, counter):
-    """Give every word of ``cells`` a topic drawn from eq. 5 given the words placed before it.
-
-    For a model with frozen word-topic counts whose cell counts are all zero: the cells
-    in the order given, each cell's words in order, each drawn (from stream ``(counter,
-    cell)``) with the weights of :func:`~curiosity_cli.topics._sampler.gibbs_cell_frozen`
-    over the counts of the words already placed, then counted. ``phiw`` is that
-    function's.
-    """
-    p = np.zeros(phiw.shape[1], np.float32)
-    for j in range(cells.shape[0]):
-        cell = cells[j]
-        state = stream_start(key, counter, cell)
-        for i in range(cell_first[cell], cell_first[cell] + cell_count[cell]):
-            w = words[i]
-            for k in range(p.shape[0]):
-                p[k] = phiw[w, k] * (np.float32(ng[cell, k]) + alpha)
-            state, bits = next_state(state)
-            k = lane_draw(p, bits)
-            topics[i] = k
-            count_word(cell, k, ncz, ng, table)
 
 
 @njit

@@ -27,6 +27,12 @@ from curiosity_cli.checks import check_float, check_int
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics.neighbours import check_neighbours
 
+#: Chains are held in multiples of this many (float32 lanes of a 256-bit vector): the
+#: kernels compile for the number of chains held, and a remainder past a multiple of 8
+#: runs as scalar code, at twice the time per chain. The padding chains repeat the last
+#: real one and are never reported.
+LANES = 8
+
 
 class FrozenChains:
     """``R`` frozen-Φ Gibbs chains over the same words, advanced in lock-step.
@@ -70,14 +76,15 @@ class FrozenChains:
         self._cells = np.arange(n_cells, dtype=np.int64)
         self._counts = None  # (V, K, R) int32 frozen word-topic counts
         self._phiw = None
-        self._keys = None
+        self._keys = None  # (R padded,) uint64
+        self._n = 0  # real chains
         self._sweeps = 0
         self._topics = self._ncz = self._ng = None
 
     @property
     def n_chains(self) -> int:
         """R, the chains started (0 before :meth:`start`)."""
-        return 0 if self._keys is None else self._keys.size
+        return self._n
 
     @property
     def n_words(self) -> int:
@@ -107,17 +114,20 @@ class FrozenChains:
         placed = [False] * n if placed is None else [bool(p) for p in placed]
         if len(placed) != n:
             raise ParameterError(f"placed: got {len(placed)}, expected one per chain ({n})")
-        keys = np.array([mix(np.uint64(check_int("seeds", s, 0, 2**64 - 1))) for s in seeds], np.uint64)
+        keys = [mix(np.uint64(check_int("seeds", s, 0, 2**64 - 1))) for s in seeds]
         self._set_phis(phis)
-        self._keys = keys
+        self._n = n
+        held = self._phiw.shape[2]
+        self._keys = np.array(_padded(keys, held), np.uint64)
+        placed = _padded(placed, held)
         n_cells = self._table.shape[0]
-        self._topics = np.zeros((self._words.size, n), np.int8)
-        self._ncz = np.zeros((n_cells, self._k, n), np.int32)
-        self._ng = np.zeros((n_cells, self._k, n), np.int32)
-        for r in range(n):
+        self._topics = np.zeros((self._words.size, held), np.int8)
+        self._ncz = np.zeros((n_cells, self._k, held), np.int32)
+        self._ng = np.zeros((n_cells, self._k, held), np.int32)
+        for r in range(held):
             start_chain_kernel(
                 r, placed[r], self._cells, self._cell_first, self._cell_count, self._words, self._topics, self._phiw,
-                self._ncz, self._ng, self._table, np.float32(self._alpha), keys[r],
+                self._ncz, self._ng, self._table, np.float32(self._alpha), self._keys[r],
             )
         self._sweeps = 0
 
@@ -134,6 +144,8 @@ class FrozenChains:
         index = np.asarray(chains, np.int64)
         if index.ndim != 1 or index.size == 0 or index.min() < 0 or index.max() >= self.n_chains:
             raise ParameterError(f"chains: expected a non-empty list of chains in 0..{self.n_chains - 1}")
+        self._n = index.size
+        index = np.array(_padded(list(index), _held(index.size)), np.int64)
         self._counts = np.ascontiguousarray(self._counts[:, :, index])
         self._phiw = np.ascontiguousarray(self._phiw[:, :, index])
         self._keys = self._keys[index]
@@ -158,7 +170,7 @@ class FrozenChains:
     def topics(self) -> np.ndarray:
         """(N, R) int8: each word's current topic in each chain."""
         self._started("topics")
-        return self._topics.copy()
+        return self._topics[:, : self._n].copy()
 
     def ml_topics(self) -> np.ndarray:
         """(N, R) int16: each word's maximum-likelihood topic in each chain, the word included.
@@ -171,13 +183,15 @@ class FrozenChains:
         self._started("ml_topics")
         norm = 1.0 / (self._counts.sum(axis=0, dtype=np.int64) + self._v * self._beta)  # (K, R)
         phid = (self._counts + self._beta) * norm
-        out = np.empty((self._words.size, self.n_chains), np.int16)
+        out = np.empty((self._words.size, self._keys.size), np.int16)
         ml_chains_kernel(
             self._cells, self._cell_first, self._cell_count, self._words, phid, self._ng, self._alpha, tuple(self._keys), out
         )
-        return out
+        return out[:, : self._n]
 
     def _set_phis(self, phis: Sequence[np.ndarray]) -> None:
+        """Each chain's frozen counts and eq. 5's fixed factors, padded (:data:`LANES`)."""
+        phis = _padded(list(phis), _held(len(phis)))
         counts = np.empty((self._v, self._k, len(phis)), np.int32)
         for r, phi in enumerate(phis):
             phi = np.asarray(phi)
@@ -195,6 +209,16 @@ class FrozenChains:
     def _started(self, name: str) -> None:
         if self._keys is None:
             raise ParameterError(f"{name}: no chains yet; start() them first")
+
+
+def _held(n: int) -> int:
+    """The chains held for ``n`` real ones: the next multiple of :data:`LANES`."""
+    return -(-n // LANES) * LANES
+
+
+def _padded(values: list, size: int) -> list:
+    """``values`` to ``size`` items, the last repeated."""
+    return values + values[-1:] * (size - len(values))
 
 
 def _check_ids(name: str, values, size: int) -> np.ndarray:

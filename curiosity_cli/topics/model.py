@@ -334,33 +334,6 @@ class TopicModel:
         )
         self._counter = cells.size
 
-    def place(self, seed: int) -> None:
-        """Every word of a frozen model drawn anew, given the words drawn before it; a new seed.
-
-        The observed cells in cell order, each cell's words in order: each word's topic
-        is drawn from eq. 5 with the counts of the words placed so far (its cell's and
-        its neighbours'), then counted, so the start already follows Φ and the
-        neighbourhoods, where :meth:`restart`'s uniform topics know neither. Cell ``c``
-        draws from stream ``(0, c)``; the counter is then 1. Otherwise as
-        :meth:`restart`: the state depends on the seed, the frozen counts and the cells'
-        words only.
-
-        Raises
-        ------
-        ParameterError
-            The model is not frozen, or ``seed`` outside 0 .. 2**64 - 1.
-        """
-        from curiosity_cli.topics._gibbs_kernels import place_frozen_kernel
-
-        if not self._frozen:
-            raise ParameterError("place: the model learns its word-topic counts; only a frozen model places its words (restart() this one)")
-        cells = self._forget_topics(seed)
-        place_frozen_kernel(
-            cells, self._cell_first, self._cell_count, self._words, self._topics, self._frozen_weights(),
-            self._ncz, self._ng, self._table, np.float32(self._alpha), self._key(), np.uint64(0),
-        )
-        self._counter = 1
-
     def _forget_topics(self, seed: int) -> np.ndarray:
         """Take a new seed, reorder the observed cells by cell with times 0, 1, ..., and zero
         the cell counts; returns the cells, (n_observed,) int64, in that order."""

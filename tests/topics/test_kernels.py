@@ -14,7 +14,6 @@ from naive import (
     log_likelihood_naive,
     mix,
     ml_topics_naive,
-    place_naive,
     recount,
     refine_batch_naive,
     refine_cells_naive,
@@ -274,36 +273,6 @@ def test_restart_matches_twin_and_a_fresh_model(frozen):
         np.testing.assert_array_equal(twin.topics[c], before.topics[c])
     assert (twin.counter, twin.key) == (before.counter, before.key)
     assert_matches(model, twin)  # the cached counts agree with the redrawn topics
-
-
-@pytest.mark.parametrize("threads", [1, 2])
-def test_placed_start_and_the_sweeps_after_it_match_twin(threads):
-    model, _ = frozen_model(18, **BATCH_GRID)
-    model.refine_batch(2)
-    twin = NaiveModel.of(model)
-    model.place(77)
-    place_naive(twin, 77)
-    assert_matches(model, twin)
-    assert model.seed == 77 and twin.counter == model.full_state()["counter"] == 1
-    model.refine_batch(2, threads=threads)
-    refine_batch_naive(twin, 2)
-    assert_matches(model, twin)
-
-
-def test_a_placed_start_depends_on_the_seed_and_counts_only():
-    model = frozen_model(19, **BATCH_GRID)[0]
-    model.refine_batch(3)
-    model.place(5)
-    again = frozen_model(19, **BATCH_GRID)[0]
-    again.place(5)
-    np.testing.assert_array_equal(model.topics(), again.topics())
-    again.place(6)
-    assert not np.array_equal(model.topics(), again.topics())
-
-
-def test_only_a_frozen_model_places_its_words():
-    with pytest.raises(ParameterError, match="frozen"):
-        small_model(16).place(1)
 
 
 @pytest.mark.parametrize("threads", [1, 2])
