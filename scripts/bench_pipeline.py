@@ -13,9 +13,10 @@ Part 2 (--full-grid): `curiosity reproduce CONFIG --jobs N` in a fresh process, 
 already cached, into --results-dir (a temporary folder unless given), for the grids of
 --grids: ``paper``, the paper's own grid (the three embedded maps of --config x the
 paper's four weight functions), and ``config``, the whole of --config as it stands: wall
-time, and the seconds per stage from its REPORT.md, beside the figures of commit 8f4a5d2
-(the paper's grid with 4 frozen sweeps from a random start at every checkpoint, measured
-on a 2-core machine: explore 4.6, label 7.9, all 12.7 minutes). --grid-only skips part 1.
+time, and the seconds per stage from its REPORT.md, beside the figures of commit 1903b17
+(the paper's grid labelled one single chain at a time, 64 sweeps then 16 warm per
+checkpoint, with the two-start check, on a 2-core machine: explore 4.9, label 28.9, all
+34.2 minutes). --grid-only skips part 1.
 
     python scripts/bench_pipeline.py                                   # part 1, a few minutes
     python scripts/bench_pipeline.py --full-grid                       # and both grids
@@ -42,8 +43,8 @@ from curiosity_cli.explore.walker import explore
 from curiosity_cli.words.extract import extract_words
 
 
-#: Minutes per stage of the paper's grid at commit 8f4a5d2 (README, issue 14), 2 cores.
-BEFORE = {"explore": 4.6, "label": 7.9, "all": 12.7}
+#: Minutes per stage of the paper's grid at commit 1903b17 (README, issue 14), 2 cores.
+BEFORE = {"explore": 4.9, "label": 28.9, "all": 34.2}
 #: The weight functions of the paper's own grid (its section 5.1).
 PAPER_WEIGHT_FUNCTIONS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity")
 
@@ -76,7 +77,7 @@ def main() -> None:
             "config": (f"{args.config.name} as it stands", args.config, []),
         }
         grids = [grids[name] for name in args.grids]
-        print(f"\nbefore (commit 8f4a5d2, paper's grid, 2 cores): explore {BEFORE['explore']} min, "
+        print(f"\nbefore (commit 1903b17, paper's grid, 2 cores): explore {BEFORE['explore']} min, "
               f"label {BEFORE['label']} min, all {BEFORE['all']} min")
         for title, path, sets in grids:
             with tempfile.TemporaryDirectory() as tmp:
