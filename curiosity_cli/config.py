@@ -347,6 +347,32 @@ def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> Exper
     return _check_experiment(_build(ExperimentConfig, raw.data, (), raw), raw)
 
 
+#: The converged labelling schedule (README, "Reproducing the paper"): 256 sweeps from
+#: random topics at every checkpoint, which brought chains from two starts together in 35
+#: of the 36 map-length-target cells of the paper's grid. ``--converged`` of ``label`` and
+#: ``reproduce``; the experiment's config.yaml records the two keys it sets.
+CONVERGED_LABELS = ("label.sweeps=256", "label.warm_sweeps=null")
+
+
+def with_converged_labels(overrides: typing.Iterable[str]) -> list[str]:
+    """``overrides`` and then :data:`CONVERGED_LABELS`.
+
+    Raises
+    ------
+    ConfigError
+        An override of a key the converged schedule sets (it would be silently replaced).
+    """
+    overrides = list(overrides)
+    fixed = {_parse_override(text)[0] for text in CONVERGED_LABELS}
+    for text in overrides:
+        if _parse_override(text)[0] in fixed:
+            raise ConfigError(
+                f"{OVERRIDES} {shown(text)}: the converged schedule sets {' and '.join(CONVERGED_LABELS)}; "
+                "give either, not both", parameter=OVERRIDES,
+            )
+    return [*overrides, *CONVERGED_LABELS]
+
+
 def load_saved_config(folder: str | Path, overrides: typing.Iterable[str] = ()) -> ExperimentConfig:
     """The config an experiment folder was explored with (its ``config.yaml``), plus ``overrides``.
 

@@ -107,12 +107,31 @@ def _reason(exc: Exception) -> str:
     return str(text) or type(exc).__name__
 
 
+#: The name of :func:`atomic_path`'s temporary files.
+LEFTOVER = ".*.tmp*"
+
+
+def remove_leftovers(folder: Path) -> int:
+    """Delete the temporary files writers killed inside :func:`atomic_path` left below ``folder``; how many.
+
+    For a stage that starts over in a folder it alone writes: a file being written by
+    another command at the same time would go too.
+    """
+    removed = 0
+    for path in Path(folder).rglob(LEFTOVER):
+        if path.is_file():
+            path.unlink(missing_ok=True)
+            removed += 1
+    return removed
+
+
 @contextlib.contextmanager
 def atomic_path(path: Path):
     """Yield a temporary path beside ``path``; it replaces ``path`` only if the block succeeds.
 
     A reader never sees a half-written file, and a killed writer leaves at most a stray
-    ``.tmp`` file, never a truncated result under the real name.
+    ``.tmp`` file (:data:`LEFTOVER`, which :func:`remove_leftovers` deletes), never a
+    truncated result under the real name.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

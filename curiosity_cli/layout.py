@@ -97,9 +97,13 @@ class ExperimentFolder:
         """Every run folder under its real name (finished or not), sorted."""
         return sorted(self.runs.glob("*/*/restart-*"))
 
+    @property
+    def batches(self) -> Path:
+        return self.root / "batch"
+
     def batch(self, dataset: str) -> Path:
         """A map's batch reference Z_b."""
-        return self.root / "batch" / f"{dataset}.npz"
+        return self.batches / f"{dataset}.npz"
 
     def label_file(self, dataset: str, weight_function: str, restart: int) -> Path:
         """A run's label file (Z_p's contingency tables)."""

@@ -189,3 +189,14 @@ def test_reproduce_quick_runs_quick_yaml_so_a_config_beside_it_is_a_usage_error(
     result = run("reproduce", str(CONFIG_DIR / "paper-grid.yaml"), "--quick")
     assert result.exit_code == 2
     assert "--quick" in result.output and "runs configs/quick.yaml" in result.output
+
+
+@pytest.mark.parametrize("command", ["label", "reproduce"])
+def test_converged_with_a_label_sweeps_override_is_one_clear_error(command, tmp_path):
+    where = ["--results-dir", str(tmp_path)] if command == "reproduce" else [str(tmp_path)]
+    result = run(command, "--converged", "--set", "label.sweeps=3", *where)
+    assert result.exit_code == 1
+    assert result.output.strip() == (
+        "Error: --set 'label.sweeps=3': the converged schedule sets label.sweeps=256 and label.warm_sweeps=null; "
+        "give either, not both"
+    )

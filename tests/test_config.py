@@ -309,3 +309,13 @@ def test_a_string_that_reads_as_a_float_is_saved_quoted(tmp_path):
     saved = tmp_path / "resolved.yaml"
     saved.write_text(to_yaml(config))
     assert load_config(saved) == config and config.name == "1e5"
+
+
+def test_the_converged_schedule_sets_its_two_label_keys_and_refuses_a_clash():
+    from curiosity_cli.config import with_converged_labels
+
+    config = load_config(CONFIG_DIR / "quick.yaml", with_converged_labels(["seed=3"]))
+    assert (config.label.sweeps, config.label.warm_sweeps, config.seed) == (256, None, 3)
+    with pytest.raises(ConfigError, match=r"'label.warm_sweeps=4': the converged schedule sets label.sweeps=256 and "
+                                          r"label.warm_sweeps=null; give either, not both"):
+        with_converged_labels(["label.warm_sweeps=4"])

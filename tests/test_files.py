@@ -37,3 +37,20 @@ def test_read_yaml_refuses_a_binary_file(tmp_path):
     path.write_bytes(b"\xff\xfe\x00")
     with pytest.raises(ConfigError, match="x.yaml: not a text file; expected YAML"):
         read_yaml(path, "config file")
+
+
+def test_the_leftovers_of_killed_atomic_writers_are_removed_and_nothing_else(tmp_path):
+    from curiosity_cli.files import atomic_path, remove_leftovers
+
+    result = tmp_path / "a" / "result.npz"
+    with pytest.raises(RuntimeError):
+        with atomic_path(result) as tmp:
+            tmp.write_bytes(b"half")
+            leftover = tmp_path / "a" / "b" / tmp.name  # as a killed writer would leave it
+            leftover.parent.mkdir()
+            leftover.write_bytes(b"half")
+            raise RuntimeError
+    (tmp_path / "a" / "kept.npz").write_bytes(b"whole")
+    (tmp_path / "a" / ".hidden").write_bytes(b"not ours")
+    assert remove_leftovers(tmp_path) == 1
+    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == [".hidden", "kept.npz"]

@@ -26,14 +26,15 @@ def label(
     cache_dir: Path = typer.Option(DEFAULT_CACHE, "--cache-dir", help="Where word stores are kept."),
     backend: Backend = typer.Option(Backend.loky, "--backend", help="loky: processes on this machine; dask: a Dask cluster (needs the distributed extra)."),
     scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler, e.g. tcp://10.0.0.5:8786; default a local cluster of --jobs workers."),
+    converged: bool = typer.Option(False, "--converged", help="Converged labels: 256 sweeps from random topics at every checkpoint (label.sweeps=256, label.warm_sweeps=null), about ten times the labelling time."),
 ) -> None:
     """Label each map with every run's checkpoint models (Z_p) and in batch mode (Z_b)."""
-    from curiosity_cli.config import load_saved_config
+    from curiosity_cli.config import load_saved_config, with_converged_labels
     from curiosity_cli.evaluate.label_stage import label_experiment
 
     if scheduler is not None and backend is not Backend.dask:
         raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")
-    config = load_saved_config(folder, overrides)
+    config = load_saved_config(folder, with_converged_labels(overrides) if converged else overrides)
     with StagedProgress() as progress:
         done = label_experiment(
             config, folder, cache_dir=cache_dir, jobs=jobs, force=force,

@@ -30,13 +30,14 @@ def reproduce(
     scheduler: str = typer.Option(None, "--scheduler", metavar="ADDRESS", help="With --backend dask: a running scheduler; default a local cluster of --jobs workers, shared by both stages."),
     results_dir: Path = typer.Option(DEFAULT_RESULTS, "--results-dir", help="Experiment folders go here."),
     cache_dir: Path = typer.Option(DEFAULT_CACHE, "--cache-dir", help="Where word stores are kept."),
+    converged: bool = typer.Option(False, "--converged", help="Converged labels: 256 sweeps from random topics at every checkpoint (label.sweeps=256, label.warm_sweeps=null), about ten times the labelling time."),
 ) -> None:
     """Extract, explore, label, evaluate and plot, then write results/<experiment>/REPORT.md.
 
     Every stage keeps what it finished: run the same command again to resume. With
     --sweep, once per combination of values, then results/<experiment>-sweep/SWEEP.md.
     """
-    from curiosity_cli.config import load_config
+    from curiosity_cli.config import load_config, with_converged_labels
     from curiosity_cli.files import display_path
     from curiosity_cli.reproduce import reproduce as run_pipeline
 
@@ -46,6 +47,8 @@ def reproduce(
         raise typer.BadParameter(f"runs configs/quick.yaml; give it or a CONFIG ({config}), not both", param_hint="--quick")
     if config is None:
         config = CONFIG_DIR / ("quick.yaml" if quick else "paper-grid.yaml")
+    if converged:
+        overrides = with_converged_labels(overrides)
     if sweeps:
         _reproduce_sweep(config, overrides, sweeps, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs,
                          force=force, backend=backend.value, scheduler=scheduler)

@@ -59,7 +59,7 @@ import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
 from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
-from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz
+from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz, remove_leftovers
 from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
 from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of, recorded_digest
 
@@ -519,6 +519,8 @@ def label_experiment(
     folder = Path(folder)
     layout = ExperimentFolder(folder)
     record_label_settings(folder, config)
+    for written in (layout.labels, layout.batches):  # what a killed label was writing
+        remove_leftovers(written)
     stores = prepare_stores(config, cache_dir)
     by_name = {info.name: info for info in stores.values()}
     folders = [p for p in layout.run_folders() if p.parent.parent.name in by_name]

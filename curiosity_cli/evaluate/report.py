@@ -227,9 +227,9 @@ def _convergence_section(convergence, config: ExperimentConfig) -> list[str]:
             f"at {worst['path_length']} steps against {_TARGETS[worst['against']]}, "
             f"{_signed(worst['difference'], 3)} bits): absolute MI there depends on how the labelling chain started, "
             "by about that much. Comparisons between walkers remain like for like, as every run is labelled the "
-            "same way. More sweeps narrow it: on the embedded maps, 256 at every checkpoint (`curiosity label --set "
-            "label.sweeps=256 --set label.warm_sweeps=null`) brought the two starts together in 35 of 36 cells, at "
-            "about ten times the labelling time (README, \"Reproducing the paper\")."
+            "same way. More sweeps narrow it: on the embedded maps, 256 at every checkpoint (`curiosity label "
+            "--converged`) brought the two starts together in 35 of 36 cells, at about ten times the labelling time "
+            "(README, \"Reproducing the paper\")."
         )
     return lines + [""]
 
