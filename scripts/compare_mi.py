@@ -32,7 +32,7 @@ def main() -> None:
     parser.add_argument("b", type=Path, help="experiment folder B (e.g. the labels after)")
     args = parser.parse_args()
     a, b = (pd.read_csv(ExperimentFolder(folder).table("mi")).set_index(RUN) for folder in (args.a, args.b))
-    both = a.join(b, lsuffix="_a", rsuffix="_b", how="inner")
+    both = a.merge(b, left_index=True, right_index=True, suffixes=("_a", "_b"))
     print(f"{len(both)} run-lengths in both; MI in bits, B minus A: mean ± standard error over runs, "
           f"✗ where more than {CONVERGENCE_TOLERANCE} and more than 2 standard errors")
     print(f"{'dataset':<16} {'target':<6} {'length':>6} {'n':>4} {'A':>7} {'B':>7} {'B - A':>18}")

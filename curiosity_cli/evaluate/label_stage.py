@@ -49,7 +49,7 @@ from __future__ import annotations
 import contextlib
 import json
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -164,6 +164,24 @@ class RunInputs:
     def phi(self, length: int) -> np.ndarray:
         """(V, K) int32 ndarray: the word-topic counts Φ_p after ``length`` steps."""
         return self.checkpoints[length].dense()
+
+    def phis(self) -> _DenseCheckpoints:
+        """Φ_p at each checkpoint, shortest path first, each made dense only when read."""
+        return _DenseCheckpoints(self)
+
+
+class _DenseCheckpoints(Sequence):
+    """A run's Φ_p by checkpoint, dense on reading: a block holds 16 runs' checkpoints, which
+    dense would be 150 MB at once (and grow a worker's memory past loky's limit)."""
+
+    def __init__(self, run: RunInputs):
+        self._run = run
+
+    def __len__(self) -> int:
+        return len(self._run.meta["checkpoints"])
+
+    def __getitem__(self, j: int) -> np.ndarray:
+        return self._run.phi(self._run.meta["checkpoints"][j])
 
 
 def batch_recipe(config: ExperimentConfig, info: StoreInfo) -> Recipe:
@@ -312,7 +330,7 @@ def label_block(runs: list[RunInputs], inputs: MapInputs, arrays: MapArrays, con
         if is_checked(config, run.meta["restart"]):
             chains.append((index, SECOND_PREFIX))
     lengths = [run.meta["checkpoints"] for run in runs]
-    phis = [[run.phi(n) for n in run.meta["checkpoints"]] for run in runs]
+    phis = [run.phis() for run in runs]
     tables = [{} for _ in runs]
     examples = [{} for _ in runs]
     labelled = label_paths(
