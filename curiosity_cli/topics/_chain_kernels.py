@@ -10,21 +10,22 @@ innermost, contiguous dimension of every per-chain array, so each step over topi
 vector operation across chains, and the chains hide each other's latency (a single
 chain's draw waits for the count change of the word before it):
 
-- ``topics`` (N, R) int8/int16: each word's topic in each chain.
+- ``topics`` (N, R) int8: each word's topic in each chain (K <= 127).
 - ``phiw`` (V, K, R) float32: ``(float32(n_kw) + beta) * float32(1 / (n_k + V beta))``,
   the factors of eq. 5 that frozen counts fix.
 - ``ncz``, ``ng`` (n_cells, K, R) int32: each chain's cell topic counts and neighbourhood
   sums (a cell's counts plus its neighbours').
-- ``keys`` (R,) uint64: ``mix(seed)`` of each chain.
+- ``keys``: a tuple of R uint64, ``mix(seed)`` of each chain; a tuple, so that the
+  number of chains is known when compiling (one compilation per R, cached on disk).
 
 The draw, per chain, for word ``i`` of cell ``c`` with word id ``w`` and topic ``old``::
 
     p[k] = phiw[w, k] * (float32(ng[c, k] - (k == old)) + alpha)    # the word left out
 
 in float32; an inverse-CDF search over the float32 running sum ``s[k] = s[k-1] + p[k]``
-(from ``s[-1] = 0``):
-``target = unit32(bits) * s[K-1]`` and the topic is the first ``k`` with ``s[k] >
-target`` (rounding can leave none; then the last topic with ``p[k] > 0``). Every
+(from ``s[-1] = 0``): ``target = unit32(bits) * s[K-1]`` and the topic is the first
+``k`` with ``s[k] > target`` (rounding can leave none; then the last topic with
+``p[k] > 0``). Every
 operation is per chain, so a chain's draws do not depend on which chains share its block.
 """
 
@@ -38,26 +39,23 @@ from curiosity_cli.topics._rng import below, next_state, stream_start, unit32
 
 
 @njit(inline="always")
-def _count(cell, k, r, delta, ncz, ng, table):
-    """Add ``delta`` words of ``cell`` at topic ``k`` in chain ``r``: its cell counts and the
-    neighbourhood sums of the cell and of every neighbour."""
-    ncz[cell, k, r] += delta
-    ng[cell, k, r] += delta
+def _count(cell, k, r, ncz, ng, table):
+    """Count one more word of ``cell`` at topic ``k`` in chain ``r``: in its cell counts and
+    the neighbourhood sums of the cell and of every neighbour."""
+    ncz[cell, k, r] += 1
+    ng[cell, k, r] += 1
     for j in range(table.shape[1]):
         d = table[cell, j]
         if d >= 0:
-            ng[d, k, r] += delta
+            ng[d, k, r] += 1
 
 
-@njit(inline="always")
-def _first_above(running, k_count, target):
-    """The first ``k`` with ``running[k] > target`` (float32 running sums, non-decreasing);
-    if rounding left none, the last ``k`` whose weight is positive."""
-    for k in range(k_count):
-        if running[k] > target:
-            return k
-    k = k_count - 1
-    while k > 0 and running[k] <= running[k - 1]:
+@njit
+def _last_positive(phiw, ng, cell, w, r, alpha):
+    """The last topic whose weight is positive in chain ``r`` (the word not in ``ng[cell]``):
+    the draw when rounding left the target at or past the total."""
+    k = phiw.shape[1] - 1
+    while k > 0 and phiw[w, k, r] * (np.float32(ng[cell, k, r]) + alpha) <= 0:
         k -= 1
     return k
 
@@ -84,20 +82,16 @@ def start_chain_kernel(r, placed, cells, cell_first, cell_count, words, topics, 
                 for k in range(n_topics):
                     total += phiw[w, k, r] * (np.float32(ng[cell, k, r]) + alpha)
                     running[k] = total
-                k = _first_above(running, n_topics, unit32(bits) * total)
+                target = unit32(bits) * total
+                k = 0
+                while k < n_topics and running[k] <= target:
+                    k += 1
+                if k == n_topics:
+                    k = _last_positive(phiw, ng, cell, w, r, alpha)
             else:
                 k = below(bits, n_topics)
             topics[i, r] = k
-            _count(cell, k, r, 1, ncz, ng, table)
-
-
-@njit
-def _last_positive(phiw, ng, cell, w, r, alpha):
-    """The last topic whose weight is positive in chain ``r`` (the word already left out of ``ng``)."""
-    k = phiw.shape[1] - 1
-    while k > 0 and phiw[w, k, r] * (np.float32(ng[cell, k, r]) + alpha) <= 0:
-        k -= 1
-    return k
+            _count(cell, k, r, ncz, ng, table)
 
 
 @njit
