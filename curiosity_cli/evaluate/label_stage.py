@@ -14,7 +14,7 @@ Written under ``results/<experiment>/``:
   NMI follow from them exactly, in kilobytes instead of a megabyte per checkpoint. A
   restart below ``label.check_restarts`` also has ``placed_batch`` and ``placed_human``:
   the same tables for a second labelling chain from a placed start
-  (:meth:`~curiosity_cli.evaluate.label_sampling.PathLabeller.start`), which evaluation
+  (:meth:`~curiosity_cli.topics.chains.FrozenChains.start`), which evaluation
   compares with the first to check that Z_p has forgotten its start. For a
   map with human labels also ``class_first_step`` ((C,) int32): the step at which the
   path first stood in a cell where class ``h`` covers at least ``CLASS_SHARE_PERCENT`` %
@@ -64,7 +64,6 @@ from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
 from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of, recorded_digest
 
 if TYPE_CHECKING:
-    from curiosity_cli.evaluate.label_sampling import PathLabeller
     from curiosity_cli.explore.runs import Run
     from curiosity_cli.parallel import Workers
     from curiosity_cli.words.map_stores import StoreInfo
@@ -171,8 +170,8 @@ class RunInputs:
 
 
 class _DenseCheckpoints(Sequence):
-    """A run's Φ_p by checkpoint, dense on reading: a block holds 16 runs' checkpoints, which
-    dense would be 150 MB at once (and grow a worker's memory past loky's limit)."""
+    """A run's Φ_p by checkpoint, dense on reading: a block holds 16 runs, whose 6 checkpoints
+    each, all dense, would be 150 MB at once."""
 
     def __init__(self, run: RunInputs):
         self._run = run
@@ -420,7 +419,7 @@ def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None
 
 
 def read_label_file(path: Path) -> tuple[dict, dict]:
-    """``(meta, arrays)`` of a run's label file, as :func:`label_run` makes it.
+    """``(meta, arrays)`` of a run's label file, as :func:`label_block` makes it.
 
     Raises
     ------
@@ -751,7 +750,7 @@ def _label_task(
     threads: int = 1,
 ) -> list[tuple]:
     """Label a block of runs in a worker: ``(arrays, examples, meta)`` per run; ``arrays`` are its map's when shipped
-    (Dask), else read once. One thread, whatever ``threads`` is: the blocks keep the workers busy."""
+    (Dask), else read once. One thread (``threads`` is 1): the blocks keep every worker busy."""
     runs, inputs = task
     if arrays is None:
         arrays = _map_arrays(inputs.entry, inputs.store_path, inputs.batch_path)

@@ -110,7 +110,7 @@ def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None
     arrays : dict of str to ndarray
         ``lengths`` (n,), ``batch`` (n, K, K), optionally ``human`` (n, K, C),
         ``class_first_step`` (C,) and the second chain's ``placed_batch`` and
-        ``placed_human``, as :func:`~curiosity_cli.evaluate.label_stage.label_run` writes them.
+        ``placed_human``, as :func:`~curiosity_cli.evaluate.label_stage.label_block` writes them.
     class_names : dict of int to str, optional
         The map's legend.
 
