@@ -13,8 +13,8 @@ the object, nor on their number.
 
 Random streams, per chain, from ``key = mix(seed)``: a uniform start draws cell ``c``
 from stream ``(c, c)`` (as :meth:`~curiosity_cli.topics.model.TopicModel.restart` of a
-model holding every cell), a placed start from ``(0, c)``; sweep ``s`` after a start (0, 1, ...) draws cell ``c`` from stream
-``(n_cells + s, c)``.
+model holding every cell), a placed start from ``(0, c)``; sweep ``s`` after a start
+(0, 1, ...) draws cell ``c`` from stream ``(n_cells + s, c)``.
 """
 
 from __future__ import annotations
