@@ -39,6 +39,10 @@ _SAVED_BASE = "paper.yaml"
 #: that argument, which begins the message of any error about it.
 OVERRIDES = "overrides"
 
+#: The top-level key of an experiment config that declares a sweep over its other keys
+#: (:func:`curiosity_cli.sweep.declared_sweeps`); an experiment never sees it.
+SWEEP_KEY = "sweep"
+
 #: The longest experiment or dataset name; a sweep names its experiments in up to this many.
 MAX_NAME = 120
 # Names become file and folder names: no separators, no leading dot, no path of '..'.
@@ -62,6 +66,11 @@ WALKER_NAMES = (
     "scattered-cells",
     "compact-block",
 )
+
+#: The readings of eq. 8 a config may name in ``explore.coverage``: what a visited
+#: candidate's own term (``d = 0``) means, which the paper leaves undefined.
+#: :func:`curiosity_cli.explore.weights.coverage_potential` gives each its meaning.
+COVERAGE_READINGS = ("literal", "clamp", "others")
 
 
 def _spec(
@@ -155,7 +164,13 @@ class ExploreConfig:
     checkpoints: tuple[int, ...] = _spec(min=1)
     samples_per_step: int = _spec(min=1)
     step_seconds: float | None = _spec(min=0, min_exclusive=True)
+    coverage: str = _spec(choices=COVERAGE_READINGS)
+    # read by the clamp reading only (run_settings)
     min_d2: float | None = _spec(min=0, min_exclusive=True)
+
+    def run_settings(self) -> dict:
+        """The keys a run's numbers depend on: every key but ``min_d2`` unless the reading is clamp."""
+        return {key: value for key, value in to_dict(self).items() if key != "min_d2" or self.coverage == "clamp"}
 
 
 @dataclass(frozen=True)
@@ -284,6 +299,9 @@ def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
     if path in seen:
         raise ConfigError(f"{display_path(path)}: base: the chain of base configs loops back here")
     data = read_yaml(path, "config file")
+    if SWEEP_KEY in data and seen:
+        raise ConfigError(f"{display_path(path)}: {SWEEP_KEY}: only the experiment config itself may declare a sweep")
+    data.pop(SWEEP_KEY, None)  # the sweep's, not an experiment's (curiosity_cli.sweep.declared_sweeps)
     base = data.pop("base", None)
     if base is not None:
         if not isinstance(base, str):
@@ -701,8 +719,25 @@ def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:
             f"got {checkpoints}, expected increasing path lengths no longer than explore.path_length "
             f"({explore.path_length})",
         )
+    _check_coverage(explore, raw)
     _check_drive(config.drive, raw)
     return dataclasses.replace(config, datasets=tuple(datasets))
+
+
+def _check_coverage(explore: ExploreConfig, raw: _Raw) -> None:
+    """The clamp needs its floor; a floor set without naming a reading is the old syntax."""
+    if explore.coverage == "clamp" and explore.min_d2 is None:
+        raise _invalid(raw, ("explore", "min_d2"), "got null, expected a number > 0: the clamp reading's floor on d^2")
+    paper = str((CONFIG_DIR / _SAVED_BASE).resolve())
+    if explore.min_d2 is not None and raw.origin(("explore", "min_d2")) != paper and (
+        raw.origin(("explore", "coverage")) == paper
+    ):
+        # min_d2 alone once meant the clamp; read now as literal it would be silently ignored
+        raise _invalid(
+            raw, ("explore", "min_d2"),
+            f"got {explore.min_d2} without explore.coverage; the reading of eq. 8 is now named there "
+            f"(one of {', '.join(COVERAGE_READINGS)}): add explore.coverage: clamp to clamp d^2 at {explore.min_d2}",
+        )
 
 
 def _check_drive(drive: DriveConfig, raw: _Raw) -> None:

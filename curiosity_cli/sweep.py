@@ -265,6 +265,63 @@ def parse_sweeps(options: Sequence[str], sets: Sequence[str] = ()) -> tuple[Swee
     return tuple(axes)
 
 
+def declared_sweeps(config_path: str | Path) -> list[str]:
+    """The sweep an experiment config declares under its top-level ``sweep`` key, as ``--sweep`` options.
+
+    ``sweep`` maps dotted keys to lists of values, in the order the axes vary (the first
+    slowest), e.g. ``{explore.coverage: [literal, clamp], seed: [0, 1, 2]}``.
+
+    Parameters
+    ----------
+    config_path : str or Path
+        The experiment YAML.
+
+    Returns
+    -------
+    list of str
+        ``KEY=V1,V2,...``, one per declared key; empty when the file declares none.
+
+    Raises
+    ------
+    ConfigError
+        ``sweep`` is not a mapping of keys to non-empty lists, or a value cannot be
+        written as one ``--sweep`` value; naming the file and the key.
+    """
+    from curiosity_cli.config import SWEEP_KEY
+    from curiosity_cli.yamlfile import read_yaml
+
+    declared = read_yaml(Path(config_path), "config file").get(SWEEP_KEY)
+    if declared is None:
+        return []
+    where = f"{display_path(Path(config_path))}: {SWEEP_KEY}"
+    if not isinstance(declared, dict) or not declared:
+        raise ConfigError(f"{where}: expected a mapping of dotted keys to lists of values, e.g. seed: [0, 1, 2]")
+    options = []
+    for key, values in declared.items():
+        if not isinstance(key, str) or not isinstance(values, list) or not values:
+            raise ConfigError(f"{where}.{key}: expected a list of one or more values, e.g. [0, 1, 2]")
+        texts = [_value_text(value) for value in values]
+        if any(split_values(text) != [text] for text in texts):
+            raise ConfigError(f"{where}.{key}: a value with a comma outside brackets; write it as a list")
+        options.append(f"{key}={','.join(texts)}")
+    return options
+
+
+def _value_text(value) -> str:
+    """A YAML value as a ``--sweep`` value that reads back to it: strings as typed when they can be."""
+    if isinstance(value, str) and _parsed(value) == value:
+        return value
+    return json.dumps(value)
+
+
+def merge_sweeps(declared: Sequence[str], given: Sequence[str]) -> list[str]:
+    """The config's declared sweep with the command line's ``--sweep`` options: a given key
+    replaces the declared key's values in place, and other given keys follow, in order."""
+    given_by_key = {text.partition("=")[0].strip(): text for text in given}
+    merged = [given_by_key.pop(text.partition("=")[0].strip(), text) for text in declared]
+    return merged + [text for text in given if text.partition("=")[0].strip() in given_by_key]
+
+
 def _overlap(key: str, other: str) -> bool:
     """Whether two dotted keys set the same leaf (equal, or one a section of the other)."""
     return key == other or key.startswith(other + ".") or other.startswith(key + ".")

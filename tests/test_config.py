@@ -42,7 +42,7 @@ def test_paper_yaml_holds_the_papers_parameters():
         "topic-perplexity",
     )
     assert config.explore.weight_functions[4:] == ("lawnmower", "scattered-cells", "compact-block")
-    assert config.explore.min_d2 is None, "eq. 8 as written: a visited neighbour has weight 0"
+    assert config.explore.coverage == "literal", "eq. 8 as written: a visited neighbour has weight 0"
     assert config.drive.gamma == 0.7
     assert config.datasets == ("zurich-zh17", "aerial-mosaic", "sentinel-coast", "reef-mosaic")
 
@@ -112,14 +112,25 @@ def test_a_saved_config_still_loads_after_a_key_is_added_to_the_project(tmp_path
     saved.parent.mkdir(parents=True)
     saved.write_text(saved_yaml(config))
     assert load_config(saved) == config
-    # a folder saved before explore.min_d2 existed: the key takes its default from paper.yaml
+    # a folder saved before explore.coverage existed (min_d2 null: eq. 8 as written) reads as literal
     data = yaml.safe_load(saved.read_text())
-    del data["explore"]["min_d2"]
+    del data["explore"]["coverage"]
+    data["explore"]["min_d2"] = None
     saved.write_text(yaml.safe_dump(data, sort_keys=False))
     paper = yaml.safe_load((CONFIG_DIR / "paper.yaml").read_text())
-    assert "min_d2" in paper["explore"]
-    assert load_config(saved).explore.min_d2 == paper["explore"]["min_d2"]
-    # a base beside the config still comes first
+    assert paper["explore"]["coverage"] == "literal"
+    assert load_config(saved).explore.coverage == "literal"
+    # one saved with the old clamp (min_d2 alone) is refused, never read as literal
+    data["explore"]["min_d2"] = 0.25
+    saved.write_text(yaml.safe_dump(data, sort_keys=False))
+    with pytest.raises(ConfigError, match=r"config.yaml: explore.min_d2: got 0.25 without explore.coverage.*clamp"):
+        load_config(saved)
+    data["explore"]["coverage"] = "clamp"
+    saved.write_text(yaml.safe_dump(data, sort_keys=False))
+    assert load_config(saved).explore.min_d2 == 0.25
+    # a base beside the config still comes first: a key missing from both is refused
+    del data["explore"]["coverage"]
+    saved.write_text(yaml.safe_dump(data, sort_keys=False))
     (saved.parent / "paper.yaml").write_text("seed: 7\n")
     with pytest.raises(ConfigError, match="missing key"):
         load_config(saved)
@@ -319,3 +330,33 @@ def test_the_converged_schedule_sets_its_two_label_keys_and_refuses_a_clash():
     with pytest.raises(ConfigError, match=r"'label.warm_sweeps=4': the converged schedule sets label.sweeps=256 and "
                                           r"label.warm_sweeps=null; give either, not both"):
         with_converged_labels(["label.warm_sweeps=4"])
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("explore:\n  coverage: clamped\n", "exp.yaml: explore.coverage: got 'clamped'"),
+        ("explore:\n  coverage: clamp\n  min_d2: null\n", "exp.yaml: explore.min_d2: got null, expected a number > 0"),
+        (
+            "explore:\n  min_d2: 0.5\n",
+            "exp.yaml: explore.min_d2: got 0.5 without explore.coverage; the reading of eq. 8 is now named there "
+            "(one of literal, clamp, others): add explore.coverage: clamp",
+        ),
+    ],
+)
+def test_bad_readings_of_eq_8_are_refused_naming_the_key(tmp_path, text, message):
+    with pytest.raises(ConfigError) as info:
+        load_config(_experiment(tmp_path, text))
+    assert message in str(info.value) and "\n" not in str(info.value)
+
+
+def test_each_reading_is_one_value_and_the_floor_counts_only_for_the_clamp():
+    for reading in ("literal", "clamp", "others"):
+        config = load_config(CONFIG_DIR / "quick.yaml", [f"explore.coverage={reading}"])
+        assert config.explore.coverage == reading and config.explore.min_d2 == 0.25
+        assert ("min_d2" in config.explore.run_settings()) == (reading == "clamp")
+    clamp = load_config(CONFIG_DIR / "quick.yaml", ["explore.coverage=clamp", "explore.min_d2=0.5"])
+    assert clamp.explore.run_settings()["min_d2"] == 0.5
+    # a floor on the command line without a reading is the old syntax: refused, naming the option
+    with pytest.raises(ConfigError, match=r"^overrides: explore.min_d2: got 0.5 without explore.coverage"):
+        load_config(CONFIG_DIR / "quick.yaml", ["explore.min_d2=0.5"])

@@ -22,7 +22,8 @@ def reproduce(
         [], "--sweep", metavar="KEY=V1,V2,...",
         help="Run every combination of the --sweep options' values (their product), each as its own experiment "
         "under results/<name>-sweep/, and compare their headlines in SWEEP.md; e.g. --sweep model.topics=16,32. "
-        "Values are split on commas outside brackets; one value just fixes the key.",
+        "Values are split on commas outside brackets; one value just fixes the key. A config's own `sweep:` "
+        "runs the same way; --sweep replaces the values of a key it declares.",
     ),
     jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
     force: bool = typer.Option(False, "--force", help="Redo runs and labels that are already finished."),
@@ -35,11 +36,13 @@ def reproduce(
     """Extract, explore, label, evaluate and plot, then write results/<experiment>/REPORT.md.
 
     Every stage keeps what it finished: run the same command again to resume. With
-    --sweep, once per combination of values, then results/<experiment>-sweep/SWEEP.md.
+    --sweep, or a config that declares a sweep, once per combination of values, then
+    results/<experiment>-sweep/SWEEP.md.
     """
     from curiosity_cli.config import load_config, with_converged_labels
     from curiosity_cli.files import display_path
     from curiosity_cli.reproduce import reproduce as run_pipeline
+    from curiosity_cli.sweep import declared_sweeps, merge_sweeps
 
     if scheduler is not None and backend is not Backend.dask:
         raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")
@@ -49,6 +52,7 @@ def reproduce(
         config = CONFIG_DIR / ("quick.yaml" if quick else "paper-grid.yaml")
     if converged:
         overrides = with_converged_labels(overrides)
+    sweeps = merge_sweeps(declared_sweeps(config), sweeps)
     if sweeps:
         _reproduce_sweep(config, overrides, sweeps, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs,
                          force=force, backend=backend.value, scheduler=scheduler)

@@ -109,7 +109,7 @@ def run_recipe(
     from the map, the experiment seed and the restart.
     """
     explore = {
-        key: value for key, value in to_dict(config.explore).items() if ("explore", key) not in _SELECTION_KEYS
+        key: value for key, value in config.explore.run_settings().items() if ("explore", key) not in _SELECTION_KEYS
     }
     return Recipe({
         "store": store, "vocabulary_hashes": vocabulary_hashes, "dataset": dataset,
@@ -162,14 +162,19 @@ def check_saved_config(folder: Path, config: ExperimentConfig) -> None:
     saved_path = ExperimentFolder(folder).config
     if not saved_path.is_file():
         return
-    saved = to_dict(load_config(saved_path))
-    current = to_dict(config)
-    for keys, old, new in differences({k: saved.get(k) for k in _RUN_SECTIONS}, {k: current[k] for k in _RUN_SECTIONS}):
+    saved, current = (_run_sections(load_config(saved_path)), _run_sections(config))
+    for keys, old, new in differences(saved, current):
         if keys not in _SELECTION_KEYS:
             raise ConfigError(
                 f"{display_path(saved_path)}: {'.'.join(keys)} was {old!r} for the runs already there, now {new!r}; "
                 "use another experiment name or another results folder"
             )
+
+
+def _run_sections(config: ExperimentConfig) -> dict:
+    sections = {key: to_dict(getattr(config, key)) for key in _RUN_SECTIONS}
+    sections["explore"] = config.explore.run_settings()
+    return sections
 
 
 def run_grid(

@@ -11,9 +11,9 @@ Each step ``t`` (0-based) of a run of ``path_length`` steps, with the walker in 
 3. **Score** the in-bounds neighbours (the cell's row of the grid's neighbour table,
    :meth:`~curiosity_cli.cell_grid.SquareGrid.neighbour_table`: up, down, left, right,
    those that exist) with the run's weight function
-   (:mod:`curiosity_cli.explore.weights`). When every neighbour is visited and the
-   paper's repulsion leaves them all weight 0, they are scored again by the boxed-in
-   rule of that module, and the step is counted as boxed in.
+   (:mod:`curiosity_cli.explore.weights`), under the run's reading of eq. 8. A step
+   whose neighbours are all visited is counted as boxed in; under the literal reading,
+   which leaves them all weight 0, they are scored again by that module's boxed-in rule.
 4. **Move** to a neighbour drawn with probability proportional to its weight. Weights
    that are NaN or infinite count as 0; if no weight is left positive the draw is
    uniform, and the step is counted as a fallback.
@@ -98,8 +98,8 @@ class Exploration:
         Steps whose move was drawn uniformly because no weight was positive (always
         False on the last step, which does not move).
     boxed_in : (L,) bool ndarray
-        Steps whose neighbours were all visited, so the paper's repulsion gave each
-        weight 0 and the boxed-in rule scored them.
+        Steps whose neighbours were all visited (under the literal reading of eq. 8, the
+        steps the boxed-in rule scored).
     candidate_step, candidate_cell : (M,) int64 ndarrays
         For every scored neighbour: the step and the neighbour's cell.
     coverage, word_perplexity, topic_perplexity, weight : (M,) float64 ndarrays
@@ -162,7 +162,7 @@ def explore(
     model : ModelConfig
         Topics, α, β, η and the spatial neighbourhood of the topic model.
     settings : ExploreConfig
-        Path length, checkpoints, refinement budget and the coverage clamp.
+        Path length, checkpoints, refinement budget and the reading of eq. 8.
     seed : int or sequence of int
         Entropy for :class:`numpy.random.SeedSequence`; the topic model and the moves
         draw from two streams spawned from it.
@@ -229,15 +229,16 @@ def explore(
         visited = np.flatnonzero(visits)
         candidates = Candidates(
             cells=cells,
-            coverage=coverage_potential(cells, visited, visits[visited], store.grid, settings.min_d2),
+            coverage=coverage_potential(
+                cells, visited, visits[visited], store.grid, settings.coverage, settings.min_d2
+            ),
             word_perplexity=np.array([word_perplexity(topic_model, store.cell_words(g)) for g in cells]),
             topic_perplexity=np.array([topic_perplexity(topic_model, store.cell_words(g), g) for g in cells]),
         )
-        weights = _weights(walker, weight_function, candidates)
-        if np.all(np.isinf(candidates.coverage)) and not np.any(weights > 0):
-            boxed_in[step] = True
+        boxed_in[step] = bool(np.all(visits[cells] > 0))
+        if boxed_in[step] and settings.coverage == "literal":
             candidates = dataclasses.replace(candidates, coverage=visits[cells].astype(np.float64))
-            weights = _weights(walker, weight_function, candidates)
+        weights = _weights(walker, weight_function, candidates)
         choice, fallback[step] = draw_move(weights, rng)
         scored.append((step, candidates, weights, choice))
         cell = int(cells[choice])

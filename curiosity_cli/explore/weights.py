@@ -9,14 +9,24 @@ them), which keeps each function a one-liner that is easy to check against the p
 - ``random-walk``: 1 (eq. 7);
 - ``stochastic-coverage``: ``1 / U(g_i)`` (eq. 8), with the coverage potential
   ``U(g) = Σ_j n_j / d²(g, c_j)`` over the visited cells ``c_j`` with visit counts
-  ``n_j``; ``d`` is the Euclidean distance in cell units. A visited candidate has
-  ``d = 0``, so ``U = ∞`` and weight 0: the walker never steps back while an unvisited
-  neighbour is open (the paper's rule). When every neighbour is visited the walker is
-  *boxed in* and the step is drawn by the limit of eq. 8 as a visited cell's own
-  ``d²`` shrinks to 0 alike for every candidate: ``U(g_i)`` becomes ``n(g_i)``, the
-  candidate's own visit count, so the least visited neighbours are preferred (the
-  walker counts these steps). ``explore.min_d2`` instead clamps ``d²`` from below, our
-  old deviation: with ``min_d2 = 0.25`` a visited cell repels as if half a cell away;
+  ``n_j``; ``d`` is the Euclidean distance in cell units. A visited candidate's own term
+  has ``d = 0``, which eq. 8 leaves undefined; ``explore.coverage`` names how it is read
+  (:func:`coverage_potential`):
+
+  - ``literal`` (the default): ``n / 0 = ∞``, so ``U = ∞`` and weight 0, as the formula
+    is written: the walker never steps back while an unvisited neighbour is open. When
+    every neighbour is visited the walker is *boxed in* and the step is drawn by the
+    limit of eq. 8 as a visited cell's own ``d²`` shrinks to 0 alike for every
+    candidate: ``U(g_i)`` becomes ``n(g_i)``, the candidate's own visit count, so the
+    least visited neighbours are preferred.
+  - ``clamp``: ``d²`` clamped from below at ``explore.min_d2``, what an implementation
+    does to avoid dividing by zero (our own earlier code did): with ``min_d2 = 0.25`` a
+    visited cell repels as if half a cell away, so a walker may step back onto it.
+  - ``others``: a candidate's own visits are left out of its sum, the reading of a
+    potential meant to push away from *other* places: a visited neighbour repels only
+    through the visited cells around it, like an unvisited one.
+
+  Under every reading a step whose neighbours are all visited is counted as boxed in.
 - ``word-perplexity``: ``WordPerplexity(g_i) / U(g_i)`` (eqs. 9 and 11);
 - ``topic-perplexity``: ``TopicPerplexity(g_i) / U(g_i)`` (eqs. 10 and 12).
 
@@ -41,6 +51,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.config import COVERAGE_READINGS
+from curiosity_cli.errors import ParameterError
 from curiosity_cli.explore import plans
 
 
@@ -56,7 +68,8 @@ class Candidates:
         (up, down, left, right: those that exist).
     coverage : (n,) float64 ndarray
         The coverage potential ``U(g_i)`` (module docstring), > 0: infinite for a visited
-        candidate under the paper's rule, and its visit count when the walker is boxed in.
+        candidate under the literal reading, and its visit count when the walker is boxed
+        in under that reading.
     word_perplexity, topic_perplexity : (n,) float64 ndarrays
         Eqs. 11 and 12 of each candidate's words under the model learned so far (the
         words are seen, not added to the model); 1.0 for a cell without words.
@@ -125,9 +138,10 @@ CEILINGS: tuple[str, ...] = tuple(n for n, w in WEIGHT_FUNCTIONS.items() if isin
 
 
 def coverage_potential(
-    candidates: np.ndarray, visited: np.ndarray, visits: np.ndarray, grid: SquareGrid, min_d2: float | None
+    candidates: np.ndarray, visited: np.ndarray, visits: np.ndarray, grid: SquareGrid, reading: str,
+    min_d2: float | None = None,
 ) -> np.ndarray:
-    """``U(g) = Σ_j n_j / d²(g, c_j)`` for each candidate cell ``g`` (eq. 8), ``d²`` clamped or not.
+    """``U(g) = Σ_j n_j / d²(g, c_j)`` for each candidate cell ``g`` (eq. 8) under a reading.
 
     Parameters
     ----------
@@ -139,18 +153,32 @@ def coverage_potential(
         ``n_j``, how often each was visited.
     grid : SquareGrid
         The map's cells, whose distances ``d`` are.
-    min_d2 : float or None
-        Lower clamp on the squared distance, > 0; None for the paper's rule, under which
-        a visited candidate (``d = 0``) has ``U = ∞``.
+    reading : {'literal', 'clamp', 'others'}
+        What a visited candidate's own term (``d = 0``) is (module docstring): ``∞``
+        (``U = ∞``), ``n / min_d2``, or left out.
+    min_d2 : float, optional
+        The clamp's floor on ``d²``, > 0; read by ``clamp`` only.
 
     Returns
     -------
     (n,) float64 ndarray
+        ``∞`` for a visited candidate under ``literal``; finite otherwise.
+
+    Raises
+    ------
+    ParameterError
+        An unknown ``reading``, or ``clamp`` without ``min_d2``.
     """
     d2 = grid.squared_distances(candidates, visited)
     n = np.asarray(visits, np.float64)[None, :]
-    if min_d2 is not None:
+    own = d2 == 0
+    if reading == "clamp":
+        if min_d2 is None:
+            raise ParameterError("min_d2: got None, expected the clamp's floor on d^2 (> 0)")
         return (n / np.maximum(d2, min_d2)).sum(axis=1)
-    on_visited = (d2 == 0).any(axis=1)
-    far = (n / np.where(d2 == 0, 1, d2)).sum(axis=1)
-    return np.where(on_visited, np.inf, far)
+    others = (np.where(own, 0.0, n) / np.where(own, 1, d2)).sum(axis=1)
+    if reading == "others":
+        return others
+    if reading == "literal":
+        return np.where(own.any(axis=1), np.inf, others)
+    raise ParameterError(f"reading: got {reading!r}, expected one of {', '.join(COVERAGE_READINGS)}")

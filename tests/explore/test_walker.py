@@ -63,7 +63,7 @@ def test_step_records_agree_with_the_path_and_the_formulas():
         if e.boxed_in[step]:  # the limit of eq. 8: each neighbour's own visit count
             expected = [visits[int(g)] for g in e.candidate_cell[here]]
         else:
-            expected = [potential_naive(int(g), visits, 8, None) for g in e.candidate_cell[here]]
+            expected = [potential_naive(int(g), visits, 8) for g in e.candidate_cell[here]]
         np.testing.assert_allclose(e.coverage[here], expected, rtol=1e-12)
     np.testing.assert_allclose(e.weight, e.word_perplexity / e.coverage, rtol=1e-15)
     assert (e.word_perplexity >= 1).all() and (e.topic_perplexity >= 1).all()
@@ -103,16 +103,33 @@ def test_boxed_in_steps_prefer_the_least_visited_neighbour():
     assert abs(int(counts[0]) - int(counts[2])) <= 3
 
 
-def test_a_clamp_keeps_the_old_deviation_that_revisits():
-    # with min_d2 = 0.25 a visited neighbour keeps a weight, so the walker steps back
-    # while unvisited cells are open; the paper's rule never does (test above)
+@pytest.mark.parametrize("reading", ["clamp", "others"])
+def test_the_other_readings_of_eq_8_step_back_and_count_boxed_in_steps_alike(reading):
+    # under the clamp or with a candidate's own visits left out, a visited neighbour keeps a
+    # weight, so the walker steps back while unvisited cells are open; the literal reading
+    # never does (test above). A step with every neighbour visited is boxed in under each.
     store = two_region_store()
+    table = store.grid.neighbour_table()
     revisits = []
-    for min_d2 in (None, 0.25):
-        e = run(store, "stochastic-coverage", path_length=40, checkpoints=(40,), min_d2=min_d2)
+    for coverage in ("literal", reading):
+        e = run(store, "stochastic-coverage", path_length=40, checkpoints=(40,), coverage=coverage)
         revisits.append(int((~e.first_visit).sum()))
-        assert not e.boxed_in.any() or min_d2 is None
+        every_visited = [
+            all(g in e.path[: step + 1] for g in table[e.path[step]] if g >= 0) for step in range(e.path.size - 1)
+        ]
+        np.testing.assert_array_equal(e.boxed_in[:-1], every_visited)
+        assert not e.fallback.any()
     assert revisits[1] > revisits[0], revisits
+
+
+def test_each_reading_scores_the_coverage_potential_of_its_own_sum():
+    for reading in ("clamp", "others"):
+        e = run(two_region_store(), "stochastic-coverage", path_length=30, checkpoints=(30,), coverage=reading)
+        for step in range(e.path.size - 1):
+            here = e.candidate_step == step
+            visits = {int(c): int(n) for c, n in zip(*np.unique(e.path[: step + 1], return_counts=True))}
+            expected = [potential_naive(int(g), visits, 8, reading, 0.25) for g in e.candidate_cell[here]]
+            np.testing.assert_allclose(e.coverage[here], expected, rtol=1e-12)
 
 
 @pytest.mark.parametrize("name", ["lawnmower", "scattered-cells", "compact-block"])
@@ -168,7 +185,7 @@ def test_topic_perplexity_walkers_linger_on_a_rare_stripe_more_than_coverage_wal
     # 32 paired restarts from start cells within 6 columns of the stripe, 100 steps each.
     # Measured with the paper's repulsion: 0.15 of topic-perplexity steps on or beside the
     # stripe against 0.12 for stochastic coverage (paired difference 0.030, standard error
-    # 0.015; 48 restarts: 0.031 and 0.014). With the old clamp min_d2 = 0.25, which lets a
+    # 0.015; 48 restarts: 0.031 and 0.014). With the clamp reading (min_d2 = 0.25), which lets a
     # walker step back onto the stripe, it was 0.22 against 0.13.
     regions = np.zeros((24, 24), int)
     regions[:, 12] = 1

@@ -9,20 +9,23 @@ import pytest
 
 from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.config import WALKER_NAMES
+from curiosity_cli.errors import ParameterError
 from curiosity_cli.explore.walker import draw_move
 from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, coverage_potential
 
 
-def potential_naive(candidate, visits: dict, cols: int, min_d2: float | None) -> float:
-    """Σ_j n_j / max(d², min_d2), one visited cell at a time; eq. 8 as written (n / 0 = ∞) without a clamp."""
+def potential_naive(candidate, visits: dict, cols: int, reading: str = "literal", min_d2: float = 0.25) -> float:
+    """Σ_j n_j / d², one visited cell at a time, a candidate's own term (d = 0) read as ``reading`` says."""
     row, col = divmod(candidate, cols)
     total = 0.0
     for cell, n in visits.items():
         r, c = divmod(cell, cols)
         d2 = (row - r) ** 2 + (col - c) ** 2
-        if min_d2 is None and d2 == 0:
+        if d2 == 0 and reading == "literal":
             return math.inf
-        total += n / (d2 if min_d2 is None else max(d2, min_d2))
+        if d2 == 0 and reading == "others":
+            continue
+        total += n / (max(d2, min_d2) if reading == "clamp" else d2)
     return total
 
 
@@ -31,30 +34,77 @@ def test_every_name_a_config_may_give_has_a_walker_and_every_walker_a_name():
     assert tuple(WEIGHT_FUNCTIONS) == WALKER_NAMES
 
 
+def test_each_reading_of_eq_8_by_hand_on_a_3_by_3_grid():
+    # cells 0 1 2 / 3 4 5 / 6 7 8; the walker went 4 -> 1 -> 4 -> 5 -> 4 and stands on 4:
+    # visits 4: 3, 1: 1, 5: 1. Candidates 1 (visited), 3 and 7 (unvisited), 5 (visited).
+    grid = SquareGrid(3, 3)
+    visited, visits = np.array([1, 4, 5]), np.array([1, 3, 1])
+    candidates = np.array([1, 3, 5, 7])
+    # candidate 1: 4 at d² 1 gives 3, 5 at d² 2 gives 1/2, itself 1 / (0, clamped 0.25, or left out)
+    # candidate 3: 1 at d² 2 gives 1/2, 4 at d² 1 gives 3, 5 at d² 4 gives 1/4
+    # candidate 7: 1 at d² 4 gives 1/4, 4 at d² 1 gives 3, 5 at d² 2 gives 1/2
+    expected = {
+        "literal": [math.inf, 3.75, math.inf, 3.75],
+        "clamp": [3.5 + 4, 3.75, 3.5 + 4, 3.75],
+        "others": [3.5, 3.75, 3.5, 3.75],
+    }
+    for reading, values in expected.items():
+        got = coverage_potential(candidates, visited, visits, grid, reading, 0.25)
+        np.testing.assert_allclose(got, values, rtol=1e-15, err_msg=reading)
+        assert got.tolist() == [potential_naive(int(c), dict(zip([1, 4, 5], [1, 3, 1])), 3, reading) for c in candidates]
+        weights = WEIGHT_FUNCTIONS["stochastic-coverage"](Candidates(candidates, got, np.ones(4), np.ones(4)))
+        if reading == "literal":  # a visited neighbour has weight 0: the walker never steps back
+            assert weights.tolist() == [0, 1 / 3.75, 0, 1 / 3.75]
+        else:  # it keeps a weight: under the clamp less than an open neighbour's, here more under others
+            assert weights[0] > 0 and (weights[0] < weights[1]) == (reading == "clamp")
+
+
+def test_a_boxed_in_walker_under_each_reading_by_hand():
+    # a 1 x 3 corridor after 0 -> 1 -> 2 -> 1: visits 0: 1, 1: 2, 2: 1; standing on 1, both neighbours visited
+    grid = SquareGrid(1, 3)
+    visited, visits, candidates = np.array([0, 1, 2]), np.array([1, 2, 1]), np.array([0, 2])
+    # each candidate: 1 at d² 1 gives 2, the other end at d² 4 gives 1/4, itself 1 / (0, 0.25, left out)
+    assert coverage_potential(candidates, visited, visits, grid, "literal").tolist() == [math.inf, math.inf]
+    assert coverage_potential(candidates, visited, visits, grid, "clamp", 0.25).tolist() == [6.25, 6.25]
+    assert coverage_potential(candidates, visited, visits, grid, "others").tolist() == [2.25, 2.25]
+
+
 @pytest.mark.parametrize("min_d2", [0.25, 1.0, 2.0])
 def test_coverage_potential_matches_the_sum_with_the_clamp(min_d2):
     cols = 5
     visits = {0: 3, 6: 1, 7: 2, 24: 1}  # 7 is also a candidate: d = 0 hits the clamp
     candidates = np.array([1, 7, 12, 23])
-    got = coverage_potential(candidates, np.array(list(visits)), np.array(list(visits.values())), SquareGrid(5, cols), min_d2)
-    expected = [potential_naive(int(c), visits, cols, min_d2) for c in candidates]
+    got = coverage_potential(
+        candidates, np.array(list(visits)), np.array(list(visits.values())), SquareGrid(5, cols), "clamp", min_d2
+    )
+    expected = [potential_naive(int(c), visits, cols, "clamp", min_d2) for c in candidates]
     np.testing.assert_allclose(got, expected, rtol=1e-15)
     # the visited candidate (7) gets n / min_d2 from itself
     assert got[1] >= 2 / min_d2
 
 
-def test_without_a_clamp_a_visited_candidate_has_infinite_potential_and_weight_0():
+def test_literally_a_visited_candidate_has_infinite_potential_and_weight_0():
     cols = 5
     visits = {0: 3, 6: 1, 7: 2, 24: 1}
     candidates = np.array([1, 7, 12, 23])
-    got = coverage_potential(candidates, np.array(list(visits)), np.array(list(visits.values())), SquareGrid(5, cols), None)
-    expected = [potential_naive(int(c), visits, cols, None) for c in candidates]
+    got = coverage_potential(
+        candidates, np.array(list(visits)), np.array(list(visits.values())), SquareGrid(5, cols), "literal"
+    )
+    expected = [potential_naive(int(c), visits, cols) for c in candidates]
     np.testing.assert_allclose(got, expected, rtol=1e-15)
     assert got[1] == math.inf and np.isfinite(got[[0, 2, 3]]).all()
     facts = Candidates(candidates, got, np.full(4, 5.0), np.full(4, 3.0))
     for name in ("stochastic-coverage", "word-perplexity", "topic-perplexity"):
         weights = WEIGHT_FUNCTIONS[name](facts)
         assert weights[1] == 0 and (weights[[0, 2, 3]] > 0).all()
+
+
+def test_a_reading_the_potential_does_not_know_and_a_clamp_without_a_floor_are_refused():
+    grid, cells = SquareGrid(3, 3), np.array([1])
+    with pytest.raises(ParameterError, match="reading: got 'clamped'"):
+        coverage_potential(cells, np.array([4]), np.array([1]), grid, "clamped")
+    with pytest.raises(ParameterError, match="min_d2"):
+        coverage_potential(cells, np.array([4]), np.array([1]), grid, "clamp")
 
 
 def test_the_four_weight_functions_are_the_papers_formulas():
@@ -108,5 +158,5 @@ def _candidates(n: int) -> Candidates:
 def test_the_clamp_keeps_a_revisited_cell_reachable():
     # unclamped, a candidate the walker stands on would have infinite potential
     cols = 3
-    potential = coverage_potential(np.array([4]), np.array([4]), np.array([1]), SquareGrid(3, cols), 0.25)
+    potential = coverage_potential(np.array([4]), np.array([4]), np.array([1]), SquareGrid(3, cols), "clamp", 0.25)
     assert math.isfinite(potential[0]) and potential[0] == pytest.approx(4.0)
