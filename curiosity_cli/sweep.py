@@ -77,7 +77,12 @@ from curiosity_cli.layout import DEFAULT_RESULTS, ExperimentFolder
 #: The headline columns, as ``headline.csv`` has them (:func:`curiosity_cli.evaluate.tables.headline`).
 HEADLINE_COLUMNS = (
     "dataset", "topic_perplexity", "next_best", "next_best_mi", "ratio", "p_value", "pairs", "paper_map", "paper_ratio",
+    "ratio_ci_low", "ratio_ci_high", "detectable_ratio", "pairs_for_lead",
 )
+#: The key whose values are replicates, pooled in SWEEP.md's first table, not treatments.
+REPLICATE_KEY = "seed"
+#: The walkers whose distinct cells the first table of SWEEP.md shows beside the ratio.
+DISTINCT_WALKERS = ("stochastic-coverage", "topic-perplexity")
 
 _SAFE = re.compile(r"[^A-Za-z0-9_.-]+")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -582,6 +587,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
 
     folder = Path(folder)
     keys = [axis.key for axis in sweep.axes]
+    sensitivity, pooled_rows = _sensitivity(sweep, folder, outcomes)
     rows, sections = [], []
     overview = [
         "| # | " + " | ".join(keys) + " | dataset | ratio | next best | paired Wilcoxon p (pairs) | paper's ratio |",
@@ -618,7 +624,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
                 f"| {r.dataset} | {_number(r.topic_perplexity, 3)} | {r.next_best} | {_number(r.next_best_mi, 3)} | "
                 f"{_number(r.ratio)} | {_p(r.p_value)} | {r.pairs} | {r.paper_map} | {_number(r.paper_ratio)} |"
             )
-        sections.append("")
+        sections += ["", *_distinct_table(read_revisits(folder / c.name))]
     sets = ", ".join(f"`--set {s}`" for s in sweep.sets) or "none"
     lines = [
         f"# Parameter sweep of `{sweep.name}`: {_count(len(outcomes), 'combination')}",
@@ -633,6 +639,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
         f"$ {sweep.command(folder.parent)}",
         "```",
         "",
+        *sensitivity,
         "## Headlines",
         "",
         *overview,
@@ -642,10 +649,106 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
     columns = ["combination", "folder", *keys, *HEADLINE_COLUMNS]
     with atomic_path(folder / "sweep.csv") as tmp:
         pd.DataFrame(rows, columns=columns).to_csv(tmp, index=False)
+    treatments = [key for key in keys if key != REPLICATE_KEY]
+    pooled_columns = [*treatments, "seeds", *HEADLINE_COLUMNS, *(f"distinct_{w}" for w in DISTINCT_WALKERS)]
+    with atomic_path(folder / "sensitivity.csv") as tmp:
+        pd.DataFrame(pooled_rows, columns=pooled_columns).to_csv(tmp, index=False)
     path = folder / "SWEEP.md"
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(lines))
     return path
+
+
+def read_revisits(folder: Path):
+    """An experiment's ``revisits.csv`` (:func:`~curiosity_cli.evaluate.tables.summarise_revisits`), or None if absent."""
+    import pandas as pd
+
+    path = ExperimentFolder(folder).table("revisits")
+    return pd.read_csv(path) if path.is_file() else None
+
+
+def _distinct_table(revisits) -> list[str]:
+    """Mean distinct cells per walker at the headline length, a row per dataset."""
+    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
+
+    if revisits is None:
+        return ["(no revisits.csv: run `curiosity evaluate` for distinct cells)", ""]
+    at = revisits[(revisits["measure"] == "distinct_cells") & (revisits["path_length"] == HEADLINE_LENGTH)]
+    if at.empty:
+        return []
+    walkers = list(dict.fromkeys(at["weight_function"]))
+    lines = [
+        f"Distinct cells seen in {HEADLINE_LENGTH} steps (mean over restarts):",
+        "",
+        "| dataset | " + " | ".join(walkers) + " |",
+        "|---|" + "---|" * len(walkers),
+    ]
+    for dataset, block in at.groupby("dataset", sort=False):
+        means = block.set_index("weight_function")["mean"]
+        lines.append(f"| {dataset} | " + " | ".join(_number(means.get(w), 1) for w in walkers) + " |")
+    return lines + [""]
+
+
+def _sensitivity(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) -> tuple[list[str], list[dict]]:
+    """SWEEP.md's first table and ``sensitivity.csv``'s rows: per treatment (the combination's
+    values but the seed) and dataset, the headline over every seed's pairs pooled
+    (:func:`~curiosity_cli.evaluate.replicates.pool`), its interval and power, and the
+    distinct cells of :data:`DISTINCT_WALKERS`."""
+    from curiosity_cli.evaluate.replicates import pool
+    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, EvaluationError
+
+    keys = [axis.key for axis in sweep.axes]
+    treatments = [key for key in keys if key != REPLICATE_KEY]
+    groups: dict[tuple, list[Path]] = {}
+    for outcome in outcomes:
+        if outcome.error is None:
+            values = dict(text.split("=", 1) for text in outcome.combination.overrides)
+            groups.setdefault(tuple(values[k] for k in treatments), []).append(folder / outcome.combination.name)
+    pooled = REPLICATE_KEY in keys
+    lines = [
+        "## Sensitivity" + (" (seeds pooled)" if pooled else ""),
+        "",
+        f"Per {' x '.join([*treatments, 'dataset'])}: topic perplexity's mean MI at "
+        f"{HEADLINE_LENGTH} steps over the next best walker, "
+        + (
+            f"every seed's paired restarts pooled (the seeds are replicates: `{REPLICATE_KEY}` is not a treatment), "
+            if pooled else ""
+        )
+        + "with the ratio's 95 % bootstrap interval, the paired Wilcoxon p against the next best, the smallest lead "
+        "detectable at 80 % power and the pairs a 10 % lead would need (REPORT.md's verdict says how), and the mean "
+        f"distinct cells {' and '.join(DISTINCT_WALKERS)} saw in {HEADLINE_LENGTH} steps, beside the paper's ratio.",
+        "",
+        "| " + " | ".join([*treatments, "dataset", "seeds", "pairs", "ratio [95 % CI]", "p", "next best",
+                         "detectable lead", "pairs for +10 %", *(f"distinct: {w}" for w in DISTINCT_WALKERS),
+                         "paper's ratio"]) + " |",
+        "|" + "---|" * (len(treatments) + 10 + len(DISTINCT_WALKERS)),
+    ]
+    rows = []
+    for values, folders in groups.items():
+        try:
+            result = pool(folders)
+        except EvaluationError as exc:
+            lines.append("| " + " | ".join(f"`{v}`" for v in values) + f" | not pooled: {exc} |")
+            continue
+        at = result.revisits[
+            (result.revisits["measure"] == "distinct_cells") & (result.revisits["path_length"] == HEADLINE_LENGTH)
+        ].set_index(["dataset", "weight_function"])["mean"]
+        seeds = " ".join(map(str, result.seeds))
+        for r in result.headline.to_dict("records"):
+            distinct = {f"distinct_{w}": at.get((r["dataset"], w), float("nan")) for w in DISTINCT_WALKERS}
+            rows.append({**dict(zip(treatments, values)), "seeds": seeds, **r, **distinct})
+            lead = r["detectable_ratio"] - 1
+            lines.append(
+                "| " + " | ".join([
+                    *(f"`{v}`" for v in values), r["dataset"], seeds, str(r["pairs"]),
+                    f"{_number(r['ratio'])} [{_number(r['ratio_ci_low'])}, {_number(r['ratio_ci_high'])}]",
+                    _p(r["p_value"]), r["next_best"], f"{_number(100 * lead, 0)} %" if lead == lead else "",
+                    _number(r["pairs_for_lead"], 0) or ("> 10^6" if lead == lead else ""),
+                    *(_number(v, 1) for v in distinct.values()),
+                    _number(r["paper_ratio"]),
+                ]) + " |"
+            )
+    return lines + [""], rows
 
 
 def _number(value, digits: int = 2) -> str:

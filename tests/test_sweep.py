@@ -183,7 +183,8 @@ def test_a_sweep_writes_a_folder_per_combination_and_one_report_and_resumes(own_
     table = pd.read_csv(folder / "sweep.csv")
     assert list(table.columns) == [
         "combination", "folder", "model.topics", "seed", "dataset", "topic_perplexity", "next_best", "next_best_mi",
-        "ratio", "p_value", "pairs", "paper_map", "paper_ratio",
+        "ratio", "p_value", "pairs", "paper_map", "paper_ratio", "ratio_ci_low", "ratio_ci_high", "detectable_ratio",
+        "pairs_for_lead",
     ]
     assert table["model.topics"].tolist() == [4, 6] and table["dataset"].tolist() == ["own", "own"]
     assert (table["next_best"] == "random-walk").all() and (table["pairs"] == 2).all()
@@ -217,3 +218,57 @@ def test_a_failing_combination_does_not_stop_the_others(own_map, tmp_path):
     assert "## 1. explore.restarts=200\n\nFailed: explore.restarts: got 200" in report
     assert "[explore.restarts-2/REPORT.md](explore.restarts-2/REPORT.md)" in report
     assert pd.read_csv(folder / "sweep.csv")["explore.restarts"].tolist() == [2]
+
+
+def test_a_readings_sweep_declared_in_its_config_pools_the_seeds_into_the_sensitivity_table_and_resumes(own_map, tmp_path):
+    config = tiny_yaml(own_map, tmp_path)
+    text = yaml.safe_load(config.read_text())
+    text["explore"]["weight_functions"] = ["stochastic-coverage", "topic-perplexity"]
+    text["sweep"] = {"explore.coverage": ["literal", "clamp"], "seed": [1, 2]}
+    config.write_text(yaml.safe_dump(text, sort_keys=False))
+    results = tmp_path / "results"
+    result = sweep(config, results)
+    assert result.exit_code == 0, result.output
+    assert "4 combinations" in result.stderr
+    folder = results / "tiny-sweep"
+    report = (folder / "SWEEP.md").read_text()
+    assert report.index("## Sensitivity (seeds pooled)") < report.index("## Headlines")
+    pooled = pd.read_csv(folder / "sensitivity.csv", dtype={"seeds": str})
+    assert pooled["explore.coverage"].tolist() == ["literal", "clamp"]
+    assert (pooled["seeds"] == "1 2").all() and (pooled["pairs"] == 4).all(), "2 restarts of each of 2 seeds"
+    for reading, row in zip(("literal", "clamp"), pooled.to_dict("records")):
+        # the pooled ratio is over both seeds' runs: the mean of topic perplexity's 4 runs over the other's
+        mi = pd.concat(
+            pd.read_csv(folder / f"explore.coverage-{reading}_seed-{seed}" / "mi.csv") for seed in (1, 2)
+        )
+        means = mi[mi["path_length"] == 80].groupby("weight_function")["mi_human"].mean()
+        assert row["ratio"] == pytest.approx(means["topic-perplexity"] / means["stochastic-coverage"])
+        assert row["ratio_ci_low"] <= row["ratio"] <= row["ratio_ci_high"]
+        distinct = mi[(mi["path_length"] == 80) & (mi["weight_function"] == "stochastic-coverage")]["distinct_cells"]
+        assert row["distinct_stochastic-coverage"] == pytest.approx(distinct.mean())
+        assert f"| `{reading}` | own | 1 2 | 4 | {row['ratio']:.2f} [" in report
+    # the literal reading never steps back while a neighbour is open: more distinct cells than the clamp
+    assert pooled["distinct_stochastic-coverage"][0] > pooled["distinct_stochastic-coverage"][1]
+    assert "Distinct cells seen in 80 steps" in report
+
+    finished = sorted(folder.glob("*/runs/*/*/restart-*/*")) + sorted(folder.glob("*/labels/*/*/*.npz"))
+    mtimes = {path: path.stat().st_mtime_ns for path in finished}
+    (folder / "sensitivity.csv").unlink()
+    result = sweep(config, results, "--sweep", "explore.coverage=literal")  # replaces the declared values
+    assert result.exit_code == 0, result.output
+    assert "2 combinations" in result.stderr and result.stderr.count("exploring (4 runs already done)") == 2
+    assert {path: path.stat().st_mtime_ns for path in finished} == mtimes
+    assert pd.read_csv(folder / "sensitivity.csv")["explore.coverage"].tolist() == ["literal"]
+
+
+def test_a_declared_sweep_that_is_not_a_mapping_of_lists_is_refused_naming_the_file(own_map, tmp_path):
+    config = tiny_yaml(own_map, tmp_path)
+    text = yaml.safe_load(config.read_text())
+    for declared, message in (
+        ([1, 2], "tiny.yaml: sweep: expected a mapping of dotted keys to lists of values"),
+        ({"seed": 3}, "tiny.yaml: sweep.seed: expected a list of one or more values"),
+    ):
+        config.write_text(yaml.safe_dump({**text, "sweep": declared}, sort_keys=False))
+        result = sweep(config, tmp_path / "results")
+        assert result.exit_code == 1 and message in result.stderr, result.output
+    assert not (tmp_path / "results").exists()

@@ -18,6 +18,7 @@ import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, to_yaml
 from curiosity_cli.evaluate.label_stage import CLASS_SHARE_PERCENT
+from curiosity_cli.evaluate.power import POWER, TARGET_LEAD
 from curiosity_cli.evaluate.tables import (
     ALPHA, CONFIDENCE, CONVERGENCE_TOLERANCE, HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation,
 )
@@ -99,6 +100,8 @@ def verdict(row: Mapping) -> str:
     if others and not row["beats_all"]:
         text += f"; not clearly ahead of {', '.join(others)} either"
     text += f"; ratio {row['ratio']:.2f}"
+    if np.isfinite(row.get("ratio_ci_low", np.nan)):
+        text += f" ({100 * CONFIDENCE:.0f} % CI {row['ratio_ci_low']:.2f} to {row['ratio_ci_high']:.2f})"
     if _text(row["paper_map"]) and np.isfinite(row["paper_ratio"]):
         text += f" against the paper's {row['paper_ratio']:.2f} on {row['paper_map']}"
         if against != "human":
@@ -111,7 +114,24 @@ def verdict(row: Mapping) -> str:
             f" It reaches {100 * row['ceiling_share']:.0f} % of the better ceiling's MI "
             f"({row['best_ceiling']}, {row['ceiling_mi']:.2f} bits)."
         )
-    return text
+    return text + power_sentence(row)
+
+
+def power_sentence(row: Mapping) -> str:
+    """What the experiment could have found, from a headline row's power columns; "" without them.
+
+    E.g. `` With 10 pairs it could detect a lead of 21 % or more at 80 % power; a 10 %
+    lead would need 41 pairs.``
+    """
+    detectable = row.get("detectable_ratio", np.nan)
+    if not np.isfinite(detectable):
+        return ""
+    needed = row["pairs_for_lead"]
+    text = (
+        f" With {int(row['pairs'])} pairs it could detect a lead of {100 * (detectable - 1):.0f} % or more "
+        f"at {100 * POWER:.0f} % power; a {100 * TARGET_LEAD:.0f} % lead would need "
+    )
+    return text + (f"{int(needed)} pairs." if np.isfinite(needed) else "more than a million pairs.")
 
 
 def _no_verdict(summary, dataset: str) -> str:
@@ -137,8 +157,11 @@ def _verdicts(summary, top) -> list[str]:
         "(against the batch labels Z_b where a map has none). The difference is the mean paired difference to the "
         f"next best walker (paired by restart, which share start cells) with its {100 * CONFIDENCE:.0f} % Student-t "
         "confidence interval, p its paired Wilcoxon signed-rank p; \"beats\" means a higher mean than every other "
-        f"walker with p < {ALPHA} against each. The ratio is of the two means, beside the paper's for the map the "
-        "dataset stands in for.",
+        f"walker with p < {ALPHA} against each. The ratio is of the two means, with its {100 * CONFIDENCE:.0f} % "
+        "interval from a bootstrap over the pairs, beside the paper's for the map the dataset stands in for. The "
+        f"smallest lead detectable at {100 * POWER:.0f} % power, and the pairs a {100 * TARGET_LEAD:.0f} % lead "
+        "needs, are for a paired t-test at p < 0.05 with the spread of the paired differences observed here "
+        "(evaluate/power.py); seeds run as a sweep pool their pairs in SWEEP.md.",
         "",
     ]
 
@@ -403,6 +426,35 @@ def _maps_table(maps) -> list[str]:
     return lines + [""]
 
 
+def _revisits_section(revisits, lengths: list[int], config: ExperimentConfig) -> list[str]:
+    """Distinct cells, steps onto visited cells and boxed-in steps per walker (mean ± 95 % CI half-width)."""
+    if revisits is None or revisits.empty:
+        return []
+    lines = [
+        "## Revisits",
+        "",
+        f"Eq. 8 read as `{config.explore.coverage}` (`explore.coverage`; README, \"Readings of eq. 8\"). Per walker "
+        "and path length L: the distinct cells the path saw, its steps onto a cell seen before (L minus distinct "
+        "cells) and its moves made with every neighbour visited (boxed in); mean ± 95 % CI half-width over "
+        "restarts. A walker ahead on MI with fewer distinct cells saw better cells, not more of them "
+        "(figure `mi-vs-distinct`).",
+        "",
+    ]
+    measures = {"distinct_cells": "distinct", "revisit_steps": "revisits", "boxed_in_steps": "boxed in"}
+    for dataset, block in revisits.groupby("dataset", sort=False):
+        header = [f"{measures[m]} at {n}" for n in lengths for m in measures]
+        lines += [f"{dataset}:", "", f"| walker | {' | '.join(header)} |", "|---" * (len(header) + 1) + "|"]
+        cells = {(r["weight_function"], r["path_length"], r["measure"]): r for r in block.to_dict("records")}
+        for name in _order(block["weight_function"]):
+            row = [
+                (f"{cells[k]['mean']:.1f} ± {(cells[k]['ci_high'] - cells[k]['ci_low']) / 2:.1f}" if k in cells else "")
+                for n in lengths for m in measures for k in [(name, n, m)]
+            ]
+            lines.append(f"| {_label(name)} | {' | '.join(row)} |")
+        lines.append("")
+    return lines
+
+
 def _short_means(mi, restarts: int) -> list[str]:
     """A note per (dataset, weight function) whose means are over fewer runs than the configured ``restarts``."""
     counts = mi.groupby(["dataset", "weight_function"], sort=True)["restart"].nunique()
@@ -432,7 +484,8 @@ def write_report(
         "",
         f"Reproduction of Girdhar & Dudek's 2-D map experiments (section 5.1) on {len(config.datasets)} map(s): "
         f"{len(walkers)} walkers{f' and {len(ceilings)} ceilings' if ceilings else ''}, {config.explore.restarts} "
-        f"restarts, paths of up to {config.explore.path_length} steps, seed {config.seed}.",
+        f"restarts, paths of up to {config.explore.path_length} steps, seed {config.seed}, eq. 8 read as "
+        f"`{config.explore.coverage}`.",
         "",
     ]
     lines += _verdicts(summary, top)
@@ -443,6 +496,7 @@ def write_report(
     lines += _mi_table(summary, "human", lengths)
     lines += ["Against the batch labeling Z_b (paper Fig. 4):", ""]
     lines += _mi_table(summary, "batch", lengths)
+    lines += _revisits_section(evaluation.revisits, lengths, config)
     lines += _convergence_section(evaluation.convergence, config)
     lines += _effects_table(evaluation.effects, lengths)
     lines += _classes_sections(evaluation.classes_summary)

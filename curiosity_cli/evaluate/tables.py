@@ -8,7 +8,10 @@ Written under ``results/<experiment>/``:
   :data:`~curiosity_cli.evaluate.label_stage.CLASS_SHARE_PERCENT`) of ``classes`` (the map's
   classes with pixels); ``mean_recall`` (mean per-class recall of Z_p under the best
   one-to-one topic-to-class matching, :func:`~curiosity_cli.evaluate.information.matched_recall`);
-  and the run's ``seed``. The human columns are NaN for a map without labels. A run
+  the run's ``seed`` and ``replicate`` (the experiment's seed, whose runs are paired by
+  restart: :data:`PAIR_KEYS`); and the revisits of the path so far
+  (:mod:`~curiosity_cli.evaluate.revisits`): ``distinct_cells``, ``revisit_steps``,
+  ``boxed_in_steps``. The human columns are NaN for a map without labels. A run
   labelled twice (``label.check_restarts``) has ``placed_mi_human`` and
   ``placed_mi_batch``: the MI of its second chain, from a placed start (NaN for the
   others).
@@ -32,12 +35,15 @@ Written under ``results/<experiment>/``:
   difference with its standard error, and whether it is within
   :data:`CONVERGENCE_TOLERANCE` bits or twice its standard error (``converged``): the
   check that Z_p has forgotten how its chain started (:func:`label_convergence`).
+- ``revisits.csv``: the same as ``summary.csv`` for each revisit column (``measure``), per
+  (dataset, weight function, path length).
 - ``headline.csv``: per dataset, topic-perplexity MI at 80 steps (against human labels,
   or against Z_b on a map without them: ``against``) divided by the next best walker's,
   the paired difference to it with its CI and Wilcoxon p, whether topic perplexity beats
   every other walker (higher mean and p < 0.05 against each), its share of the better
   ceiling's MI, and the paper's ratio for the map the dataset stands in for (1.51, 1.20
-  and 1.05).
+  and 1.05); then how sure the ratio is (:func:`with_power`): its bootstrap interval,
+  the smallest ratio detectable at 80 % power and the pairs a 10 % lead would need.
 """
 
 from __future__ import annotations
@@ -69,6 +75,8 @@ CONFIDENCE = 0.95
 #: Bits within which two labelling chains from far-apart starts count as having met.
 CONVERGENCE_TOLERANCE = 0.01
 _KEYS = ["dataset", "weight_function", "restart", "path_length"]
+#: What pairs two walkers' runs: the same start cell and streams of one seed's experiment.
+PAIR_KEYS = ["replicate", "restart"]
 
 
 class EvaluationError(CuriosityError):
@@ -89,6 +97,7 @@ class Evaluation:
     classes: pd.DataFrame | None = None
     classes_summary: pd.DataFrame | None = None
     convergence: pd.DataFrame | None = None
+    revisits: pd.DataFrame | None = None
 
 
 @dataclass(frozen=True)
@@ -100,7 +109,9 @@ class LabelRows:
     skipped: list[str]  # files left out, runs without a label file; each with why
 
 
-def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None) -> tuple[list[dict], list[dict]]:
+def run_rows(
+    meta: dict, arrays: dict, class_names: dict[int, str] | None = None, steps: tuple | None = None,
+) -> tuple[list[dict], list[dict]]:
     """The mi.csv rows (one per checkpoint) and classes.csv rows of one run's label file.
 
     Parameters
@@ -113,11 +124,15 @@ def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None
         ``placed_human``, as :func:`~curiosity_cli.evaluate.label_stage.label_block` writes them.
     class_names : dict of int to str, optional
         The map's legend.
+    steps : ((L,) int ndarray, (L,) bool ndarray), optional
+        The run's path and ``boxed_in`` flags, for the revisit columns
+        (:func:`~curiosity_cli.evaluate.revisits.revisit_counts`); NaN without.
 
     Returns
     -------
     (list of dict, list of dict)
     """
+    from curiosity_cli.evaluate.revisits import REVISIT_COLUMNS, revisit_counts
     from curiosity_cli.evaluate.information import (
         classes_found,
         matched_recall,
@@ -136,8 +151,9 @@ def run_rows(meta: dict, arrays: dict, class_names: dict[int, str] | None = None
             "mi_human": np.nan, "mi_batch": mutual_information(batch[i]),
             "nmi_human": np.nan, "nmi_batch": normalised_mutual_information(batch[i]),
             "classes_found": np.nan, "classes": np.nan, "mean_recall": np.nan,
-            "seed": " ".join(map(str, meta["run_seed"])),
+            "seed": " ".join(map(str, meta["run_seed"])), "replicate": meta["run_seed"][0],
             "placed_mi_human": np.nan, "placed_mi_batch": np.nan,
+            **(revisit_counts(*steps, length) if steps is not None else dict.fromkeys(REVISIT_COLUMNS, np.nan)),
         }
         for against in ("human", "batch"):
             if SECOND_PREFIX + against in arrays:
@@ -226,7 +242,12 @@ def label_rows(folder: Path) -> LabelRows:
         if change is not None:
             otherwise.append(f"{display_path(path)}: {change}")
             continue
-        mi, classes = run_rows(meta, arrays, class_names.get(meta["dataset"]))
+        try:
+            steps = (run.path, run.boxed_in())
+        except RunError as exc:
+            skipped.append(str(exc))
+            continue
+        mi, classes = run_rows(meta, arrays, class_names.get(meta["dataset"]), steps)
         rows += mi
         class_rows += classes
     if otherwise:
@@ -309,6 +330,20 @@ def summarise_classes(mi):
     return pd.DataFrame(_mean_ci(grouped), columns=columns)
 
 
+def summarise_revisits(mi):
+    """Mean, standard deviation and 95 % CI of each revisit column (``measure``:
+    :data:`~curiosity_cli.evaluate.revisits.REVISIT_COLUMNS`) per (dataset, weight function, length)."""
+    import pandas as pd
+
+    from curiosity_cli.evaluate.revisits import REVISIT_COLUMNS
+
+    long = mi.melt(
+        id_vars=_KEYS, value_vars=list(REVISIT_COLUMNS), var_name="measure", value_name="value",
+    ).dropna(subset=["value"])
+    grouped = long.groupby(["dataset", "weight_function", "path_length", "measure"], sort=False)["value"]
+    return pd.DataFrame(_mean_ci(grouped))
+
+
 def within_noise(mean: float, sem: float, tolerance: float = CONVERGENCE_TOLERANCE) -> bool:
     """Whether a mean difference in bits is within ``tolerance``, or within twice its
     standard error over runs (not told apart from the chains' own noise)."""
@@ -350,7 +385,7 @@ def _paired_blocks(mi):
     for against in ("human", "batch"):
         column = f"mi_{against}"
         table = mi.dropna(subset=[column]).pivot_table(
-            index=["dataset", "path_length", "restart"], columns="weight_function", values=column
+            index=["dataset", "path_length", *PAIR_KEYS], columns="weight_function", values=column
         )
         for (dataset, length), block in table.groupby(level=["dataset", "path_length"]):
             yield against, dataset, length, block
@@ -450,6 +485,8 @@ HEADLINE_COLUMNS = [
     "ci_high", "p_value", "pairs", "beats_all", "not_beaten", "best_ceiling", "ceiling_mi", "ceiling_share",
     "paper_map", "paper_ratio",
 ]
+#: The columns :func:`with_power` adds to the headline.
+POWER_COLUMNS = ["ratio_ci_low", "ratio_ci_high", "detectable_ratio", "pairs_for_lead"]
 
 
 def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
@@ -506,6 +543,32 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
             "paper_map": paper.name if paper else "", "paper_ratio": paper.headline_ratio if paper else np.nan,
         })
     return pd.DataFrame(rows, columns=HEADLINE_COLUMNS)
+
+
+def with_power(top, mi):
+    """``top`` (:func:`headline`) with how sure each ratio is (:mod:`~curiosity_cli.evaluate.power`).
+
+    From the pairs of topic perplexity and the next best walker at 80 steps: the ratio's
+    95 % paired-bootstrap interval (``ratio_ci_low``, ``ratio_ci_high``), the smallest
+    ratio the experiment could have detected at 80 % power (``detectable_ratio``), and
+    the pairs a 10 % lead would need (``pairs_for_lead``, NaN beyond a million).
+    """
+    from curiosity_cli.evaluate.power import TARGET_LEAD, detectable_difference, pairs_needed, ratio_interval
+
+    columns = {name: [] for name in POWER_COLUMNS}
+    blocks = {(against, dataset): block for against, dataset, length, block in _paired_blocks(mi) if length == HEADLINE_LENGTH}
+    for row in top.itertuples():
+        pair = blocks[(row.against, row.dataset)][[HEADLINE_WEIGHT, row.next_best]].dropna().to_numpy()
+        ours, theirs = pair[:, 0], pair[:, 1]
+        sd = float(np.std(ours - theirs, ddof=1)) if len(pair) > 1 else np.nan
+        baseline = float(theirs.mean())
+        low, high = ratio_interval(ours, theirs)
+        needed = pairs_needed(TARGET_LEAD * baseline, sd)
+        columns["ratio_ci_low"].append(low)
+        columns["ratio_ci_high"].append(high)
+        columns["detectable_ratio"].append(1 + detectable_difference(sd, len(pair)) / baseline if baseline > 0 else np.nan)
+        columns["pairs_for_lead"].append(np.nan if needed is None else needed)
+    return top.assign(**columns)
 
 
 def read_class_names(config: ExperimentConfig) -> dict[str, dict[int, str]]:
@@ -566,11 +629,12 @@ def evaluate_experiment(folder: Path) -> Evaluation:
     effects = paired_effects(mi, tests)
     maps = read_maps(folder)
     stands_in_for = {} if maps is None else {r.dataset: r.stands_in_for for r in maps.itertuples() if isinstance(r.stands_in_for, str)}
-    top = headline(summary, tests, stands_in_for, effects)
+    top = with_power(headline(summary, tests, stands_in_for, effects), mi)
+    revisits = summarise_revisits(mi)
     convergence = label_convergence(mi)
     tables = {
         "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
-        "effects": effects, "headline": top, "convergence": convergence,
+        "effects": effects, "headline": top, "convergence": convergence, "revisits": revisits,
     }
     for name, table in tables.items():
         with atomic_path(ExperimentFolder(folder).table(name)) as tmp:
@@ -579,4 +643,4 @@ def evaluate_experiment(folder: Path) -> Evaluation:
         mi.to_parquet(tmp, index=False)
     with atomic_path(ExperimentFolder(folder).skipped) as tmp:
         tmp.write_text(json.dumps(skipped, indent=2) + "\n")
-    return Evaluation(mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence)
+    return Evaluation(mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits)

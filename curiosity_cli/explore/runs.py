@@ -147,6 +147,30 @@ class Run:
         return SparseCounts(words, topics, counts, (self.meta["vocabulary_size"], self.meta["n_topics"])).dense()
 
 
+    def boxed_in(self) -> np.ndarray:
+        """(L,) bool ndarray: ``path.csv``'s ``boxed_in``, the steps whose neighbours were all visited.
+
+        Raises
+        ------
+        RunError
+            ``path.csv`` missing, unreadable, or not one ``boxed_in`` value per step.
+        """
+        import pandas as pd
+
+        csv = self.folder / "path.csv"
+        try:
+            column = pd.read_csv(csv, usecols=["boxed_in"])["boxed_in"]
+        except FileNotFoundError:
+            raise RunError(f"{display_path(csv)}: not found; the run folder is incomplete") from None
+        except (ValueError, OSError) as exc:
+            raise RunError(f"{display_path(csv)}: corrupt ({exc})") from None
+        if column.dtype != bool or column.size != self.path.size:
+            raise RunError(
+                f"{display_path(csv)}: boxed_in: expected {self.path.size} values true or false, one per step"
+            )
+        return column.to_numpy()
+
+
 def finished_meta(folder: Path) -> dict | None:
     """The ``run.json`` of a run folder that exists under its real name (so it was written whole) and reads back.
 

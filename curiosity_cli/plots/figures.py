@@ -145,6 +145,11 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
                 else:
                     written += _save(fig, out / stem)
 
+        if "distinct_cells" in mi:
+            written += _save(distinct_figure(mi, order), out / "mi-vs-distinct")
+        else:
+            notes.append("mi-vs-distinct: mi.csv has no distinct_cells column (run `curiosity evaluate` again)")
+
         traces = {}
         for name, m in maps.items():
             batch_file = layout.batch(name)
@@ -285,6 +290,58 @@ def mi_figure(summary, against: str, datasets: list[str]):
     fit = max(1, int(fig.get_figwidth() / 2.0))  # a legend entry takes about 2 inches
     fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), fit), frameon=False)
     title = f"Mutual information of path labels $Z_p$ with {reference}: mean and 95% CI over restarts"
+    fig.suptitle(_wrap(title, fig.get_figwidth(), _RC["figure.titlesize"]))
+    return fig
+
+
+def distinct_figure(mi, datasets: list[str]):
+    """MI against the distinct cells a path saw, one point per run and checkpoint, walkers coloured.
+
+    A walker ahead on MI at the same number of distinct cells saw better cells; one ahead
+    only by seeing more of them sits further right on the same cloud.
+
+    Parameters
+    ----------
+    mi : pandas.DataFrame
+        ``mi.csv``, with ``distinct_cells``; ceilings are left out (they are not paths).
+    datasets : list of str
+        Panel order.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+    rows = mi[~mi["weight_function"].astype(str).isin(CEILINGS)]
+    panels = [d for d in datasets if (rows["dataset"].astype(str) == d).any()]
+    weights = _weight_order(rows["weight_function"].astype(str))
+    others = [w for w in weights if w not in WEIGHT_STYLES]
+    n_cols = min(len(panels), 2)
+    fig = Figure(figsize=(0.6 + 4.4 * n_cols, 0.9 + 3.6 * math.ceil(len(panels) / n_cols)), layout="constrained")
+    axes = fig.subplots(math.ceil(len(panels) / n_cols), n_cols, squeeze=False)
+    for ax, dataset in zip(axes.flat, panels):
+        table = rows[rows["dataset"].astype(str) == dataset]
+        column = "mi_human" if table["mi_human"].notna().any() else "mi_batch"
+        for weight in weights:
+            runs = table[table["weight_function"].astype(str) == weight]
+            colour, marker = weight_style(weight, others)
+            ax.scatter(runs["distinct_cells"], runs[column], s=14, color=colour, marker=marker, alpha=0.6, linewidths=0)
+        ax.set_xscale("log", base=2)
+        ax.grid(True, color="0.9", linewidth=0.8)
+        ax.set_axisbelow(True)
+        ax.set_title(dataset)
+        ax.set_xlabel("distinct cells seen")
+        ax.set_ylabel(f"MI with {'human labels $Z_h$' if column == 'mi_human' else 'batch labels $Z_b$'} (bits)")
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
+    handles = [
+        Line2D([], [], color=weight_style(w, others)[0], marker=weight_style(w, others)[1], linestyle="", label=_label(w))
+        for w in weights
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
+    title = "MI against distinct cells seen: one point per run and checkpoint"
     fig.suptitle(_wrap(title, fig.get_figwidth(), _RC["figure.titlesize"]))
     return fig
 

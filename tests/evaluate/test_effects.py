@@ -19,6 +19,7 @@ from curiosity_cli.evaluate.tables import (
     paired_tests,
     summarise,
     summarise_classes,
+    with_power,
 )
 from curiosity_cli.explore.weights import CEILINGS
 
@@ -82,6 +83,7 @@ def synthetic_mi() -> pd.DataFrame:
                         "mi_human": mi if human else np.nan, "mi_batch": mi, "nmi_human": np.nan, "nmi_batch": np.nan,
                         "classes_found": (restart % 3 + 2) if human else np.nan, "classes": 6 if human else np.nan,
                         "mean_recall": (0.5 + 0.01 * restart) if human else np.nan, "seed": str(restart),
+                        "replicate": 0,
                     })
     return pd.DataFrame(rows)
 
@@ -91,7 +93,7 @@ def tables():
     summary, tests = summarise(mi), paired_tests(mi)
     effects = paired_effects(mi, tests)
     top = headline(summary, tests, {"win": "Montreal1", "loss": "SouthBellairs", "unlabelled": "Montreal2"}, effects)
-    return mi, summary, tests, effects, top
+    return mi, summary, tests, effects, with_power(top, mi)
 
 
 def test_effects_are_topic_perplexity_minus_each_walker_paired_by_restart_and_leave_ceilings_out():
@@ -126,11 +128,15 @@ def test_the_verdict_of_a_clear_win():
     row = top.set_index("dataset").loc["win"].to_dict() | {"dataset": "win"}
     low, high = row["ci_low"], row["ci_high"]
     assert 0 < low < high
+    assert row["ratio_ci_low"] < row["ratio"] < row["ratio_ci_high"] and 1 < row["detectable_ratio"] < row["ratio"]
     assert verdict(row) == (
         f"win: topic perplexity beats every other walker at 80 steps: 0.10 bits above stochastic-coverage, the next "
-        f"best (95 % CI +{low:.2f} to +{high:.2f}), p = 0.002; ratio {row['ratio']:.2f} against the paper's 1.51 on "
+        f"best (95 % CI +{low:.2f} to +{high:.2f}), p = 0.002; ratio {row['ratio']:.2f} (95 % CI "
+        f"{row['ratio_ci_low']:.2f} to {row['ratio_ci_high']:.2f}) against the paper's 1.51 on "
         f"Montreal1. It reaches {100 * row['ceiling_share']:.0f} % of the better ceiling's MI ({CEILINGS[0]}, "
-        f"{row['ceiling_mi']:.2f} bits)."
+        f"{row['ceiling_mi']:.2f} bits). With 10 pairs it could detect a lead of "
+        f"{100 * (row['detectable_ratio'] - 1):.0f} % or more at 80 % power; a 10 % lead would need "
+        f"{row['pairs_for_lead']} pairs."
     )
 
 
@@ -160,7 +166,8 @@ def test_the_verdict_of_a_map_without_human_labels():
         "unlabelled (MI against Z_b: the map has no human labels): topic perplexity beats every other walker at 80 "
         "steps: 0.10 bits above stochastic-coverage, the next best (95 % CI +"
     )
-    assert f"ratio {row['ratio']:.2f} against the paper's 1.20 on Montreal2 (against human labels there)." in text
+    assert f"ratio {row['ratio']:.2f} (95 % CI " in text
+    assert "against the paper's 1.20 on Montreal2 (against human labels there)." in text
 
 
 def test_a_lead_that_is_not_significant_is_not_a_win():

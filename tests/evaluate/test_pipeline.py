@@ -52,7 +52,8 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     mi = pd.read_csv(folder / "mi.csv")
     assert list(mi.columns) == [
         "dataset", "weight_function", "restart", "path_length", "mi_human", "mi_batch", "nmi_human", "nmi_batch",
-        "classes_found", "classes", "mean_recall", "seed", "placed_mi_human", "placed_mi_batch",
+        "classes_found", "classes", "mean_recall", "seed", "replicate", "placed_mi_human", "placed_mi_batch",
+        "distinct_cells", "revisit_steps", "boxed_in_steps",
     ]
     # label.check_restarts = 1: restart 0 of each walker is labelled a second time, from a placed start
     checked = mi["restart"] == 0
@@ -192,7 +193,8 @@ def test_the_headline_is_the_ratio_to_the_next_best_with_its_paired_p():
         for restart in range(10):
             mi = centre + 0.01 * rng.standard_normal()
             rows.append({"dataset": "zurich-zh17", "weight_function": weight, "restart": restart, "path_length": 80,
-                         "mi_human": mi, "mi_batch": mi, "nmi_human": mi, "nmi_batch": mi, "seed": restart})
+                         "mi_human": mi, "mi_batch": mi, "nmi_human": mi, "nmi_batch": mi, "seed": restart,
+                         "replicate": 0})
     mi = pd.DataFrame(rows)
     top = headline(summarise(mi), paired_tests(mi), {"zurich-zh17": "Montreal1"})
     row = top.iloc[0]

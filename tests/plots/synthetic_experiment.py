@@ -112,7 +112,8 @@ def make_experiment(
                     rows.append(
                         dict(dataset=name, weight_function=weight, restart=restart, path_length=length,
                              mi_human=mi if human else np.nan, mi_batch=mi_batch,
-                             nmi_human=mi / 2.5 if human else np.nan, nmi_batch=mi_batch / 4, seed=seed)
+                             nmi_human=mi / 2.5 if human else np.nan, nmi_batch=mi_batch / 4, seed=seed,
+                             distinct_cells=len(np.unique(path[:length], axis=0)))
                     )
                     if restart == 0 and length in (80, lengths[-1]):
                         merge = 2 if length < 160 else 1

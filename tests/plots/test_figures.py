@@ -46,7 +46,7 @@ def test_every_figure_is_written_as_png_and_pdf(experiment):
     written = write_figures(experiment)  # a second time replaces the files
     assert dict(matplotlib.rcParams) == rc  # styles are set in a context, not globally
     stems = [
-        "mi-vs-length-human", "mi-vs-length-batch",
+        "mi-vs-length-human", "mi-vs-length-batch", "mi-vs-distinct",
         "path-own", "labelings-own", "path-bare", "labelings-bare", "batch-convergence",
     ]
     assert names(written) == [f"{stem}{suffix}" for stem in stems for suffix in (".png", ".pdf")]
@@ -75,7 +75,7 @@ def test_missing_labelings_and_config_skip_their_figures_only(experiment):
     written = write_figures(experiment)
     assert names(written) == [
         f"{stem}{suffix}"
-        for stem in ("mi-vs-length-human", "mi-vs-length-batch", "path-own", "labelings-own")
+        for stem in ("mi-vs-length-human", "mi-vs-length-batch", "mi-vs-distinct", "path-own", "labelings-own")
         for suffix in (".png", ".pdf")
     ]
     skipped = "\n".join(written.skipped)
@@ -86,7 +86,9 @@ def test_missing_labelings_and_config_skip_their_figures_only(experiment):
 
     (experiment / "config.yaml").unlink()
     written = write_figures(experiment)
-    assert names(written) == ["mi-vs-length-human.png", "mi-vs-length-human.pdf", "mi-vs-length-batch.png", "mi-vs-length-batch.pdf"]
+    assert names(written) == [
+        f"{stem}{suffix}" for stem in ("mi-vs-length-human", "mi-vs-length-batch", "mi-vs-distinct") for suffix in (".png", ".pdf")
+    ]
     assert any("config.yaml: not found, so no map figures" in note for note in written.skipped)
 
 

@@ -31,7 +31,7 @@ def test_plot_writes_the_figures_and_lists_them(tmp_path, own_map):
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()
     assert lines[0].startswith("wrote ") and lines[0].endswith("figures/mi-vs-length-human.png")
-    assert sum(line.endswith(".pdf") for line in lines) == sum(line.endswith(".png") for line in lines) == 4
+    assert sum(line.endswith(".pdf") for line in lines) == sum(line.endswith(".png") for line in lines) == 5
     assert "skipped: " in result.stderr and "batch/own.npz: not found (run `curiosity label` first)" in result.stderr
 
 
