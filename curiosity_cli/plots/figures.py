@@ -313,6 +313,7 @@ def distinct_figure(mi, datasets: list[str]):
     """
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
+    from matplotlib.ticker import ScalarFormatter
 
     rows = mi[~mi["weight_function"].astype(str).isin(CEILINGS)]
     panels = [d for d in datasets if (rows["dataset"].astype(str) == d).any()]
@@ -329,6 +330,7 @@ def distinct_figure(mi, datasets: list[str]):
             colour, marker = weight_style(weight, others)
             ax.scatter(runs["distinct_cells"], runs[column], s=14, color=colour, marker=marker, alpha=0.6, linewidths=0)
         ax.set_xscale("log", base=2)
+        ax.xaxis.set_major_formatter(ScalarFormatter())
         ax.grid(True, color="0.9", linewidth=0.8)
         ax.set_axisbelow(True)
         ax.set_title(dataset)
