@@ -322,9 +322,16 @@ def _value_text(value) -> str:
 def merge_sweeps(declared: Sequence[str], given: Sequence[str]) -> list[str]:
     """The config's declared sweep with the command line's ``--sweep`` options: a given key
     replaces the declared key's values in place, and other given keys follow, in order."""
-    given_by_key = {text.partition("=")[0].strip(): text for text in given}
-    merged = [given_by_key.pop(text.partition("=")[0].strip(), text) for text in declared]
-    return merged + [text for text in given if text.partition("=")[0].strip() in given_by_key]
+    merged = list(declared)
+    # in place: a combination's folder is named by its axes in order, so a resumed sweep finds it
+    positions = {text.partition("=")[0].strip(): i for i, text in enumerate(declared)}
+    for text in given:
+        i = positions.pop(text.partition("=")[0].strip(), None)
+        if i is None:
+            merged.append(text)  # a key given twice stays twice, for parse_sweeps to refuse
+        else:
+            merged[i] = text
+    return merged
 
 
 def _overlap(key: str, other: str) -> bool:
@@ -624,7 +631,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
                 f"| {r.dataset} | {_number(r.topic_perplexity, 3)} | {r.next_best} | {_number(r.next_best_mi, 3)} | "
                 f"{_number(r.ratio)} | {_p(r.p_value)} | {r.pairs} | {r.paper_map} | {_number(r.paper_ratio)} |"
             )
-        sections += ["", *_distinct_table(read_revisits(folder / c.name))]
+        sections += ["", *_distinct_table(_read_revisits(folder / c.name))]
     sets = ", ".join(f"`--set {s}`" for s in sweep.sets) or "none"
     lines = [
         f"# Parameter sweep of `{sweep.name}`: {_count(len(outcomes), 'combination')}",
@@ -659,7 +666,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
     return path
 
 
-def read_revisits(folder: Path):
+def _read_revisits(folder: Path):
     """An experiment's ``revisits.csv`` (:func:`~curiosity_cli.evaluate.tables.summarise_revisits`), or None if absent."""
     import pandas as pd
 
@@ -721,7 +728,7 @@ def _sensitivity(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) -> tup
         "| " + " | ".join([*treatments, "dataset", "seeds", "pairs", "ratio [95 % CI]", "p", "next best",
                          "detectable lead", "pairs for +10 %", *(f"distinct: {w}" for w in DISTINCT_WALKERS),
                          "paper's ratio"]) + " |",
-        "|" + "---|" * (len(treatments) + 10 + len(DISTINCT_WALKERS)),
+        "|" + "---|" * (len(treatments) + 9 + len(DISTINCT_WALKERS)),
     ]
     rows = []
     for values, folders in groups.items():

@@ -272,3 +272,26 @@ def test_a_declared_sweep_that_is_not_a_mapping_of_lists_is_refused_naming_the_f
         result = sweep(config, tmp_path / "results")
         assert result.exit_code == 1 and message in result.stderr, result.output
     assert not (tmp_path / "results").exists()
+
+
+def test_a_declared_sweep_reads_as_sweep_options_and_the_command_line_replaces_a_key_in_place(tmp_path):
+    from curiosity_cli.sweep import declared_sweeps, merge_sweeps
+
+    config = tmp_path / "exp.yaml"
+    config.write_text(
+        "base: paper.yaml\nsweep:\n  explore.coverage: [literal, clamp]\n  datasets: [[zurich-zh17], [aerial-mosaic]]\n"
+        "  seed: [0, 1]\n  name_like: ['null', 'a b']\n"
+    )
+    declared = declared_sweeps(config)
+    assert declared == [
+        "explore.coverage=literal,clamp", 'datasets=["zurich-zh17"],["aerial-mosaic"]', "seed=0,1",
+        'name_like="null",a b',
+    ]
+    # each value reads back as the YAML value it was: the string 'null' stays a string
+    plan = plan_sweep(config, parse_sweeps(declared[:3]))
+    assert plan.combinations[0].config.datasets == ("zurich-zh17",) and plan.combinations[-1].config.seed == 1
+    assert parse_sweeps(declared)[3].values == ('"null"', "a b")
+    # a key given on the command line takes the declared key's place, so combinations keep their folders
+    merged = merge_sweeps(declared[:3], ["seed=2", "model.topics=8"])
+    assert merged == [declared[0], declared[1], "seed=2", "model.topics=8"]
+    assert merge_sweeps([], ["seed=1"]) == ["seed=1"] and declared_sweeps(CONFIG_DIR / "quick.yaml") == []
