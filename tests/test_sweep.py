@@ -279,7 +279,7 @@ def test_a_declared_sweep_reads_as_sweep_options_and_the_command_line_replaces_a
 
     config = tmp_path / "exp.yaml"
     config.write_text(
-        "base: paper.yaml\nsweep:\n  explore.coverage: [literal, clamp]\n  datasets: [[zurich-zh17], [aerial-mosaic]]\n"
+        "base: paper.yaml\nname: exp\nseed: 0\ndatasets: [zurich-zh17]\nsweep:\n  explore.coverage: [literal, clamp]\n  datasets: [[zurich-zh17], [aerial-mosaic]]\n"
         "  seed: [0, 1]\n  name_like: ['null', 'a b']\n"
     )
     declared = declared_sweeps(config)
