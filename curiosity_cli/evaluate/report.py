@@ -145,7 +145,7 @@ def _no_verdict(summary, dataset: str) -> str:
     return f"{dataset}: no verdict: no other walker to compare with."
 
 
-def _verdicts(summary, top) -> list[str]:
+def _verdicts(summary, top, coverage: str) -> list[str]:
     """The answer first, a line per map; then how to read it."""
     lines = ["## Verdict", ""]
     rows = {r["dataset"]: r for r in top.to_dict("records")}
@@ -161,7 +161,9 @@ def _verdicts(summary, top) -> list[str]:
         "interval from a bootstrap over the pairs, beside the paper's for the map the dataset stands in for. The "
         f"smallest lead detectable at {100 * POWER:.0f} % power, and the pairs a {100 * TARGET_LEAD:.0f} % lead "
         "needs, are for a paired t-test at p < 0.05 with the spread of the paired differences observed here "
-        "(evaluate/power.py); seeds run as a sweep pool their pairs in SWEEP.md.",
+        "(evaluate/power.py); seeds run as a sweep pool their pairs in SWEEP.md. How eq. 8 treats a visited "
+        f"neighbour (here `{coverage}`) can move the verdict: `configs/readings.yaml` runs every reading on "
+        "the four maps, three seeds pooled.",
         "",
     ]
 
@@ -488,7 +490,7 @@ def write_report(
         f"`{config.explore.coverage}`.",
         "",
     ]
-    lines += _verdicts(summary, top)
+    lines += _verdicts(summary, top, config.explore.coverage)
     lines += _headline_table(top)
     lines += _maps_table(evaluation.maps)
     lines += ["## Mutual information (bits, mean ± 95 % CI half-width)", "", *_labelling_note(config), "",
