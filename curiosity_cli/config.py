@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from curiosity_cli.errors import ConfigError
-from curiosity_cli.files import display_path
+from curiosity_cli.files import display_path, resolved
 from curiosity_cli.yamlfile import SHOWN_CHARS, dump_yaml, parse_yaml, read_yaml, shown
 
 #: The source checkout this package runs from; configs and data live beside the package.
@@ -295,7 +295,7 @@ class _Raw:
 
 def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
     """Merge ``path`` and, first, the chain of ``base`` files it names."""
-    path = path.resolve()
+    path = resolved(path)
     if path in seen:
         raise ConfigError(f"{display_path(path)}: base: the chain of base configs loops back here")
     data = read_yaml(path, "config file")
@@ -359,7 +359,7 @@ def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> Exper
         One line naming the file (or ``overrides``), the key, the value and what was expected.
     """
     path = Path(path)
-    raw = _Raw(str(path.resolve()))
+    raw = _Raw(str(resolved(path)))
     _load_chain(path, raw)
     _apply_overrides(raw, overrides)
     return _check_experiment(_build(ExperimentConfig, raw.data, (), raw), raw)
@@ -416,7 +416,7 @@ def load_words_config(path: str | Path, overrides: typing.Iterable[str] = ()) ->
         As :func:`load_config`; also for an override outside ``words``.
     """
     path = Path(path)
-    raw = _Raw(str(path.resolve()))
+    raw = _Raw(str(resolved(path)))
     _load_chain(path, raw)
     for text in overrides:
         if not _parse_override(text)[0][0] == "words":
@@ -445,8 +445,8 @@ def load_dataset_config(path: str | Path) -> DatasetConfig:
 
     path = Path(path)
     where = display_path(path)
-    raw = _Raw(str(path.resolve()))
-    raw.merge(read_yaml(path, "dataset file"), str(path.resolve()))
+    raw = _Raw(str(resolved(path)))
+    raw.merge(read_yaml(path, "dataset file"), str(resolved(path)))
     config = _build(DatasetConfig, raw.data, (), raw)
     if config.fetch is not None:
         if config.fetch not in FETCHED_MAPS:
@@ -459,6 +459,11 @@ def load_dataset_config(path: str | Path) -> DatasetConfig:
         config = dataclasses.replace(config, **fetched_files(config.fetch))
     elif config.image is None:
         raise ConfigError(f"{where}: image: missing key; expected the path of the map's image")
+    if config.word_stride > config.cell_width:
+        raise ConfigError(
+            f"{where}: word_stride: got {config.word_stride}, expected at most cell_width ({config.cell_width}): "
+            "a wider stride leaves cells without texton words"
+        )
     if config.labels is not None and config.legend is None:
         raise ConfigError(f"{where}: legend: missing; a dataset with labels needs a legend YAML")
     if config.size is not None and len(config.size) != 2:
@@ -497,7 +502,7 @@ def dataset_path(name_or_path: str | Path, relative_to: Path | None = None) -> P
         return registered
     candidate = (relative_to or Path.cwd()) / text
     if candidate.is_file():
-        return candidate.resolve()
+        return resolved(candidate)
     raise ConfigError(
         f"no dataset {shown(text)}: expected one of {', '.join(dataset_names())} "
         "or a path to a dataset YAML"
@@ -687,7 +692,7 @@ def _resolve_path(value: str, keys: tuple, raw: _Raw) -> Path:
         return path
     source = raw.origin(keys)
     base = Path.cwd() if source == OVERRIDES else Path(source).parent
-    return (base / path).resolve()
+    return resolved(base / path)
 
 
 def _check_experiment(config: ExperimentConfig, raw: _Raw) -> ExperimentConfig:

@@ -20,11 +20,20 @@ class CorruptFileError(CuriosityError):
     """A file that exists but cannot be read as what it should be: truncated, empty, or another format."""
 
 
+def resolved(path: str | Path) -> Path:
+    """``Path(path).resolve()``, a symlink loop raised as the OS error it is, which the CLI
+    reports by its path (Python 3.11's ``resolve`` raises ``RuntimeError`` for it)."""
+    try:
+        return Path(path).resolve()
+    except RuntimeError:
+        raise OSError(errno.ELOOP, os.strerror(errno.ELOOP), str(path)) from None
+
+
 def display_path(path: Path) -> str:
     """A path as a user would type it: relative to the current directory when inside it."""
     try:
-        return str(Path(path).resolve().relative_to(Path.cwd()))
-    except ValueError:
+        return str(resolved(path).relative_to(Path.cwd()))
+    except (ValueError, OSError):
         return str(path)
 
 
@@ -184,8 +193,8 @@ def check_inside(path: Path, root: Path, what: str) -> None:
     Names are validated when a config is loaded; this second line of defence keeps a name
     that slipped through from writing outside the results or the cache.
     """
-    resolved, top = Path(path).resolve(), Path(root).resolve()
-    if top not in resolved.parents:
+    inside, top = resolved(path), resolved(root)
+    if top not in inside.parents:
         raise ConfigError(
             f"{what}: {display_path(path)} is not inside {display_path(root)}; "
             "expected a name without '/' or '..'"

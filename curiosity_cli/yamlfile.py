@@ -3,8 +3,9 @@
 A YAML file is user input: a few lines of anchors and aliases ("billion laughs") expand
 to billions of values that take a minute and all memory to walk or print. A document is
 therefore refused above :data:`MAX_BYTES`, above :data:`MAX_VALUES` values counted with
-every alias expanded, above :data:`MAX_DEPTH` levels of nesting, and when an alias
-refers to a node that contains it. The loader is PyYAML's safe one, plus the float forms
+every alias expanded, above :data:`MAX_DEPTH` levels of nesting, when an alias
+refers to a node that contains it, and when a mapping gives a key twice (PyYAML would
+keep the last silently). The loader is PyYAML's safe one, plus the float forms
 people type that YAML 1.1 reads as strings (``1e-3``, ``1E5``, ``-.5``).
 """
 
@@ -80,6 +81,25 @@ def _loader():
             if node is not None:
                 _bounded_size(node, {}, 0)
             return node
+
+        def construct_mapping(self, node, deep=False):
+            # PyYAML keeps the last of a key given twice: a setting silently lost
+            marks = {}
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key = self.construct_object(key_node, deep=True)
+                mark = key_node.start_mark
+                try:
+                    first = marks.setdefault(key, mark)
+                except TypeError:  # an unhashable key: the base class refuses it
+                    continue
+                if first is not mark:
+                    raise _Refused(
+                        f"key {shown(key)} is given twice (lines {first.line + 1} and {mark.line + 1}); "
+                        "expected each key once"
+                    )
+            return super().construct_mapping(node, deep)
 
     BoundedLoader.add_implicit_resolver("tag:yaml.org,2002:float", _TYPED_FLOAT, list("-+.0123456789"))
     return BoundedLoader

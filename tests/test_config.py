@@ -142,8 +142,16 @@ def test_an_int_is_accepted_where_a_number_is_expected():
 
 
 def _experiment(tmp_path: Path, text: str) -> Path:
+    """An experiment config of ``text`` and, for the keys it leaves out, a name, a seed and a map."""
+    try:
+        given = yaml.safe_load(text)
+    except yaml.YAMLError:
+        given = None
+    given = given if isinstance(given, dict) else {}
+    defaults = {"name": "t", "seed": "1", "datasets": "[aerial-mosaic]"}
+    head = "".join(f"{key}: {value}\n" for key, value in defaults.items() if key not in given)
     path = tmp_path / "exp.yaml"
-    path.write_text(f"base: {CONFIG_DIR / 'paper.yaml'}\nname: t\nseed: 1\ndatasets: [aerial-mosaic]\n{text}")
+    path.write_text(f"base: {CONFIG_DIR / 'paper.yaml'}\n{head}{text}")
     return path
 
 

@@ -137,7 +137,26 @@ CASES = {
         ["results/E/config.yaml: expected a mapping of keys at the top level, got list"]),
     "a list as saved config, plot": (
         lambda w: _saved_config(w, "- E\n"), ["plot", "results/E"], 1, ["results/E/"]),
-    # 6. out-of-range numbers on the command line are usage errors
+    # 6. issue 25: a key given twice, a symlink loop where a file belongs, a stride wider than a cell
+    "a key given twice in an experiment config": (
+        lambda w: (w / "e.yaml").write_text(f"base: {CONFIG_DIR / 'paper.yaml'}\nname: E\nseed: 1\nseed: 2\n"),
+        ["config", "show", "e.yaml"], 1, ["e.yaml", "key 'seed' is given twice (lines 3 and 4)"]),
+    "a key given twice in a dataset YAML": (
+        lambda w: _own_map(w).write_text((w / "own.yaml").read_text() + "cell_width: 8\n"),
+        ["datasets", "show", "own.yaml"], 1, ["own.yaml", "key 'cell_width' is given twice"]),
+    "a symlink loop as the config": (
+        lambda w: (w / "e.yaml").symlink_to(w / "e.yaml"), ["config", "show", "e.yaml"], 1,
+        ["e.yaml: Too many levels of symbolic links"]),
+    "a symlink loop as a base": (
+        lambda w: ((w / "loop.yaml").symlink_to(w / "loop.yaml"), (w / "e.yaml").write_text("base: loop.yaml\n")),
+        ["config", "show", "e.yaml"], 1, ["e.yaml: base: file not found", "loop.yaml"]),
+    "a symlink loop as a map's image": (
+        lambda w: (_own_map(w), (w / "map.png").unlink(), (w / "map.png").symlink_to(w / "map.png")),
+        ["datasets", "show", "own.yaml"], 1, ["map.png: Too many levels of symbolic links"]),
+    "a word stride wider than a cell": (
+        lambda w: _own_map(w, word_stride=256), ["datasets", "show", "own.yaml"], 1,
+        ["own.yaml: word_stride: got 256, expected at most cell_width (16)"]),
+    # 7. out-of-range numbers on the command line are usage errors
     "a huge texton vocabulary": (
         lambda w: None, ["vocab", "build", "--out", "results/vocab", "--texton-words", "100000000"], 2,
         ["--texton-words", "less than or equal to", "30000"]),
