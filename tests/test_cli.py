@@ -158,6 +158,11 @@ def test_extract_writes_a_density_png(own_map, tmp_path):
     result = run("extract", str(own_map), "--cache-dir", str(tmp_path / "c"), "--density", str(out))
     assert result.exit_code == 0, result.output
     assert cv2.imread(str(out)) is not None
+    # a path that does not say PNG is a usage error, before anything is extracted or written
+    text = tmp_path / "d.txt"
+    result = run("extract", str(own_map), "--cache-dir", str(tmp_path / "c2"), "--density", str(text))
+    assert result.exit_code == 2 and "--density" in result.stderr and "expected a path ending in .png" in result.stderr
+    assert not text.exists() and not (tmp_path / "c2").exists()
 
 
 @pytest.mark.parametrize(

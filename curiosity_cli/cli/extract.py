@@ -30,6 +30,8 @@ def extract(
     from curiosity_cli.files import display_path
     from curiosity_cli.words.extract import extract_words
 
+    if density is not None and density.suffix.lower() != ".png":
+        raise typer.BadParameter(f"got {density}, expected a path ending in .png (the figure is a PNG)", param_hint="--density")
     words = load_words_config(config, overrides)
     map_data = load_map(dataset)
     result = extract_words(map_data, words, stride=stride, cell_width=cell_width, cache_dir=cache_dir, force=force)
