@@ -108,8 +108,12 @@ def drive(
     typer.echo(f"drove {outcome.frames} frames: {outcome.detail}{stopped}; log in {display_path(folder / 'log.jsonl')}")
     if video_out is not None:
         typer.echo(f"wrote {display_path(video_out)}")
-    if outcome.reason in ("SIGINT", "SIGTERM"):
-        raise typer.Exit(128 + {"SIGINT": 2, "SIGTERM": 15}[outcome.reason])
+    if outcome.reason in _SIGNAL_EXIT:
+        raise typer.Exit(_SIGNAL_EXIT[outcome.reason])
+
+
+#: The exit code of a command stopped by a signal, as a shell reports it: 128 + its number.
+_SIGNAL_EXIT = {"SIGINT": 130, "SIGTERM": 143}
 
 
 @app.command("simrobot")
@@ -156,3 +160,4 @@ def simrobot(
         seed=resolved.seed if seed is None else seed, estop_after=estop_after, link=link, log_file=log_file, on_ready=ready,
     )
     typer.echo(f"simrobot: stopped by {stopped_by}", err=True)
+    raise typer.Exit(_SIGNAL_EXIT[stopped_by])

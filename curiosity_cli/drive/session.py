@@ -31,6 +31,7 @@ from curiosity_cli.drive.pipeline import CuriosityPipeline, warm_up
 from curiosity_cli.drive.sim import Body, Pose
 from curiosity_cli.drive.simrobot import Noise, SimRobot, open_pty
 from curiosity_cli.errors import ParameterError
+from curiosity_cli.files import display_path
 from curiosity_cli.layout import DEFAULT_RESULTS
 
 
@@ -169,6 +170,20 @@ def drive_session(
     return outcome, out
 
 
+def _check_link(link: Path) -> None:
+    """Refuse a ``link`` that cannot become a symlink: in a missing folder, or where a file is."""
+    if not link.parent.is_dir():
+        raise ParameterError(
+            f"link: {display_path(link.parent)} is not a folder; expected the symlink's folder to exist",
+            parameter="link",
+        )
+    if link.exists() and not link.is_symlink():
+        raise ParameterError(
+            f"link: {display_path(link)} exists and is not a symlink; expected a new name (or a symlink to replace)",
+            parameter="link",
+        )
+
+
 def simrobot_session(
     config: ExperimentConfig,
     sim_map: MapData,
@@ -214,6 +229,8 @@ def simrobot_session(
         The signal that stopped it, ``SIGINT`` or ``SIGTERM``.
     """
     d = config.drive
+    if link is not None:
+        _check_link(link)
     body = _body(sim_map, start, heading_deg, config)
     events = JsonLines(log_file) if log_file is not None else None
     master, slave, path = open_pty()

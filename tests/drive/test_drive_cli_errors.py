@@ -58,6 +58,17 @@ def test_bad_noise_and_unknown_maps_are_one_line_errors():
     assert "no dataset 'atlantis'" in one_line_error(result)
 
 
+def test_a_link_that_cannot_be_made_names_the_link_not_the_pty(tmp_path):
+    result = runner.invoke(app, ["simrobot", "--map", "reef-mosaic", "--link", str(tmp_path / "none" / "robot")])
+    line = one_line_error(result)
+    assert "--link: " in line and "none is not a folder; expected the symlink's folder to exist" in line
+    assert "/dev/" not in line
+    (tmp_path / "robot").write_text("a file of the user's")
+    result = runner.invoke(app, ["simrobot", "--map", "reef-mosaic", "--link", str(tmp_path / "robot")])
+    assert "robot exists and is not a symlink; expected a new name" in one_line_error(result)
+    assert (tmp_path / "robot").read_text() == "a file of the user's"
+
+
 def test_a_camera_that_cannot_be_opened_is_a_one_line_error(tmp_path):
     result = runner.invoke(app, ["drive", "--dry-run", "--camera", str(tmp_path / "none.mp4"), "--out", str(tmp_path / "run")])
     assert "none.mp4': OpenCV cannot open it; expected a device index, a video file or a stream URL" in one_line_error(result)

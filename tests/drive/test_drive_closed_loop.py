@@ -87,6 +87,10 @@ def test_sigint_sends_stop_and_exits_130(tmp_path, simrobot, warm_kernels):
     assert "stopped by SIGINT; STOP acknowledged" in stdout
     assert robot.received()[-1] == "STOP"
     assert read_log(out)[-1]["outcome"] == "SIGINT"
+    # the robot too exits as a stopped process does, 128 + the signal
+    robot.process.send_signal(signal.SIGTERM)
+    _, robot_stderr = robot.process.communicate(timeout=RUN_SECONDS)
+    assert robot.process.returncode == 143 and "simrobot: stopped by SIGTERM" in robot_stderr
 
 
 def test_a_robot_that_disconnects_mid_run_is_a_clean_error_after_stop_was_attempted(tmp_path, simrobot, warm_kernels):
