@@ -103,9 +103,14 @@ def main() -> None:
     stderr and exit code 130 or 143 (the shell's 128 + the signal's number). ``drive``
     and ``simrobot`` handle both signals themselves while they run (STOP goes first).
     """
+    import os
     import signal
     import sys
 
+    # OpenCV and its FFmpeg print their own lines for a camera they cannot open, before
+    # our one Error line says the same; a user who wants them sets the variables
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
     received = []
 
     def interrupt(signum, frame):

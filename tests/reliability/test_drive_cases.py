@@ -108,3 +108,12 @@ def test_a_waiting_command_dropped_by_stop_gives_its_seq_to_the_stop(robot):
     sent = robot.frames()
     assert sent[-1] == Stop(2) and not any(isinstance(f, Vel) and f.seq == 2 for f in sent)
     assert _new_seqs(sent) == [0, 1, 2]
+
+
+@pytest.mark.parametrize("camera", ["7", "tcp://127.0.0.1:9"])
+def test_a_camera_that_cannot_be_opened_is_the_only_line_on_stderr(tmp_path, camera):
+    # OpenCV's and FFmpeg's own warnings ("[ WARN:0@0.02] ...", "[tcp @ 0x...] Connection refused") stay quiet
+    outcome = run_cli(["drive", "--dry-run", "--camera", camera, "--out", "run"], cwd=tmp_path, timeout=60)
+    assert_clean_error(outcome, f"camera '{camera}': OpenCV cannot open it")
+    assert outcome.stderr.splitlines() == [line for line in outcome.stderr.splitlines() if line.startswith("Error: ")]
+    assert not (tmp_path / "run").exists()
