@@ -153,7 +153,10 @@ def atomic_path(path: Path):
     try:
         with naming_os_errors(path):
             yield Path(tmp)
+        try:
             os.replace(tmp, path)
+        except OSError as exc:  # e.g. a folder where the file belongs: name it, not the temporary file
+            raise OSError(exc.errno, exc.strerror, os.fspath(path)) from None
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)

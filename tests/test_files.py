@@ -22,6 +22,15 @@ def test_atomic_path_replaces_only_on_success(tmp_path):
     assert os.listdir(target.parent) == ["result.txt"]
 
 
+def test_a_folder_where_the_result_belongs_is_named_not_the_temporary_file(tmp_path):
+    (tmp_path / "mi.csv").mkdir()
+    with pytest.raises(OSError) as info:
+        with atomic_path(tmp_path / "mi.csv") as tmp:
+            tmp.write_text("rows")
+    assert info.value.filename == str(tmp_path / "mi.csv")
+    assert sorted(os.listdir(tmp_path)) == ["mi.csv"], "the temporary file is gone"
+
+
 def test_atomic_path_gives_ordinary_permissions(tmp_path):
     umask = os.umask(0o022)
     try:
