@@ -213,7 +213,8 @@ def label_rows(folder: Path) -> LabelRows:
         raise EvaluationError(f"{display_path(layout.labels)}: no label files; run `curiosity label` first")
     config = load_saved_config(folder)
     class_names = read_class_names(config)
-    rows, class_rows, skipped, otherwise = [], [], [], []
+    files, skipped = _in_grid(folder, files)
+    rows, class_rows, otherwise = [], [], []
     batch_digests = {}
     for path in files:
         try:
@@ -280,17 +281,41 @@ def _batch_digest(path: Path) -> str | None:
         raise EvaluationError(f"{exc}; run `curiosity label` to compute it again") from None
 
 
-def _unlabelled_runs(folder: Path, files: list[Path]) -> list[str]:
-    """A line for each run of the grid (``runs.csv``) that has no label file, naming the file it lacks."""
+def _planned_label_files(folder: Path) -> list[Path] | None:
+    """The label file of each run of the grid (``runs.csv``, rewritten by every ``explore``);
+    None for a folder from before the grid recorded its runs."""
     import pandas as pd
 
     planned = ExperimentFolder(folder).runs_csv
-    if not planned.is_file():  # a folder from before the grid recorded its runs
-        return []
+    if not planned.is_file():
+        return None
     runs = pd.read_csv(planned, usecols=["dataset", "weight_function", "restart"])
+    return [ExperimentFolder(folder).label_file(r.dataset, r.weight_function, r.restart) for r in runs.itertuples()]
+
+
+def _in_grid(folder: Path, files: list[Path]) -> tuple[list[Path], list[str]]:
+    """``files`` of runs in the grid, and a line for those of runs outside it (a config narrowed since)."""
+    planned = _planned_label_files(folder)
+    if planned is None:
+        return files, []
+    keep = set(planned)
+    outside = [path for path in files if path not in keep]
+    if not outside:
+        return files, []
+    note = (
+        f"{len(outside)} label files of runs outside the grid of {display_path(ExperimentFolder(folder).runs_csv)} "
+        f"(explore.weight_functions or explore.restarts narrowed since), e.g. {display_path(outside[0])}"
+    )
+    return [path for path in files if path in keep], [note]
+
+
+def _unlabelled_runs(folder: Path, files: list[Path]) -> list[str]:
+    """A line for each run of the grid (``runs.csv``) that has no label file, naming the file it lacks."""
     present = set(files)
-    paths = (ExperimentFolder(folder).label_file(r.dataset, r.weight_function, r.restart) for r in runs.itertuples())
-    return [f"{display_path(path)}: not found; run `curiosity label` to make it" for path in paths if path not in present]
+    return [
+        f"{display_path(path)}: not found; run `curiosity label` to make it"
+        for path in _planned_label_files(folder) or [] if path not in present
+    ]
 
 
 def _mean_ci(grouped) -> pd.DataFrame:

@@ -287,3 +287,16 @@ def test_a_reproduction_killed_while_labelling_resumes_to_the_tables_of_an_unint
     for table in TABLES:
         assert (killed / table).read_bytes() == (tmp_path / "whole" / "grid" / table).read_bytes(), table
     assert not list(killed.rglob("*.tmp*")), "no half-written file is left"
+
+
+def test_a_grid_narrowed_after_labelling_is_evaluated_on_its_own_runs(own_map, tmp_path):
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
+    narrowed = dataclasses.replace(
+        config, explore=dataclasses.replace(config.explore, restarts=1, weight_functions=("random-walk", "topic-perplexity"))
+    )
+    run_grid(narrowed, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    evaluation = evaluate_experiment(folder)
+    assert set(evaluation.mi["restart"]) == {0}
+    assert set(evaluation.mi["weight_function"]) == {"random-walk", "topic-perplexity"}
+    assert any(note.startswith("6 label files of runs outside the grid of") for note in evaluation.skipped)
