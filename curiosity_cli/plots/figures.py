@@ -30,6 +30,7 @@ from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.layout import ExperimentFolder
 from curiosity_cli.plots import palette
+from curiosity_cli.plots.preview import shrink_image, shrink_labels
 from curiosity_cli.plots.experiment_inputs import (
     MI_COLUMNS,
     SUMMARY_COLUMNS,
@@ -61,7 +62,6 @@ OTHER_STYLES = (("0.3", "v"), ("0.55", "P"), ("0.4", "X"), ("0.6", "h"), ("0.35"
 EXAMPLE_WEIGHT = "topic-perplexity"
 
 _DPI = 150
-_MAX_SIDE = 800  # pixels per side an image is shrunk to before drawing: keeps PDFs small
 _RC = {
     "font.size": 10,
     "axes.titlesize": 10.5,
@@ -375,7 +375,7 @@ def path_figure(m, path, example: Example, z_p: np.ndarray, z_b: np.ndarray | No
     height, width = m.image.shape[:2]
     fig = Figure(figsize=(10.5, 5.6), layout="constrained")
     ax_path, ax_labels = fig.subplots(1, 2)
-    _show(ax_path, _shrink_image(m.image), (height, width))
+    _show(ax_path, shrink_image(m.image), (height, width))
     points = np.stack([pixel_cols, pixel_rows], axis=1)  # matplotlib draws (x, y) = (col, row)
     segments = np.stack([points[:-1], points[1:]], axis=1)
     blue_red = LinearSegmentedColormap.from_list("blue-red", ["#1f3fff", "#b000b0", "#ff1f1f"])
@@ -392,7 +392,7 @@ def path_figure(m, path, example: Example, z_p: np.ndarray, z_b: np.ndarray | No
     bar.set_label("step along the path (circle: start, square: end)")
 
     slots = palette.match_topics(z_p, z_b)[0] if z_b is not None else palette.rank_topics(z_p)
-    _show(ax_labels, palette.paint_topics(_shrink_labels(z_p), slots), (height, width))
+    _show(ax_labels, palette.paint_topics(shrink_labels(z_p), slots), (height, width))
     n_topics = np.unique(z_p).size
     ax_labels.set_title(f"$Z_p$: labels from the model of its first {example.length} steps ({n_topics} topics)")
     matched = "colours matched to $Z_b$'s" if z_b is not None else "colours by topic size"
@@ -421,14 +421,14 @@ def labelings_figure(m, z_b: np.ndarray | None, z_ps: list[tuple[Example, np.nda
     from curiosity_cli.plots.preview import colour_labels
 
     height, width_px = m.image.shape[:2]
-    panels = [("input image", _shrink_image(m.image), None)]
+    panels = [("input image", shrink_image(m.image), None)]
     if m.labels is not None:
         legend = [
             Patch(facecolor=np.array(c.colour) / 255, edgecolor="0.5", linewidth=0.5, label=c.name) for c in m.legend
         ]
-        panels.append(("ground truth $Z_h$", colour_labels(_shrink_labels(m.labels), m.legend), legend))
+        panels.append(("ground truth $Z_h$", colour_labels(shrink_labels(m.labels), m.legend), legend))
     if z_b is not None:
-        painted = palette.paint_topics(_shrink_labels(z_b), palette.rank_topics(z_b))
+        painted = palette.paint_topics(shrink_labels(z_b), palette.rank_topics(z_b))
         panels.append((f"batch labels $Z_b$ ({np.unique(z_b).size} topics)", painted, None))
     for example, z_p in z_ps:
         if z_b is not None:
@@ -437,7 +437,7 @@ def labelings_figure(m, z_b: np.ndarray | None, z_ps: list[tuple[Example, np.nda
         else:
             slots, extra = palette.rank_topics(z_p), ""
         title = f"$Z_p$ after {example.length} steps ({np.unique(z_p).size} topics){extra}"
-        panels.append((title, palette.paint_topics(_shrink_labels(z_p), slots), None))
+        panels.append((title, palette.paint_topics(shrink_labels(z_p), slots), None))
 
     # one row of up to four maps (plus a narrow column for the legend), else two rows of three
     # with the legend in the sixth slot
@@ -536,27 +536,6 @@ def _wrap(text: str, width_inches: float, font_size: float = _RC["figure.labelsi
 
     chars_per_inch = 130 / font_size  # DejaVu Sans averages a little over half an em per character
     return textwrap.fill(text, width=max(30, int(width_inches * chars_per_inch)))
-
-
-def _step(shape) -> int:
-    return max(1, math.ceil(max(shape[:2]) / _MAX_SIDE))
-
-
-def _shrink_labels(labels: np.ndarray) -> np.ndarray:
-    """(H, W) → every ``step``-th pixel, so at most :data:`_MAX_SIDE` per side (labels must not blend)."""
-    step = _step(labels.shape)
-    return labels[::step, ::step]
-
-
-def _shrink_image(image: np.ndarray) -> np.ndarray:
-    """(H, W, 3) uint8 → area-averaged to the size :func:`_shrink_labels` gives."""
-    import cv2
-
-    step = _step(image.shape)
-    if step == 1:
-        return image
-    rows, cols = -(-image.shape[0] // step), -(-image.shape[1] // step)
-    return cv2.resize(image, (cols, rows), interpolation=cv2.INTER_AREA)  # OpenCV takes (width, height)
 
 
 def _show(ax, rgb: np.ndarray, shape: tuple[int, int]) -> None:

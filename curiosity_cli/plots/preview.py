@@ -10,6 +10,31 @@ from curiosity_cli.data import MapClass, MapData
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import atomic_path
 
+#: Pixels per side a map is shrunk to before drawing: keeps figures small, and a huge map
+#: from taking gigabytes in matplotlib.
+MAX_SIDE = 800
+
+
+def _step(shape) -> int:
+    return max(1, -(-max(shape[:2]) // MAX_SIDE))
+
+
+def shrink_labels(labels: np.ndarray) -> np.ndarray:
+    """(H, W) → every ``step``-th pixel, so at most :data:`MAX_SIDE` per side (labels must not blend)."""
+    step = _step(labels.shape)
+    return labels[::step, ::step]
+
+
+def shrink_image(image: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8 → area-averaged to the size :func:`shrink_labels` gives."""
+    import cv2
+
+    step = _step(image.shape)
+    if step == 1:
+        return image
+    rows, cols = -(-image.shape[0] // step), -(-image.shape[1] // step)
+    return cv2.resize(image, (cols, rows), interpolation=cv2.INTER_AREA)  # OpenCV takes (width, height)
+
 
 def colour_labels(labels: np.ndarray, legend: tuple[MapClass, ...]) -> np.ndarray:
     """Paint a label map with its legend's colours.
@@ -48,11 +73,11 @@ def write_preview(maps: list[MapData], out: Path) -> None:
     fig = Figure(figsize=(11, 5.2 * len(maps)), layout="constrained")
     axes = fig.subplots(len(maps), 2, squeeze=False)
     for (ax_image, ax_labels), m in zip(axes, maps):
-        ax_image.imshow(m.image, interpolation="antialiased")
+        ax_image.imshow(shrink_image(m.image), interpolation="antialiased")
         ax_image.set_title(f"{m.config.name}: image ({m.image.shape[0]} x {m.image.shape[1]} px)")
         if m.labels is not None:
             # nearest keeps thin classes (a trail a few px wide) visible when the map is shrunk
-            ax_labels.imshow(colour_labels(m.labels, m.legend), interpolation="nearest")
+            ax_labels.imshow(colour_labels(shrink_labels(m.labels), m.legend), interpolation="nearest")
             ax_labels.set_title("labels")
             ax_labels.legend(
                 handles=[Patch(color=np.array(c.colour) / 255, label=c.name) for c in m.legend],

@@ -155,3 +155,19 @@ def test_missing_folder_or_mi_table_is_a_plot_error(tmp_path, experiment):
     (experiment / "mi.csv").unlink()
     with pytest.raises(CuriosityError, match=r"mi.csv: not found; run `curiosity evaluate` first"):
         write_figures(experiment)
+
+
+def test_maps_are_shrunk_before_drawing_labels_by_picking_and_images_by_averaging():
+    from curiosity_cli.plots.preview import MAX_SIDE, shrink_image, shrink_labels
+
+    labels = np.arange(2000 * 1700).reshape(2000, 1700) % 7
+    small = shrink_labels(labels)
+    assert max(small.shape) <= MAX_SIDE and small.shape == labels[::3, ::3].shape
+    np.testing.assert_array_equal(small, labels[::3, ::3])  # a label is never blended with its neighbours
+    image = np.zeros((2000, 1700, 3), np.uint8)
+    image[:, ::2] = 255  # stripes a pixel wide average to grey, not to black or white
+    shrunk = shrink_image(image)
+    assert shrunk.shape == (*small.shape, 3) and 60 < shrunk.min() <= shrunk.max() < 195
+    assert abs(float(shrunk.mean()) - 127.5) < 3
+    same = np.ones((MAX_SIDE, 10, 3), np.uint8)
+    assert shrink_image(same) is same and shrink_labels(same[:, :, 0]).shape == (MAX_SIDE, 10)
