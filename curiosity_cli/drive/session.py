@@ -30,7 +30,7 @@ from curiosity_cli.drive.link import LinkTiming, RobotLink
 from curiosity_cli.drive.pipeline import CuriosityPipeline, warm_up
 from curiosity_cli.drive.sim import Body, Pose
 from curiosity_cli.drive.simrobot import Noise, SimRobot, open_pty
-from curiosity_cli.errors import ParameterError
+from curiosity_cli.errors import CuriosityError, ParameterError
 from curiosity_cli.files import display_path
 from curiosity_cli.layout import DEFAULT_RESULTS
 
@@ -164,6 +164,9 @@ def drive_session(
                 if robot is not None:
                     robot.close()
                 log.write("end", outcome=None, error=" ".join(str(exc).split()) or type(exc).__name__, frames=0)
+                if isinstance(exc, CuriosityError):  # the folder stays, as a log of the attempt: say where
+                    kept = f"{exc.args[0]}; the session's log is kept in {display_path(out / 'log.jsonl')}"
+                    raise type(exc)(kept, parameter=exc.parameter, rerun=exc.rerun) from None
             raise
         finally:
             log.close()

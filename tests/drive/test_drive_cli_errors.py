@@ -78,4 +78,8 @@ def test_a_serial_port_that_does_not_exist_is_a_one_line_error(tmp_path):
     result = runner.invoke(
         app, ["drive", "--serial", str(tmp_path / "ttyUSB9"), "--camera", "sim", "--sim-map", "reef-mosaic", "--out", str(tmp_path / "run")]
     )
-    assert f"serial port {tmp_path / 'ttyUSB9'}: cannot open it" in one_line_error(result)
+    line = one_line_error(result)
+    assert f"serial port {tmp_path / 'ttyUSB9'}: cannot open it" in line
+    # the run folder stays as the attempt's log, and the line says where
+    assert line.endswith(f"; the session's log is kept in {tmp_path / 'run' / 'log.jsonl'}")
+    assert '"error":"serial port' in (tmp_path / "run" / "log.jsonl").read_text()
