@@ -40,8 +40,6 @@ def label(
             config, folder, cache_dir=cache_dir, jobs=jobs, force=force,
             on_stage=progress.stage, on_done=progress.advance, backend=backend.value, scheduler=scheduler,
         )
-    if done["left_out"]:
-        typer.echo(f"not labelled ({len(done['left_out'])}): " + "; ".join(done["left_out"]), err=True)
     typer.echo(
         f"labelled {done['labelled']} runs in {done['seconds']:.0f} s ({done['skipped']} were up to date; "
         f"batch references: {done['batch_reused']} reused)"

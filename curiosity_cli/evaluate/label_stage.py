@@ -507,8 +507,7 @@ def label_experiment(
     Returns
     -------
     dict
-        ``labelled``, ``skipped``, ``batch_reused`` counts, ``seconds``, ``left_out``: a
-        line per run folder without a ``run.json`` (not labelled), naming it, and
+        ``labelled``, ``skipped``, ``batch_reused`` counts, ``seconds``, and
         ``relabelled``: a line per label file made again because it was made otherwise
         (other settings, another run or batch reference), saying what changed.
 
@@ -519,8 +518,8 @@ def label_experiment(
     LabelError
         No finished runs; runs made otherwise than ``config`` makes them (before any
         work, naming them); or, after labelling the others, runs that could not be
-        labelled (corrupt, a task that raised, a batch reference that failed), all of
-        them named.
+        labelled (corrupt, without a ``run.json``, a task that raised, a batch reference
+        that failed), all of them named.
     ParameterError, BackendError
         As :class:`~curiosity_cli.parallel.Workers`; and a Dask scheduler that cannot be
         reached or has unusable workers.
@@ -612,14 +611,15 @@ def label_experiment(
                         labelled += 1
                     if on_done is not None:
                         on_done()
-    if problems:
+    if problems or left_out:
+        failed = todo - labelled + len(left_out)
         raise LabelError(
-            f"{todo - labelled} of {todo} runs could not be labelled (the others are written): "
+            f"{failed} of {todo + len(left_out)} runs could not be labelled (the others are written): "
             + "; ".join([*problems, *left_out])
         )
     return {
         "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": time.perf_counter() - started,
-        "left_out": left_out, "relabelled": relabelled,
+        "relabelled": relabelled,
     }
 
 

@@ -136,6 +136,11 @@ ERRORS = [
         lambda work: _edit_run_json(work, lambda meta: [meta]),
     ),
     ErrorCase(
+        # the other 7 runs are labelled; the unfinished one is named, and the command fails
+        "deleted-run-json-at-label", [*LABEL, "--force"], ("1 of 8 runs could not be labelled", RUN, "no run.json"),
+        lambda work: (work / RUN / "run.json").unlink(), allowed=(EXPERIMENT,),
+    ),
+    ErrorCase(
         "missing-batch-at-evaluate", ["evaluate", EXPERIMENT], (BATCH, "not found", "curiosity label"),
         lambda work: (work / BATCH).unlink(),
     ),
@@ -241,10 +246,6 @@ REDOS = [
         "many-deleted-label-files-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 5", "; and 2 more"),
         lambda work: [f.unlink() for f in sorted((work / EXPERIMENT / "labels").glob("*/*/restart-*.npz"))[:5]],
         lambda work: _skipped(work, LABEL_FILE), ("(6 rows)",),
-    ),
-    RedoCase(
-        "deleted-run-json-at-label", [*LABEL, "--force"], ("not labelled (1)", RUN, "no run.json"),
-        lambda work: (work / RUN / "run.json").unlink(), outputs=("labelled 7 runs",),
     ),
     RedoCase(
         "run-json-is-a-list-at-explore", EXPLORE, (f"{RUN}/run.json", "a JSON list", "redoing the run"),
