@@ -222,6 +222,13 @@ def label_rows(folder: Path) -> LabelRows:
         except CorruptFileError as exc:
             skipped.append(f"{exc}; run `curiosity label` to redo it")
             continue
+        if layout.label_file(meta["dataset"], meta["weight_function"], meta["restart"]) != path:
+            # a file copied or moved over another run's: it would count its own run twice
+            skipped.append(
+                f"{display_path(path)}: holds the labels of {meta['dataset']} / {meta['weight_function']} / restart "
+                f"{meta['restart']}, not of the run it is named after; run `curiosity label` to redo it"
+            )
+            continue
         run_path = layout.run(meta["dataset"], meta["weight_function"], meta["restart"])
         try:
             run = read_run(run_path)

@@ -243,6 +243,13 @@ REDOS = [
         lambda work: _replace_meta(work / LABEL_FILE, [1, 2]), lambda work: _skipped(work, LABEL_FILE), ("(14 rows)",),
     ),
     RedoCase(
+        # restart 0's file copied over restart 1's: it must not count restart 0 twice and restart 1 never
+        "label-file-copied-over-another-at-evaluate", ["evaluate", EXPERIMENT],
+        ("skipped 1", LABEL_FILE.replace("000", "001"), "holds the labels of own / random-walk / restart 0"),
+        lambda work: shutil.copy(work / LABEL_FILE, work / LABEL_FILE.replace("000", "001")),
+        lambda work: _skipped(work, LABEL_FILE.replace("000", "001")), ("(14 rows)",),
+    ),
+    RedoCase(
         "many-deleted-label-files-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 5", "; and 2 more"),
         lambda work: [f.unlink() for f in sorted((work / EXPERIMENT / "labels").glob("*/*/restart-*.npz"))[:5]],
         lambda work: _skipped(work, LABEL_FILE), ("(6 rows)",),
