@@ -48,6 +48,7 @@ Written under ``results/<experiment>/``:
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import json
 from dataclasses import dataclass
@@ -668,11 +669,12 @@ def evaluate_experiment(folder: Path) -> Evaluation:
         "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
         "effects": effects, "headline": top, "convergence": convergence, "revisits": revisits,
     }
-    for name, table in tables.items():
-        with atomic_path(ExperimentFolder(folder).table(name)) as tmp:
-            table.to_csv(tmp, index=False)
-    with atomic_path(ExperimentFolder(folder).table("mi", ".parquet")) as tmp:
-        mi.to_parquet(tmp, index=False)
-    with atomic_path(ExperimentFolder(folder).skipped) as tmp:
-        tmp.write_text(json.dumps(skipped, indent=2) + "\n")
+    layout = ExperimentFolder(folder)
+    # every table is written whole before any replaces its old self: a failure (a full
+    # disk) leaves the old set, not new tables beside old ones
+    with contextlib.ExitStack() as stack:
+        for name, table in tables.items():
+            table.to_csv(stack.enter_context(atomic_path(layout.table(name))), index=False)
+        mi.to_parquet(stack.enter_context(atomic_path(layout.table("mi", ".parquet"))), index=False)
+        stack.enter_context(atomic_path(layout.skipped)).write_text(json.dumps(skipped, indent=2) + "\n")
     return Evaluation(mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits)

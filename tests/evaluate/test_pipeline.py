@@ -300,3 +300,21 @@ def test_a_grid_narrowed_after_labelling_is_evaluated_on_its_own_runs(own_map, t
     assert set(evaluation.mi["restart"]) == {0}
     assert set(evaluation.mi["weight_function"]) == {"random-walk", "topic-perplexity"}
     assert any(note.startswith("6 label files of runs outside the grid of") for note in evaluation.skipped)
+
+
+def test_a_failure_while_writing_the_tables_leaves_the_old_set_whole(own_map, tmp_path, monkeypatch):
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
+    evaluate_experiment(folder)
+    tables = sorted(folder.glob("*.csv")) + [folder / "mi.parquet", folder / "skipped.json"]
+    before = {path: path.read_bytes() for path in tables}
+    ExperimentFolder(folder).label_file("own", "random-walk", 1).unlink()  # the new tables would differ
+
+    def full_disk(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(pd.DataFrame, "to_parquet", full_disk)
+    with pytest.raises(OSError):
+        evaluate_experiment(folder)
+    assert {path: path.read_bytes() for path in tables} == before
+    assert not [p for p in folder.iterdir() if ".tmp" in p.name]
