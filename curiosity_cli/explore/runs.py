@@ -193,7 +193,8 @@ def read_run(folder: Path) -> Run:
     Raises
     ------
     RunError
-        A missing or corrupt ``run.json`` or ``checkpoints.npz``, naming the file.
+        A missing or corrupt ``run.json`` or ``checkpoints.npz``, or a ``path.csv``
+        without a row per step, naming the file.
     """
     try:
         return _read(Path(folder))
@@ -205,7 +206,19 @@ def _read(folder: Path) -> Run:
     """:func:`read_run` without the advice: the error names the file and what is wrong with it."""
     meta = _read_meta(folder / "run.json")
     (path,) = _load_arrays(folder / "checkpoints.npz", ["path"])
+    _check_steps(folder / "path.csv", path.size)
     return Run(folder, meta, path.astype(np.int64))
+
+
+def _check_steps(csv: Path, steps: int) -> None:
+    """Refuse a ``path.csv`` without a whole line per step (cut short, or missing)."""
+    try:
+        data = csv.read_bytes()
+    except FileNotFoundError:
+        raise RunError(f"{display_path(csv)}: not found; the run folder is incomplete") from None
+    lines = data.count(b"\n")
+    if lines != steps + 1 or not data.endswith(b"\n"):
+        raise RunError(f"{display_path(csv)}: {max(lines - 1, 0)} whole rows, expected a header and {steps} steps")
 
 
 def _read_meta(path: Path) -> dict:

@@ -87,6 +87,13 @@ def _huge_png(work: Path) -> None:
     _dataset(work, image="huge.png")
 
 
+def _loads_path_csv(work: Path) -> None:
+    import pandas as pd
+
+    steps = pd.read_csv(work / RUN / "path.csv")
+    assert len(steps) == json.loads((work / RUN / "run.json").read_text())["path_length"]
+
+
 def _truncated_png(work: Path) -> None:
     data = (_own_yaml(work).parent / "map.png").read_bytes()
     (work / "cut.png").write_bytes(data[: len(data) // 2])
@@ -257,6 +264,14 @@ REDOS = [
     RedoCase(
         "run-json-is-a-list-at-explore", EXPLORE, (f"{RUN}/run.json", "a JSON list", "redoing the run"),
         lambda work: _edit_run_json(work, lambda meta: [meta]), outputs=("wrote 1 runs",),
+    ),
+    RedoCase(
+        # path.csv cut to 4 of the run's steps: the run is not finished, and is made again
+        "truncated-path-csv-at-explore", EXPLORE, (f"{RUN}/path.csv", "expected a header and", "redoing the run"),
+        lambda work: (work / RUN / "path.csv").write_text(
+            "".join((work / RUN / "path.csv").read_text().splitlines(keepends=True)[:5])
+        ),
+        lambda work: _loads_path_csv(work), outputs=("wrote 1 runs",),
     ),
     RedoCase(
         "run-json-without-seed-at-explore", EXPLORE, (f"{RUN}/run.json", "no key 'seed'", "redoing the run"),
