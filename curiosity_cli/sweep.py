@@ -674,13 +674,20 @@ def _read_revisits(folder: Path):
     return pd.read_csv(path) if path.is_file() else None
 
 
+def _distinct_at_headline(revisits):
+    """The rows of ``revisits.csv`` for distinct cells at the headline length."""
+    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
+
+    return revisits[(revisits["measure"] == "distinct_cells") & (revisits["path_length"] == HEADLINE_LENGTH)]
+
+
 def _distinct_table(revisits) -> list[str]:
     """Mean distinct cells per walker at the headline length, a row per dataset."""
     from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
 
     if revisits is None:
         return ["(no revisits.csv: run `curiosity evaluate` for distinct cells)", ""]
-    at = revisits[(revisits["measure"] == "distinct_cells") & (revisits["path_length"] == HEADLINE_LENGTH)]
+    at = _distinct_at_headline(revisits)
     if at.empty:
         return []
     walkers = list(dict.fromkeys(at["weight_function"]))
@@ -737,9 +744,7 @@ def _sensitivity(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) -> tup
         except EvaluationError as exc:
             lines.append("| " + " | ".join(f"`{v}`" for v in values) + f" | not pooled: {exc} |")
             continue
-        at = result.revisits[
-            (result.revisits["measure"] == "distinct_cells") & (result.revisits["path_length"] == HEADLINE_LENGTH)
-        ].set_index(["dataset", "weight_function"])["mean"]
+        at = _distinct_at_headline(result.revisits).set_index(["dataset", "weight_function"])["mean"]
         seeds = " ".join(map(str, result.seeds))
         for r in result.headline.to_dict("records"):
             distinct = {f"distinct_{w}": at.get((r["dataset"], w), float("nan")) for w in DISTINCT_WALKERS}

@@ -20,6 +20,7 @@ from curiosity_cli.evaluate.tables import (
     headline,
     paired_effects,
     paired_tests,
+    paper_maps_of,
     read_maps,
     summarise,
     summarise_revisits,
@@ -82,8 +83,6 @@ def pool(folders: Sequence[Path]) -> Pooled:
     if len(set(seeds)) != len(seeds):
         raise EvaluationError(f"seeds {seeds}: two experiments of the same seed cannot be pooled as replicates")
     mi = pd.concat(tables, ignore_index=True)
-    maps = read_maps(folders[0])
-    stands_in_for = {} if maps is None else {r.dataset: r.stands_in_for for r in maps.itertuples() if isinstance(r.stands_in_for, str)}
     tests = paired_tests(mi)
-    top = with_power(headline(summarise(mi), tests, stands_in_for, paired_effects(mi, tests)), mi)
+    top = with_power(headline(summarise(mi), tests, paper_maps_of(read_maps(folders[0])), paired_effects(mi, tests)), mi)
     return Pooled(top, summarise_revisits(mi), tuple(sorted(seeds)))

@@ -214,7 +214,8 @@ def label_rows(folder: Path) -> LabelRows:
         raise EvaluationError(f"{display_path(layout.labels)}: no label files; run `curiosity label` first")
     config = load_saved_config(folder)
     class_names = read_class_names(config)
-    files, skipped = _in_grid(folder, files)
+    planned = _planned_label_files(folder)
+    files, skipped = _in_grid(folder, files, planned)
     rows, class_rows, otherwise = [], [], []
     batch_digests = {}
     for path in files:
@@ -266,7 +267,7 @@ def label_rows(folder: Path) -> LabelRows:
             f"({RERUN} first for runs)",
             rerun="explore",
         )
-    skipped += _unlabelled_runs(folder, files)
+    skipped += _unlabelled_runs(files, planned)
     return LabelRows(rows, class_rows, skipped)
 
 
@@ -301,9 +302,9 @@ def _planned_label_files(folder: Path) -> list[Path] | None:
     return [ExperimentFolder(folder).label_file(r.dataset, r.weight_function, r.restart) for r in runs.itertuples()]
 
 
-def _in_grid(folder: Path, files: list[Path]) -> tuple[list[Path], list[str]]:
-    """``files`` of runs in the grid, and a line for those of runs outside it (a config narrowed since)."""
-    planned = _planned_label_files(folder)
+def _in_grid(folder: Path, files: list[Path], planned: list[Path] | None) -> tuple[list[Path], list[str]]:
+    """``files`` of runs in the grid (``planned``: :func:`_planned_label_files`), and a line
+    for those of runs outside it (a config narrowed since)."""
     if planned is None:
         return files, []
     keep = set(planned)
@@ -317,13 +318,10 @@ def _in_grid(folder: Path, files: list[Path]) -> tuple[list[Path], list[str]]:
     return [path for path in files if path in keep], [note]
 
 
-def _unlabelled_runs(folder: Path, files: list[Path]) -> list[str]:
-    """A line for each run of the grid (``runs.csv``) that has no label file, naming the file it lacks."""
+def _unlabelled_runs(files: list[Path], planned: list[Path] | None) -> list[str]:
+    """A line for each run of the grid (``planned``) that has no label file, naming the file it lacks."""
     present = set(files)
-    return [
-        f"{display_path(path)}: not found; run `curiosity label` to make it"
-        for path in _planned_label_files(folder) or [] if path not in present
-    ]
+    return [f"{display_path(path)}: not found; run `curiosity label` to make it" for path in planned or [] if path not in present]
 
 
 def _mean_ci(grouped) -> pd.DataFrame:
@@ -638,6 +636,13 @@ def read_maps(folder: Path):
         raise EvaluationError(f"{display_path(path)}: cannot read the table of maps: {exc}") from None
 
 
+def paper_maps_of(maps) -> dict[str, str]:
+    """Dataset name to the paper's map it stands in for, from :func:`read_maps` (None: none)."""
+    if maps is None:
+        return {}
+    return {r.dataset: r.stands_in_for for r in maps.itertuples() if isinstance(r.stands_in_for, str)}
+
+
 def evaluate_experiment(folder: Path) -> Evaluation:
     """Compute and write every table of an experiment folder (module docstring).
 
@@ -661,8 +666,7 @@ def evaluate_experiment(folder: Path) -> Evaluation:
     tests = paired_tests(mi)
     effects = paired_effects(mi, tests)
     maps = read_maps(folder)
-    stands_in_for = {} if maps is None else {r.dataset: r.stands_in_for for r in maps.itertuples() if isinstance(r.stands_in_for, str)}
-    top = with_power(headline(summary, tests, stands_in_for, effects), mi)
+    top = with_power(headline(summary, tests, paper_maps_of(maps), effects), mi)
     revisits = summarise_revisits(mi)
     convergence = label_convergence(mi)
     tables = {
