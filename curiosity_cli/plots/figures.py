@@ -328,7 +328,7 @@ def distinct_figure(mi, datasets: list[str]):
         for weight in weights:
             runs = table[table["weight_function"].astype(str) == weight]
             colour, marker = weight_style(weight, others)
-            ax.scatter(runs["distinct_cells"], runs[column], s=14, color=colour, marker=marker, alpha=0.6, linewidths=0)
+            ax.scatter(runs["distinct_cells"], runs[column], s=14, color=colour, marker=marker, alpha=0.6)
         ax.set_xscale("log", base=2)
         ax.xaxis.set_major_formatter(ScalarFormatter())
         ax.grid(True, color="0.9", linewidth=0.8)
@@ -342,7 +342,8 @@ def distinct_figure(mi, datasets: list[str]):
         Line2D([], [], color=weight_style(w, others)[0], marker=weight_style(w, others)[1], linestyle="", label=_label(w))
         for w in weights
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), frameon=False)
+    fit = max(1, int(fig.get_figwidth() / 2.0))  # a legend entry takes about 2 inches, as in mi_figure
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), fit), frameon=False)
     title = "MI against distinct cells seen: one point per run and checkpoint"
     fig.suptitle(_wrap(title, fig.get_figwidth(), _RC["figure.titlesize"]))
     return fig
