@@ -54,9 +54,10 @@ MAX_VOCABULARY = 30000
 
 #: The walkers a config may name in ``explore.weight_functions``, in the order reports list
 #: them: the paper's four weight functions in its order, the lawnmower, then the ceilings.
-#: Names are the config's vocabulary, checked here under every entry point;
-#: :data:`curiosity_cli.explore.weights.WEIGHT_FUNCTIONS` gives each its meaning (a test
-#: keeps the two the same).
+#: The one list of walkers: names are the config's vocabulary, checked here under every
+#: entry point without importing the explore stage, and
+#: :data:`curiosity_cli.explore.weights.WEIGHT_FUNCTIONS` finds each name's walker in that
+#: module by the name (``random-walk``: ``random_walk``).
 WALKER_NAMES = (
     "random-walk",
     "stochastic-coverage",
@@ -391,22 +392,6 @@ def with_converged_labels(overrides: typing.Iterable[str]) -> list[str]:
     return [*overrides, *CONVERGED_LABELS]
 
 
-def load_saved_config(folder: str | Path, overrides: typing.Iterable[str] = ()) -> ExperimentConfig:
-    """The config an experiment folder was explored with (its ``config.yaml``), plus ``overrides``.
-
-    Raises
-    ------
-    ConfigError
-        The folder has no ``config.yaml``, or it does not validate, naming it.
-    """
-    from curiosity_cli.layout import ExperimentFolder
-
-    saved = ExperimentFolder(folder).config
-    if not saved.is_file():
-        raise ConfigError(f"{display_path(saved)}: not found; run `curiosity explore` to make the experiment first")
-    return load_config(saved, overrides)
-
-
 def load_words_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> WordsConfig:
     """Load only the ``words`` section of a config (and its base chain), for ``extract``.
 
@@ -536,7 +521,7 @@ def saved_yaml(config) -> str:
     gives a key added to the project after the file was saved its default from
     ``configs/paper.yaml``, so the folder still loads. A file made with another value
     than that default is then refused or made again by its recipe
-    (:mod:`curiosity_cli.recipes`), never taken as made with it.
+    (:mod:`curiosity_cli.experiment.recipes`), never taken as made with it.
     """
     return f"base: {_SAVED_BASE}  # the shipped configs/{_SAVED_BASE}: defaults for keys added after saving\n" + to_yaml(config)
 

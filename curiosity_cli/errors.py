@@ -7,7 +7,7 @@ Library messages name the library's own arguments, never command-line options: t
 command line knows which option gave an argument, and says so (:meth:`CuriosityError.render`).
 """
 
-#: Where a message says which stage to run again, with its ``force`` argument.
+#: Where a message says which stage to run (again), with its ``force`` argument or without.
 RERUN = "{rerun}"
 
 
@@ -22,28 +22,35 @@ class CuriosityError(Exception):
     parameter : str, optional
         The argument at fault, e.g. ``"out"`` for ``out: expected a .png file name``.
     rerun : str, optional
-        The stage (``"extract"``, ``"explore"``) whose ``force`` argument makes the
-        files at fault anew.
+        The stage (``"extract"``, ``"explore"``, ``"label"``) that makes the files at
+        fault anew.
+    force : bool
+        Whether the stage needs its ``force`` argument for that (files it would take as
+        current), or makes them anyway (files missing, or broken, which it redoes).
     """
 
-    def __init__(self, message: str, *, parameter: str | None = None, rerun: str | None = None):
+    def __init__(
+        self, message: str, *, parameter: str | None = None, rerun: str | None = None, force: bool = True,
+    ):
         if parameter is not None and not message.startswith(parameter):
             raise ValueError(f"the message must begin with {parameter!r}: {message!r}")
         super().__init__(message)
         self.parameter = parameter
         self.rerun = rerun
+        self.force = force
 
     def render(self, option: str | None = None, rerun: str | None = None) -> str:
         """The message with ``option`` for the parameter's name and ``rerun`` for the remedy.
 
         Without them, the library's own words: the parameter's name, and e.g.
-        ``explore with force=True``.
+        ``explore with force=True`` (or ``explore``, without ``force``).
         """
         message = str(self.args[0]) if self.args else ""
         if self.parameter is not None and option is not None:
             message = option + message[len(self.parameter):]
         if self.rerun is not None:
-            message = message.replace(RERUN, rerun if rerun is not None else f"{self.rerun} with force=True")
+            own = f"{self.rerun} with force=True" if self.force else self.rerun
+            message = message.replace(RERUN, rerun if rerun is not None else own)
         return message
 
     def __str__(self) -> str:

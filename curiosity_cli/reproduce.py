@@ -11,7 +11,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from curiosity_cli.config import ExperimentConfig
-from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder, experiment_root
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS, experiment_root
 
 
 def reproduce(
@@ -29,7 +30,7 @@ def reproduce(
     """Run the whole pipeline for ``config`` and return the path of its ``REPORT.md``.
 
     ``backend`` and ``scheduler`` say where the exploration runs and the labelling go
-    (see :class:`~curiosity_cli.parallel.Workers`); both stages share the workers, so
+    (see :class:`~curiosity_cli.experiment.workers.Workers`); both stages share the workers, so
     ``backend="dask"`` without a scheduler starts one local cluster, not two.
     ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
     of it done, for a progress display.
@@ -37,8 +38,8 @@ def reproduce(
     from curiosity_cli.evaluate.label_stage import label_experiment
     from curiosity_cli.evaluate.report import write_report
     from curiosity_cli.evaluate.tables import evaluate_experiment
+    from curiosity_cli.experiment.workers import Workers
     from curiosity_cli.explore.grid import run_grid
-    from curiosity_cli.parallel import Workers
     from curiosity_cli.plots.figures import write_figures
     from curiosity_cli.yamlfile import read_yaml
 

@@ -45,7 +45,7 @@ combination under the same folder, and no folder is reused for other values. The
 are valid experiment names, so ``curiosity label`` or ``evaluate`` work on a
 combination's folder as on any other. The config file and ``--set`` options are not in
 the name: after a change to them that alters runs, a resumed combination refuses its
-folder as any experiment does (:func:`curiosity_cli.explore.grid.check_saved_config`);
+folder as any experiment does (:func:`curiosity_cli.experiment.saved_config.check_saved_config`);
 ``--set name=...`` starts another sweep folder.
 
 Resuming
@@ -71,8 +71,9 @@ from pathlib import Path
 
 from curiosity_cli.config import OVERRIDES, ExperimentConfig, load_config
 from curiosity_cli.errors import ConfigError, CuriosityError
+from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import atomic_path, display_path
-from curiosity_cli.layout import DEFAULT_RESULTS, ExperimentFolder
+from curiosity_cli.paths import DEFAULT_RESULTS
 
 #: The headline columns, as ``headline.csv`` has them (:func:`curiosity_cli.evaluate.tables.headline`).
 HEADLINE_COLUMNS = (
@@ -686,7 +687,7 @@ def _distinct_table(revisits) -> list[str]:
     from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
 
     if revisits is None:
-        return ["(no revisits.csv: run `curiosity evaluate` for distinct cells)", ""]
+        return ["(no revisits.csv: evaluate the experiments again for distinct cells)", ""]
     at = _distinct_at_headline(revisits)
     if at.empty:
         return []

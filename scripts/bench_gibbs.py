@@ -143,8 +143,8 @@ def _rss_mb() -> float:
 
 
 def _ours(spec: dict, words: np.ndarray, cell_start: np.ndarray, rows: int, cols: int, vocabulary_size: int) -> tuple:
-    from curiosity_cli.topics.model import TopicModel
     from curiosity_cli.cell_grid import SquareGrid
+    from curiosity_cli.topics.model import TopicModel
 
     def build(rows, cols, cell_start, seed):
         model = TopicModel(
@@ -255,7 +255,7 @@ def prepare_corpora(names: list[str], quick: bool, seed: int, folder: Path) -> d
         else:
             from curiosity_cli.config import CONFIG_DIR, PROJECT_ROOT, load_words_config
             from curiosity_cli.data import load_map
-            from curiosity_cli.layout import DEFAULT_CACHE
+            from curiosity_cli.paths import DEFAULT_CACHE
             from curiosity_cli.words.extract import extract_words
 
             store = extract_words(

@@ -20,7 +20,7 @@ from pathlib import Path
 import pandas as pd
 
 from curiosity_cli.evaluate.tables import CONVERGENCE_TOLERANCE, within_noise
-from curiosity_cli.layout import ExperimentFolder
+from curiosity_cli.experiment.layout import ExperimentFolder
 
 RUN = ["dataset", "weight_function", "restart", "path_length"]
 TARGETS = {"mi_human": "Z_h", "mi_batch": "Z_b"}

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from curiosity_cli.config import CONFIG_DIR, load_config
-from curiosity_cli.layout import DEFAULT_RESULTS
+from curiosity_cli.paths import DEFAULT_RESULTS
 from curiosity_cli.reproduce import reproduce
 
 LENGTHS = (80, 320)

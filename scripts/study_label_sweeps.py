@@ -44,8 +44,9 @@ from curiosity_cli.evaluate.information import contingency, mutual_information
 from curiosity_cli.evaluate.label_sampling import label_paths, map_chains, pixel_labels
 from curiosity_cli.evaluate.label_stage import path_seed
 from curiosity_cli.evaluate.tables import CONVERGENCE_TOLERANCE, within_noise
+from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.explore.runs import read_run
-from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
+from curiosity_cli.paths import DEFAULT_CACHE
 from curiosity_cli.words.store import load_store
 
 #: What pairs one labelling with another of the same checkpoint.

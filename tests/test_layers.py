@@ -1,8 +1,11 @@
 """Data flows one way: no module imports a later stage of the pipeline (read with ``ast``, nothing imported).
 
 The stages in order are ``words``, ``topics``, ``explore``, ``evaluate``, ``plots``: a
-stage may import the bottom layer, itself and the stages before it. ``drive`` may import
-``words`` and ``topics``; no stage imports ``drive``. The bottom layer (the top-level
+stage may import the bottom layer, itself and the stages before it. ``experiment`` (the
+experiment folder as a unit: its layout, recipes, files and maps' facts) sits between
+``topics`` and ``explore``: the stages that read and write experiment folders ask it,
+and it asks ``words`` how a map's word store is named. ``drive`` may import ``words``,
+``topics`` and ``experiment`` (provenance); no stage imports ``drive``. The bottom layer (the top-level
 modules: config, errors, files, data ...) imports no stage at all, and nothing below the
 command line imports ``cli``. Imports inside functions and under ``TYPE_CHECKING`` count
 as much as those at the top of a module.
@@ -16,11 +19,11 @@ from pathlib import Path
 import curiosity_cli
 
 PACKAGE = Path(curiosity_cli.__file__).parent
-STAGES = ("words", "topics", "explore", "evaluate", "plots")
+STAGES = ("words", "topics", "experiment", "explore", "evaluate", "plots")
 
 #: What each room of the package may import besides the bottom layer and itself.
 ALLOWED = {stage: set(STAGES[:i]) for i, stage in enumerate(STAGES)}
-ALLOWED["drive"] = {"words", "topics"}
+ALLOWED["drive"] = {"words", "topics", "experiment"}
 
 #: Modules that put several stages together, and why; they may import any stage.
 ORCHESTRATORS = {

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from curiosity_cli.recipes import Recipe, first_of, recorded_digest
+from curiosity_cli.experiment.recipes import Recipe, first_of, recorded_digest
 
 
 def test_the_digest_is_of_the_inputs_whatever_their_order():

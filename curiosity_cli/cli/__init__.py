@@ -52,7 +52,8 @@ def _command_line_message(exc: CuriosityError, command) -> str:
     option = None
     if exc.parameter is not None:
         option = next((flag for name, flag in _options(command) if name == exc.parameter), None)
-    return exc.render(option=option, rerun=f"`curiosity {exc.rerun} --force`" if exc.rerun else None)
+    remedy = f"`curiosity {exc.rerun}{' --force' if exc.force else ''}`" if exc.rerun else None
+    return exc.render(option=option, rerun=remedy)
 
 
 def _options(command):

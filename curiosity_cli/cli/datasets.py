@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli import app
-from curiosity_cli.layout import DEFAULT_RESULTS
+from curiosity_cli.paths import DEFAULT_RESULTS
 
 datasets_app = typer.Typer(help="List and preview the maps (embedded or your own).", no_args_is_help=True)
 app.add_typer(datasets_app, name="datasets")
@@ -26,8 +26,8 @@ def list_datasets() -> None:
 
     A fetched map that is not cached yet is listed from its YAML; nothing is downloaded.
     """
-    from curiosity_cli.config import dataset_path, load_dataset_config
     from curiosity_cli.cell_grid import map_grid
+    from curiosity_cli.config import dataset_path, load_dataset_config
     from curiosity_cli.data import dataset_names, load_map
     from curiosity_cli.fetched import is_fetched
 

@@ -11,11 +11,11 @@ import typer
 from curiosity_cli.cli import app
 from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.config import CONFIG_DIR
-from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS
+from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 
 class Backend(str, enum.Enum):
-    """Where runs are computed (``curiosity_cli.parallel.BACKENDS``)."""
+    """Where runs are computed (``curiosity_cli.experiment.workers.BACKENDS``)."""
 
     loky = "loky"
     dask = "dask"

@@ -8,7 +8,7 @@ import typer
 
 from curiosity_cli.cli import app
 from curiosity_cli.config import CONFIG_DIR
-from curiosity_cli.layout import DEFAULT_CACHE
+from curiosity_cli.paths import DEFAULT_CACHE
 
 
 @app.command("extract")

@@ -9,7 +9,8 @@ import typer
 from curiosity_cli.cli import app
 from curiosity_cli.cli.explore import Backend
 from curiosity_cli.cli.progress import StagedProgress
-from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 #: Skipped pieces named on the terminal by `evaluate` (skipped.json lists them all).
 _SHOWN = 3
@@ -29,8 +30,9 @@ def label(
     converged: bool = typer.Option(False, "--converged", help="Converged labels: 256 sweeps from random topics at every checkpoint (label.sweeps=256, label.warm_sweeps=null), about ten times the labelling time."),
 ) -> None:
     """Label each map with every run's checkpoint models (Z_p) and in batch mode (Z_b)."""
-    from curiosity_cli.config import load_saved_config, with_converged_labels
+    from curiosity_cli.config import with_converged_labels
     from curiosity_cli.evaluate.label_stage import label_experiment
+    from curiosity_cli.experiment.saved_config import load_saved_config
 
     if scheduler is not None and backend is not Backend.dask:
         raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")
@@ -47,13 +49,27 @@ def label(
 
 
 @app.command("evaluate")
-def evaluate(folder: Path = EXPERIMENT) -> None:
-    """Mutual information of the path labelings against human and batch labels, with statistics."""
+def evaluate(
+    folder: Path = EXPERIMENT,
+    partial: bool = typer.Option(False, "--partial", help="Evaluate the runs that have usable labels, leaving out (and listing) those that do not."),
+) -> None:
+    """Mutual information of the path labelings against human and batch labels, with statistics.
+
+    Every run of the grid needs its labels; with --partial, runs without usable labels are left out and listed in skipped.json.
+    """
+    from curiosity_cli.errors import CuriosityError
     from curiosity_cli.evaluate.report import verdict
-    from curiosity_cli.evaluate.tables import evaluate_experiment
+    from curiosity_cli.evaluate.tables import IncompleteLabelsError, evaluate_experiment
+    from curiosity_cli.experiment.recipes import first_of
     from curiosity_cli.files import display_path
 
-    result = evaluate_experiment(folder)
+    try:
+        result = evaluate_experiment(folder, partial=partial)
+    except IncompleteLabelsError as exc:
+        raise CuriosityError(
+            f"{len(exc.left_out)} runs of the grid have no usable labels ({first_of(exc.left_out)}); run `curiosity label` "
+            "to make them, or `curiosity evaluate --partial` to leave them out"
+        ) from None
     if result.skipped:
         # the first few on the terminal; every one is in skipped.json
         shown = "; ".join(result.skipped[:_SHOWN])

@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli import app
-from curiosity_cli.layout import DEFAULT_RESULTS
+from curiosity_cli.paths import DEFAULT_RESULTS
 
 
 @app.command("plot")

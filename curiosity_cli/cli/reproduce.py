@@ -7,10 +7,10 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli import app
-from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.cli.explore import Backend
+from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.config import CONFIG_DIR
-from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS
+from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 
 @app.command("reproduce")

@@ -80,8 +80,8 @@ def prepare_folder(folder: Path, config: ExperimentConfig, seed: int) -> None:
     import yaml
 
     from curiosity_cli.config import saved_yaml
+    from curiosity_cli.experiment.provenance import provenance
     from curiosity_cli.files import atomic_path
-    from curiosity_cli.provenance import provenance
 
     folder.mkdir(parents=True, exist_ok=True)
     with atomic_path(folder / "config.yaml") as tmp:

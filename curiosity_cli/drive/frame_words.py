@@ -38,7 +38,9 @@ class FrameWords:
     def __init__(self, words: WordsConfig, drive: DriveConfig):
         self._drive = drive
         self._recipe = WordRecipe(words)
-        self._orb = OrbSettings.for_frames(words, drive)
+        self._orb = OrbSettings.for_frames(
+            words, per_tile=drive.orb_per_tile, fill_threshold=drive.orb_fill_threshold, n_levels=drive.orb_levels
+        )
         self.vocabulary_size = self._recipe.vocabulary_size
         self.grid = (drive.grid_rows, drive.grid_cols)
         # every kind's, hue's ("") too: a saved model names what all its ids mean

@@ -32,7 +32,7 @@ from curiosity_cli.drive.sim import Body, Pose
 from curiosity_cli.drive.simrobot import Noise, SimRobot, open_pty
 from curiosity_cli.errors import CuriosityError, ParameterError
 from curiosity_cli.files import display_path
-from curiosity_cli.layout import DEFAULT_RESULTS
+from curiosity_cli.paths import DEFAULT_RESULTS
 
 
 def default_run_folder() -> Path:

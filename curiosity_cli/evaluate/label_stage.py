@@ -4,7 +4,7 @@ Written under ``results/<experiment>/``:
 
 - ``batch/<dataset>.npz``: the batch reference Z_b of a map: ``labels`` (H, W) int16
   pixel topics, ``word_labels`` (N,) int16, ``log_likelihood`` (batch_sweeps,) float64
-  and ``meta`` (JSON: its recipe, :func:`batch_recipe`, and seconds). Reused while its
+  and ``meta`` (JSON: its recipe, :meth:`~curiosity_cli.experiment.experiment.Experiment.batch_recipe`, and seconds). Reused while its
   recipe is the one the experiment's settings give; otherwise computed again, with a note
   saying what changed.
 - ``labels/<dataset>/<weight function>/restart-<NNN>.npz``: for one run, per checkpoint
@@ -20,7 +20,7 @@ Written under ``results/<experiment>/``:
   path first stood in a cell where class ``h`` covers at least ``CLASS_SHARE_PERCENT`` %
   of the pixels, -1 if never (the classes found within ``n`` steps are those below
   ``n``); ``meta["class_share_percent"]`` records the share. A label file is current
-  while its recipe (:func:`label_recipe`: its run's and batch reference's digests, the
+  while its recipe (:meth:`~curiosity_cli.experiment.experiment.Experiment.label_recipe`: its run's and batch reference's digests, the
   label settings, the share and the human labels) is the one they give now; the others
   are labelled again, and how many and why is noted.
 - ``labels/<dataset>/examples/<weight function>-restart-<NNN>-<length>.npz``: the pixel
@@ -29,7 +29,7 @@ Written under ``results/<experiment>/``:
 
 Every file is written atomically; a killed ``label`` resumes with the runs not yet done.
 
-Batch references and blocks of runs are tasks of :class:`~curiosity_cli.parallel.Workers`.
+Batch references and blocks of runs are tasks of :class:`~curiosity_cli.experiment.workers.Workers`.
 A map's runs to label are cut into blocks (:func:`blocks`) of up to
 :data:`CHAINS_PER_BLOCK` chains (a run's, and a checked run's second chain), whose chains
 advance in lock-step in one task; a run's labels depend only on the run, never on its
@@ -46,7 +46,6 @@ identical.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import time
 from collections.abc import Callable, Sequence
@@ -57,32 +56,29 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
+from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
+from curiosity_cli.experiment.experiment import Experiment
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.experiment.recipes import (
+    CLASS_SHARE_PERCENT, LABEL_FORMAT, RECIPE_KEY, SECOND_START, Recipe, first_of, is_checked,
+)
+from curiosity_cli.experiment.saved_config import record_label_settings
+from curiosity_cli.experiment.wholeness import FILES_KEY, changed, records
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz, remove_leftovers
-from curiosity_cli.layout import DEFAULT_CACHE, ExperimentFolder
-from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of, recorded_digest
+from curiosity_cli.paths import DEFAULT_CACHE
 
 if TYPE_CHECKING:
+    from curiosity_cli.experiment.maps import StoreInfo
+    from curiosity_cli.experiment.workers import Workers
     from curiosity_cli.explore.runs import Run
-    from curiosity_cli.parallel import Workers
-    from curiosity_cli.words.map_stores import StoreInfo
     from curiosity_cli.words.store import WordStore
 
-#: Label files: 2 since the chains of a map's runs advance in lock-step (their draws changed).
-LABEL_FORMAT = 2
-#: Batch references, whose draws did not change with the label files'.
-BATCH_FORMAT = 1
-#: A human class counts as found in a visited cell when it covers at least this share
-#: (percent) of the cell's pixels: enough to be seen, not a sliver at the cell's edge.
-CLASS_SHARE_PERCENT = 10
 #: Why a run without a label file is labelled (:func:`label_changes`).
 NOT_LABELLED = "not labelled yet"
 #: Path lengths whose Z_p maps are kept for restart 0 (besides the last checkpoint).
 EXAMPLE_LENGTHS = (80,)
-#: How the second labelling chain of a checked run (``label.check_restarts``) starts,
-#: and the prefix of its tables' names in the run's label file.
-SECOND_START = "placed"
+#: The prefix of the second chain's tables' names in a checked run's label file.
 SECOND_PREFIX = f"{SECOND_START}_"
 # tags that keep the label streams apart from the runs' own and from each other
 _PATH_TAG, _BATCH_TAG, _SECOND_CHAIN_TAG = 1, 2, 3
@@ -156,7 +152,8 @@ class RunInputs:
             if counts.shape != tuple(shape):
                 raise RunError(
                     f"{display_path(run.folder / 'checkpoints.npz')}: the counts at {length} steps are {counts.shape}, "
-                    f"expected (V, K) = {tuple(shape)} for the map's words and model.topics; run `curiosity explore --force`"
+                    f"expected (V, K) = {tuple(shape)} for the map's words and model.topics; {RERUN} redoes the run",
+                    rerun="explore",
                 )
         return cls(run.folder, run.meta, checkpoints, run.path)
 
@@ -181,35 +178,6 @@ class _DenseCheckpoints(Sequence):
 
     def __getitem__(self, j: int) -> np.ndarray:
         return self._run.phi(self._run.meta["checkpoints"][j])
-
-
-def batch_recipe(config: ExperimentConfig, info: StoreInfo) -> Recipe:
-    """What a map's batch reference depends on (:mod:`curiosity_cli.recipes`)."""
-    return Recipe({
-        "format": BATCH_FORMAT, "store": info.path.name, "vocabulary_hashes": info.vocabulary_hashes,
-        "seed": config.seed, "sweeps": config.label.batch_sweeps, "model": to_dict(config.model),
-    })
-
-
-def label_recipe(run: str, batch: str, config: ExperimentConfig, human: str | None, restart: int) -> Recipe:
-    """What a run's label file depends on: the digests of its ``run`` and ``batch`` reference, and of the ``human`` labels.
-
-    ``label.check_restarts`` enters only as whether this ``restart`` is checked (a
-    second chain), so changing it relabels only the runs it adds or drops.
-    """
-    label = {key: value for key, value in to_dict(config.label).items() if key != "check_restarts"}
-    inputs = {
-        "format": LABEL_FORMAT, "run": run, "batch": batch, "label": label,
-        "class_share_percent": CLASS_SHARE_PERCENT, "human": human,
-    }
-    if is_checked(config, restart):
-        inputs["second_start"] = SECOND_START
-    return Recipe(inputs)
-
-
-def is_checked(config: ExperimentConfig, restart: int) -> bool:
-    """Whether a run of this ``restart`` is labelled a second time, from a placed start (``label.check_restarts``)."""
-    return restart < config.label.check_restarts
 
 
 #: What every label file's ``meta`` names: a file without one of these is corrupt.
@@ -398,19 +366,23 @@ def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordSto
     if cell_classes.shape[0] != store.n_cells:
         raise LabelError(
             f"{display_path(Path(store_path))}: {store.n_cells} cells, but the map's labels at its cell width "
-            f"make {cell_classes.shape[0]}; run `curiosity extract` again"
+            f"make {cell_classes.shape[0]}; {RERUN} makes the store again", rerun="extract"
         )
     return first_steps(path, classes_present(cell_classes, CLASS_SHARE_PERCENT)).astype(np.int32)
 
 
 def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None:
-    """Write a run's label file and its example maps, each atomically (examples first)."""
+    """Write a run's label file and its example maps, each atomically: the examples first,
+    then the label file, whose meta records their sizes and digests (``files``)."""
+    written = []
     for length, pixels in examples.items():
         path = ExperimentFolder(folder).example(meta["dataset"], meta["weight_function"], meta["restart"], length)
         path.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as handle:
                 np.savez_compressed(handle, labels=pixels)
+        written.append(str(path.relative_to(folder)))
+    meta = {**meta, FILES_KEY: records(folder, written)}
     path = ExperimentFolder(folder).label_file(meta["dataset"], meta["weight_function"], meta["restart"])
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
@@ -447,15 +419,26 @@ def label_changes(path: Path, recipe: Recipe) -> str | None:
     """Why a run's label file at ``path`` must be made again, in words; ``None`` when it was made from ``recipe``.
 
     A missing file gives :data:`NOT_LABELLED`; a corrupt one (:func:`read_label_file`)
-    is noted on stderr as labelled again.
+    is noted on stderr as labelled again. So is a file whose example maps (``files``) are
+    missing or not as it wrote them.
     """
     try:
-        return recipe.changes(read_label_file(path)[0])
+        meta = read_label_file(path)[0]
     except FileNotFoundError:
         return NOT_LABELLED
     except CorruptFileError as exc:
         note(f"{exc}; labelling the run again")
         return str(exc)
+    if (change := recipe.changes(meta)) is not None:
+        return change
+    return examples_changed(path, meta)
+
+
+def examples_changed(path: Path, meta: dict) -> str | None:
+    """``None`` when the example maps the label file at ``path`` records (its ``meta``'s
+    ``files``) are as it wrote them; else the first that is not, in words."""
+    change = changed(ExperimentFolder.holding_label_file(path).root, meta.get(FILES_KEY, {}))
+    return None if change is None else f"{display_path(change[0])}: {change[1]}"
 
 
 def label_experiment(
@@ -478,7 +461,7 @@ def label_experiment(
     ----------
     config : ExperimentConfig
         The experiment's settings: its ``config.yaml``, whose ``label`` section may differ
-        (it is then recorded there, :func:`record_label_settings`).
+        (it is then recorded there, :func:`~curiosity_cli.experiment.saved_config.record_label_settings`).
     folder : Path
         The experiment folder: its runs are read and its labels written there, whatever
         its name (a copied or renamed experiment labels itself, not its original).
@@ -521,17 +504,16 @@ def label_experiment(
         labelled (corrupt, without a ``run.json``, a task that raised, a batch reference
         that failed), all of them named.
     ParameterError, BackendError
-        As :class:`~curiosity_cli.parallel.Workers`; and a Dask scheduler that cannot be
+        As :class:`~curiosity_cli.experiment.workers.Workers`; and a Dask scheduler that cannot be
         reached or has unusable workers.
     """
-    from curiosity_cli.words.map_stores import prepare_stores
+    from curiosity_cli.experiment.maps import prepare_stores
+    from curiosity_cli.experiment.workers import Workers
     from curiosity_cli.explore.runs import RunError
-    from curiosity_cli.parallel import Workers
     from curiosity_cli.words.store import load_store
 
     started = time.perf_counter()
-    owned = Workers(backend, scheduler, jobs) if workers is None else None  # checks the backend before any work
-    workers = workers or owned
+    computing = Workers.shared(workers, backend, scheduler, jobs)
     folder = Path(folder)
     layout = ExperimentFolder(folder)
     record_label_settings(folder, config)
@@ -542,14 +524,15 @@ def label_experiment(
     folders = [p for p in layout.run_folders() if p.parent.parent.name in by_name]
     runs = [p for p in folders if (p / "run.json").is_file()]
     left_out = [
-        f"{display_path(p)}: no run.json; run `curiosity explore` to redo it" for p in folders if p not in runs
+        f"{display_path(p)}: no run.json; explore redoes the run" for p in folders if p not in runs
     ]
     if not runs:
-        raise LabelError(f"{display_path(layout.runs)}: no finished runs; run `curiosity explore` first")
-    finished, problems = _runs_as_configured(folder, runs, config, by_name)
+        raise LabelError(f"{display_path(layout.runs)}: no finished runs; {RERUN} makes them", rerun="explore", force=False)
+    experiment = Experiment(folder, config, {name: info.facts for name, info in by_name.items()})
+    finished, problems = _runs_as_configured(experiment, runs)
 
-    with owned or contextlib.nullcontext():  # new workers (a local cluster) stop with the labelling
-        batch_recipes = {info.name: batch_recipe(config, info) for info in stores.values()}
+    with computing as workers:
+        batch_recipes = {info.name: experiment.batch_recipe(info.name) for info in stores.values()}
         batch_files, reused, batch_problems = _batch_references(
             folder, config, stores, batch_recipes, workers, force, on_stage, on_done,
         )
@@ -561,9 +544,7 @@ def label_experiment(
         skipped, to_label, recipes, relabelled = 0, {}, {}, []
         for run in finished:
             info = by_name[run.meta["dataset"]]
-            recipe = label_recipe(
-                recorded_digest(run.meta), batch_recipes[info.name].digest, config, info.labels_digest, run.meta["restart"]
-            )
+            recipe = experiment.label_recipe(run.meta)
             path = layout.label_file(info.name, run.meta["weight_function"], run.meta["restart"])
             change = None if force else label_changes(path, recipe)
             if not force and change is None:
@@ -623,47 +604,16 @@ def label_experiment(
     }
 
 
-def record_label_settings(folder: Path, config: ExperimentConfig) -> None:
-    """Write ``config`` as the experiment's ``config.yaml`` when only its ``label`` section differs.
-
-    Labels are made with the settings the folder records, so a label setting overridden
-    for one command becomes the experiment's, with a note saying which; every other
-    setting was fixed when the runs were explored.
-
-    Raises
-    ------
-    ConfigError
-        ``config`` differs from the saved config outside ``label``, naming the first key.
-    """
-    saved_path = ExperimentFolder(folder).config
-    saved = to_dict(load_config(saved_path)) if saved_path.is_file() else {}
-    changed = list(differences(saved, to_dict(config)))
-    for keys, old, new in changed:
-        if keys[0] != "label" and saved:
-            raise ConfigError(
-                f"{'.'.join(keys)}: the experiment in {display_path(folder)} was explored with {old!r}, not {new!r}; "
-                "only label settings can change once its runs exist"
-            )
-    if not changed:
-        return
-    with atomic_path(saved_path) as tmp:
-        tmp.write_text(saved_yaml(config))
-    if saved:
-        shown = ", ".join(f"{'.'.join(keys)}={new!r}" for keys, _, new in changed)
-        note(f"recorded {shown} in {display_path(saved_path)}; labels made otherwise are made again")
-
-
-def _runs_as_configured(folder: Path, runs: list[Path], config: ExperimentConfig, by_name: dict) -> tuple[list, list[str]]:
+def _runs_as_configured(experiment: Experiment, runs: list[Path]) -> tuple[list, list[str]]:
     """The finished runs of ``runs`` read back, and a line for each that cannot be read.
 
     Raises
     ------
     LabelError
         Runs made otherwise than ``config`` and the maps' current word stores make them
-        (:func:`~curiosity_cli.explore.grid.run_recipe`): labelling them would compare
+        (:meth:`~curiosity_cli.experiment.experiment.Experiment.run_recipe`): labelling them would compare
         them with a batch reference and settings they were not made with.
     """
-    from curiosity_cli.explore.grid import run_recipe
     from curiosity_cli.explore.runs import RunError, read_run
 
     finished, problems, otherwise = [], [], []
@@ -673,17 +623,15 @@ def _runs_as_configured(folder: Path, runs: list[Path], config: ExperimentConfig
         except RunError as exc:
             problems.append(str(exc))
             continue
-        info = by_name[run_path.parent.parent.name]
-        change = run_recipe(
-            config, info.name, info.path.name, info.vocabulary_hashes, run.meta["weight_function"], run.meta["restart"],
-        ).changes(run.meta)
+        # the run its folder is, not the one its run.json names: a folder copied over another's is made otherwise
+        change = experiment.run_recipe(*experiment.folder.run_of(run_path)).changes(run.meta)
         if change is None:
             finished.append(run)
         else:
             otherwise.append(f"{display_path(run_path / 'run.json')}: {change}")
     if otherwise:
         raise LabelError(
-            f"{len(otherwise)} runs were made otherwise than {display_path(ExperimentFolder(folder).config)} and the maps' "
+            f"{len(otherwise)} runs were made otherwise than {display_path(experiment.folder.config)} and the maps' "
             f"words make them now ({first_of(otherwise)}); restore the config, or run {RERUN} to redo the runs",
             rerun="explore",
         )

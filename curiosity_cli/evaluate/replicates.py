@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from curiosity_cli.errors import RERUN
 from curiosity_cli.evaluate.tables import (
     EvaluationError,
     headline,
@@ -26,8 +27,8 @@ from curiosity_cli.evaluate.tables import (
     summarise_revisits,
     with_power,
 )
+from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import display_path
-from curiosity_cli.layout import ExperimentFolder
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -75,9 +76,14 @@ def pool(folders: Sequence[Path]) -> Pooled:
         try:
             mi = pd.read_csv(path)
         except (OSError, ValueError) as exc:
-            raise EvaluationError(f"{display_path(path)}: cannot read it ({exc}); run `curiosity evaluate`") from None
+            raise EvaluationError(
+                f"{display_path(path)}: cannot read it ({exc}); {RERUN} makes it", rerun="evaluate", force=False
+            ) from None
         if "replicate" not in mi or mi["replicate"].nunique() != 1:
-            raise EvaluationError(f"{display_path(path)}: replicate: expected one seed per experiment; run `curiosity evaluate`")
+            raise EvaluationError(
+                f"{display_path(path)}: replicate: expected one seed per experiment; {RERUN} makes the table again",
+                rerun="evaluate", force=False,
+            )
         tables.append(mi)
     seeds = [int(mi["replicate"].iloc[0]) for mi in tables]
     if len(set(seeds)) != len(seeds):

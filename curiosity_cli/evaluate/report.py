@@ -17,14 +17,14 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, to_yaml
-from curiosity_cli.evaluate.label_stage import CLASS_SHARE_PERCENT
 from curiosity_cli.evaluate.power import POWER, TARGET_LEAD
 from curiosity_cli.evaluate.tables import (
     ALPHA, CONFIDENCE, CONVERGENCE_TOLERANCE, HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation,
 )
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT
 from curiosity_cli.explore.weights import CEILINGS, WEIGHT_FUNCTIONS
 from curiosity_cli.files import atomic_path
-from curiosity_cli.layout import ExperimentFolder
 
 # the paper: "For short path lengths (40 steps or less), we do not see any statistical difference"
 _SHORT = 40
@@ -315,7 +315,7 @@ def _classes_sections(classes_summary) -> list[str]:
     found = classes_summary[classes_summary["measure"] == "classes_found"]
     lines = [f"## Classes found at {length} steps", ""]
     if found.empty:
-        lines += ["(label files without classes found: run `curiosity label` to redo them)", ""]
+        lines += ["(label files without classes found: label the experiment again to redo them)", ""]
     else:
         lines += [
             f"Human classes the path's cells reached within {length} steps, mean over restarts ± "

@@ -5,7 +5,7 @@ Written under ``results/<experiment>/``:
 - ``mi.csv`` and ``mi.parquet``: one row per (dataset, weight function, restart, path
   length): ``mi_human``, ``mi_batch`` (bits), ``nmi_human``, ``nmi_batch``;
   ``classes_found`` (human classes the path's cells reached within the length, see
-  :data:`~curiosity_cli.evaluate.label_stage.CLASS_SHARE_PERCENT`) of ``classes`` (the map's
+  :data:`~curiosity_cli.experiment.recipes.CLASS_SHARE_PERCENT`) of ``classes`` (the map's
   classes with pixels); ``mean_recall`` (mean per-class recall of Z_p under the best
   one-to-one topic-to-class matching, :func:`~curiosity_cli.evaluate.information.matched_recall`);
   the run's ``seed`` and ``replicate`` (the experiment's seed, whose runs are paired by
@@ -58,10 +58,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from curiosity_cli.errors import RERUN, CuriosityError
+from curiosity_cli.experiment.experiment import Experiment
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.experiment.recipes import first_of
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, open_npz
-from curiosity_cli.layout import ExperimentFolder
-from curiosity_cli.recipes import first_of, recorded_digest, recorded_inputs
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -82,6 +83,23 @@ PAIR_KEYS = ["replicate", "restart"]
 
 class EvaluationError(CuriosityError):
     """Results that cannot be evaluated: missing, corrupt, or not from the same maps."""
+
+
+class IncompleteLabelsError(EvaluationError):
+    """Runs of the grid without usable labels: tables without them would not be the experiment's.
+
+    Attributes
+    ----------
+    left_out : list of str
+        One line per run, naming the file at fault and why.
+    """
+
+    def __init__(self, left_out: list[str]):
+        super().__init__(
+            f"{len(left_out)} runs of the grid have no usable labels ({first_of(left_out)}); {RERUN} makes them, "
+            "or evaluate with partial=True to leave them out", rerun="label", force=False,
+        )
+        self.left_out = left_out
 
 
 @dataclass(frozen=True)
@@ -107,7 +125,8 @@ class LabelRows:
 
     mi: list[dict]  # one per run and checkpoint
     classes: list[dict]  # one per run, checkpoint and class with pixels
-    skipped: list[str]  # files left out, runs without a label file; each with why
+    left_out: list[str]  # runs of the grid without usable labels, each naming the file at fault and why
+    notes: list[str]  # label files of runs outside the grid, which change no number
 
 
 def run_rows(
@@ -133,7 +152,6 @@ def run_rows(
     -------
     (list of dict, list of dict)
     """
-    from curiosity_cli.evaluate.revisits import REVISIT_COLUMNS, revisit_counts
     from curiosity_cli.evaluate.information import (
         classes_found,
         matched_recall,
@@ -141,6 +159,7 @@ def run_rows(
         normalised_mutual_information,
     )
     from curiosity_cli.evaluate.label_stage import SECOND_PREFIX
+    from curiosity_cli.evaluate.revisits import REVISIT_COLUMNS, revisit_counts
 
     human, batch = arrays.get("human"), arrays["batch"]
     first = arrays.get("class_first_step")
@@ -181,55 +200,54 @@ def run_rows(
     return rows, class_rows
 
 
-def label_rows(folder: Path) -> LabelRows:
+def label_rows(experiment: Experiment) -> LabelRows:
     """The table rows of every label file of an experiment, and the files left out, with why.
 
     Every label file must have been made from its run and its map's batch reference as
-    they are now and with the label settings of the experiment's ``config.yaml``, and
-    every run with the settings there (:mod:`curiosity_cli.recipes`); the human labels'
-    digest is taken as recorded, as evaluating reads no map.
+    the experiment's ``config.yaml`` and its maps as they are now make them, human labels
+    included, and every run likewise (:meth:`~curiosity_cli.experiment.experiment.Experiment.run_recipe`);
+    their files and example maps must be as they were written.
 
     Parameters
     ----------
-    folder : Path
-        The experiment folder.
+    experiment : Experiment
 
     Raises
     ------
-    ConfigError
-        No ``config.yaml``, or one that does not validate.
     EvaluationError
-        No label files at all, a missing or corrupt batch reference, or label files or
-        runs made otherwise (naming them and what changed).
+        No label files at all, or label files or runs made otherwise or altered since
+        (naming them and what changed).
+    CuriosityError
+        A map of the config that cannot be loaded, naming it.
     """
-    from curiosity_cli.config import load_saved_config
-    from curiosity_cli.evaluate.label_stage import label_recipe, read_label_file
-    from curiosity_cli.explore.grid import run_recipe
+    from curiosity_cli.evaluate.label_stage import examples_changed, read_label_file
     from curiosity_cli.explore.runs import RunError, read_run
 
-    folder = Path(folder)
-    layout = ExperimentFolder(folder)
+    layout = experiment.folder
     files = layout.label_files()
     if not files:
-        raise EvaluationError(f"{display_path(layout.labels)}: no label files; run `curiosity label` first")
-    config = load_saved_config(folder)
-    class_names = read_class_names(config)
-    planned = _planned_label_files(folder)
-    files, skipped = _in_grid(folder, files, planned)
+        raise EvaluationError(f"{display_path(layout.labels)}: no label files; {RERUN} makes them", rerun="label", force=False)
+    class_names = read_class_names(experiment.config)
+    planned = _planned_label_files(experiment)
+    files, notes = _in_grid(layout, files, planned)
+    skipped = []
     rows, class_rows, otherwise = [], [], []
-    batch_digests = {}
+    batches = {}  # per map: what is wrong with its batch reference, None if nothing
     for path in files:
         try:
             meta, arrays = read_label_file(path)
         except CorruptFileError as exc:
-            skipped.append(f"{exc}; run `curiosity label` to redo it")
+            skipped.append(f"{exc}; label the experiment again to redo it")
             continue
         if layout.label_file(meta["dataset"], meta["weight_function"], meta["restart"]) != path:
             # a file copied or moved over another run's: it would count its own run twice
             skipped.append(
                 f"{display_path(path)}: holds the labels of {meta['dataset']} / {meta['weight_function']} / restart "
-                f"{meta['restart']}, not of the run it is named after; run `curiosity label` to redo it"
+                f"{meta['restart']}, not of the run it is named after; label the experiment again to redo it"
             )
+            continue
+        if meta["dataset"] not in experiment.maps:
+            skipped.append(f"{display_path(path)}: {meta['dataset']} is not a map of {display_path(layout.config)}")
             continue
         run_path = layout.run(meta["dataset"], meta["weight_function"], meta["restart"])
         try:
@@ -237,20 +255,21 @@ def label_rows(folder: Path) -> LabelRows:
         except RunError as exc:
             skipped.append(str(exc))
             continue
-        run_change = run_recipe(
-            config, run.meta["dataset"], run.meta["store"], run.meta["vocabulary_hashes"], run.meta["weight_function"],
-            run.meta["restart"],
-        ).changes(run.meta)
+        run_change = experiment.run_recipe(meta["dataset"], meta["weight_function"], meta["restart"]).changes(run.meta)
         if run_change is not None:
             otherwise.append(f"{display_path(run_path / 'run.json')}: {run_change}")
             continue
-        if meta["dataset"] not in batch_digests:
-            batch_digests[meta["dataset"]] = _batch_digest(layout.batch(meta["dataset"]))
-        human = recorded_inputs(meta).get("human")  # evaluating reads no map: taken as recorded
-        recipe = label_recipe(recorded_digest(run.meta), batch_digests[meta["dataset"]], config, human, meta["restart"])
-        change = recipe.changes(meta)
+        if meta["dataset"] not in batches:
+            batches[meta["dataset"]] = _batch_change(layout.batch(meta["dataset"]), experiment.batch_recipe(meta["dataset"]))
+        if batches[meta["dataset"]] is not None:
+            otherwise.append(batches[meta["dataset"]])
+            continue
+        change = experiment.label_recipe(run.meta).changes(meta)
         if change is not None:
             otherwise.append(f"{display_path(path)}: {change}")
+            continue
+        if (change := examples_changed(path, meta)) is not None:
+            otherwise.append(change)
             continue
         try:
             steps = (run.path, run.boxed_in())
@@ -263,46 +282,39 @@ def label_rows(folder: Path) -> LabelRows:
     if otherwise:
         raise EvaluationError(
             f"{len(otherwise)} label files or runs were made otherwise than {display_path(layout.config)} "
-            f"and the files they come from say ({first_of(otherwise)}); run `curiosity label` to label them again "
-            f"({RERUN} first for runs)",
-            rerun="explore",
+            f"and the maps make them now, or changed since ({first_of(otherwise)}); {RERUN} makes the label files "
+            "again (explore first, for runs made otherwise)",
+            rerun="label", force=False,
         )
     skipped += _unlabelled_runs(files, planned)
-    return LabelRows(rows, class_rows, skipped)
+    return LabelRows(rows, class_rows, skipped, notes)
 
 
-def _batch_digest(path: Path) -> str | None:
-    """The recipe digest of a map's batch reference (None if it records none).
-
-    Raises
-    ------
-    EvaluationError
-        The batch reference is missing or corrupt: every label file of the map needs it.
-    """
+def _batch_change(path: Path, recipe) -> str | None:
+    """What is wrong with a map's batch reference (missing, corrupt, or made otherwise than
+    ``recipe``), in words; None if nothing. Its label files were compared with it, and the
+    figures draw it."""
     from curiosity_cli.evaluate.label_stage import read_meta
 
     try:
         with open_npz(path) as npz:
-            return recorded_digest(read_meta(npz))
+            change = recipe.changes(read_meta(npz))
     except FileNotFoundError:
-        raise EvaluationError(f"{display_path(path)}: not found; run `curiosity label` to make it") from None
+        return f"{display_path(path)}: not found"
     except CorruptFileError as exc:
-        raise EvaluationError(f"{exc}; run `curiosity label` to compute it again") from None
+        return str(exc)
+    return None if change is None else f"{display_path(path)}: {change}"
 
 
-def _planned_label_files(folder: Path) -> list[Path] | None:
-    """The label file of each run of the grid (``runs.csv``, rewritten by every ``explore``);
-    None for a folder from before the grid recorded its runs."""
-    import pandas as pd
-
-    planned = ExperimentFolder(folder).runs_csv
-    if not planned.is_file():
+def _planned_label_files(experiment: Experiment) -> list[Path] | None:
+    """The label file of each run of the grid; None for a folder from before the grid recorded its runs."""
+    planned = experiment.planned()
+    if planned is None:
         return None
-    runs = pd.read_csv(planned, usecols=["dataset", "weight_function", "restart"])
-    return [ExperimentFolder(folder).label_file(r.dataset, r.weight_function, r.restart) for r in runs.itertuples()]
+    return [experiment.folder.label_file(r.dataset, r.weight_function, r.restart) for r in planned]
 
 
-def _in_grid(folder: Path, files: list[Path], planned: list[Path] | None) -> tuple[list[Path], list[str]]:
+def _in_grid(layout: ExperimentFolder, files: list[Path], planned: list[Path] | None) -> tuple[list[Path], list[str]]:
     """``files`` of runs in the grid (``planned``: :func:`_planned_label_files`), and a line
     for those of runs outside it (a config narrowed since)."""
     if planned is None:
@@ -312,7 +324,7 @@ def _in_grid(folder: Path, files: list[Path], planned: list[Path] | None) -> tup
     if not outside:
         return files, []
     note = (
-        f"{len(outside)} label files of runs outside the grid of {display_path(ExperimentFolder(folder).runs_csv)} "
+        f"{len(outside)} label files of runs outside the grid of {display_path(layout.runs_csv)} "
         f"(explore.weight_functions or explore.restarts narrowed since), e.g. {display_path(outside[0])}"
     )
     return [path for path in files if path in keep], [note]
@@ -321,7 +333,7 @@ def _in_grid(folder: Path, files: list[Path], planned: list[Path] | None) -> tup
 def _unlabelled_runs(files: list[Path], planned: list[Path] | None) -> list[str]:
     """A line for each run of the grid (``planned``) that has no label file, naming the file it lacks."""
     present = set(files)
-    return [f"{display_path(path)}: not found; run `curiosity label` to make it" for path in planned or [] if path not in present]
+    return [f"{display_path(path)}: not found; label the experiment to make it" for path in planned or [] if path not in present]
 
 
 def _mean_ci(grouped) -> pd.DataFrame:
@@ -643,21 +655,41 @@ def paper_maps_of(maps) -> dict[str, str]:
     return {r.dataset: r.stands_in_for for r in maps.itertuples() if isinstance(r.stands_in_for, str)}
 
 
-def evaluate_experiment(folder: Path) -> Evaluation:
-    """Compute and write every table of an experiment folder (module docstring).
+def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
+    """Compute and write every table of an experiment folder (module docstring), and
+    ``tables.json``: the tables' sizes and digests and what they were made from
+    (:meth:`~curiosity_cli.experiment.experiment.Experiment.record_tables`).
+
+    Parameters
+    ----------
+    folder : Path
+    partial : bool
+        Evaluate the runs that have usable labels and leave out those that do not
+        (missing, corrupt or misplaced label files, broken runs), listing them in
+        ``skipped.json`` and the ``skipped`` of the result. Without it such runs are an
+        error: tables without them are not the experiment's.
 
     Raises
     ------
+    ConfigError
+        No ``config.yaml``, or one that does not validate.
+    IncompleteLabelsError
+        Without ``partial``, runs of the grid without usable labels, naming each.
     EvaluationError
-        No usable label files, or labels from another word store than their runs.
+        No usable label files, or labels or runs made otherwise than the experiment
+        makes them now.
     """
     import pandas as pd
 
-    folder = Path(folder)
-    found = label_rows(folder)
-    skipped = found.skipped
+    experiment = Experiment.open(folder)
+    layout = experiment.folder
+    inputs = experiment.inputs()  # before reading: a file changed meanwhile makes the record stale, never wrong
+    found = label_rows(experiment)
+    if found.left_out and not partial:
+        raise IncompleteLabelsError(found.left_out)
+    skipped = [*found.notes, *found.left_out]
     if not found.mi:
-        raise EvaluationError(f"{display_path(ExperimentFolder(folder).labels)}: every label file was left out: " + "; ".join(skipped))
+        raise EvaluationError(f"{display_path(layout.labels)}: every label file was left out: " + "; ".join(skipped))
     mi = pd.DataFrame(found.mi).sort_values(_KEYS, ignore_index=True)
     class_columns = [*_KEYS, "class_id", "class_name", "pixels", "found", "first_step", "topic", "recall"]
     classes = pd.DataFrame(found.classes, columns=class_columns).sort_values([*_KEYS, "class_id"], ignore_index=True)
@@ -673,12 +705,18 @@ def evaluate_experiment(folder: Path) -> Evaluation:
         "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
         "effects": effects, "headline": top, "convergence": convergence, "revisits": revisits,
     }
-    layout = ExperimentFolder(folder)
-    # every table is written whole before any replaces its old self: a failure (a full
-    # disk) leaves the old set, not new tables beside old ones
+    # every file is written whole before any replaces its old self, and tables.json
+    # records each one's digest: a failure (a full disk) leaves the old set or a mix that
+    # plot refuses, never a mix taken as one set
     with contextlib.ExitStack() as stack:
+        written = {}
         for name, table in tables.items():
-            table.to_csv(stack.enter_context(atomic_path(layout.table(name))), index=False)
-        mi.to_parquet(stack.enter_context(atomic_path(layout.table("mi", ".parquet"))), index=False)
-        stack.enter_context(atomic_path(layout.skipped)).write_text(json.dumps(skipped, indent=2) + "\n")
+            written[layout.table(name)] = stack.enter_context(atomic_path(layout.table(name)))
+            table.to_csv(written[layout.table(name)], index=False)
+        written[layout.table("mi", ".parquet")] = stack.enter_context(atomic_path(layout.table("mi", ".parquet")))
+        mi.to_parquet(written[layout.table("mi", ".parquet")], index=False)
+        written[layout.skipped] = stack.enter_context(atomic_path(layout.skipped))
+        written[layout.skipped].write_text(json.dumps(skipped, indent=2) + "\n")
+        record = experiment.record_tables({str(path.relative_to(layout.root)): tmp for path, tmp in written.items()}, inputs)
+        stack.enter_context(atomic_path(layout.tables_record)).write_text(record)
     return Evaluation(mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits)

@@ -9,11 +9,11 @@ Design, in the order a grid runs:
 - **Seeds.** Each run draws from ``SeedSequence((seed, crc32(map), crc32(weight
   function), restart))``: the same numbers whatever ``jobs`` is and in whatever order
   runs finish.
-- **Parallel.** Runs are tasks of :class:`~curiosity_cli.parallel.Workers`: joblib's
+- **Parallel.** Runs are tasks of :class:`~curiosity_cli.experiment.workers.Workers`: joblib's
   ``loky`` processes by default, where a worker loads the map's word store from the cache
   once and keeps it, and each worker's numba threads are capped so the workers together
   use the cores once.
-- **Or on a Dask cluster** (``backend="dask"``, :mod:`curiosity_cli.parallel`): each
+- **Or on a Dask cluster** (``backend="dask"``, :mod:`curiosity_cli.experiment.workers`): each
   map's store file goes to the cluster once and runs depend on the task that loads it;
   each run is one task, all submitted at once and collected as they finish. A run lost
   with its worker is computed again on another; a run whose workers keep dying is
@@ -26,13 +26,12 @@ Design, in the order a grid runs:
   keeps the resolved config, ``provenance.yaml`` (seed, version, commit) and
   ``runs.csv`` (every run's start cell and seed). A resumed grid must agree with the
   saved config on everything that changes a run's numbers, and every finished run with
-  the recipe this config gives it (:mod:`curiosity_cli.recipes`): a run made otherwise
+  the recipe this config gives it (:mod:`curiosity_cli.experiment.recipes`): a run made otherwise
   is refused by name before anything is written, or redone with ``force``.
 """
 
 from __future__ import annotations
 
-import contextlib
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -41,20 +40,17 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
+from curiosity_cli.config import ExperimentConfig, saved_yaml
 from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
+from curiosity_cli.experiment.experiment import Experiment
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.experiment.maps import StoreInfo, prepare_stores
+from curiosity_cli.experiment.recipes import RECIPE_KEY, Recipe, first_of
+from curiosity_cli.experiment.saved_config import check_saved_config
+from curiosity_cli.experiment.workers import Workers
 from curiosity_cli.files import atomic_path, check_inside, display_path
-from curiosity_cli.layout import DEFAULT_CACHE, DEFAULT_RESULTS, ExperimentFolder, experiment_root
-from curiosity_cli.parallel import Workers
-from curiosity_cli.recipes import RECIPE_KEY, Recipe, differences, first_of
+from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS, experiment_root
 from curiosity_cli.seeds import name_key
-from curiosity_cli.words.map_stores import StoreInfo, prepare_stores
-
-#: The config sections a run's numbers depend on ...
-_RUN_SECTIONS = ("seed", "model", "words", "explore")
-#: ... except these keys, which choose which runs a grid holds.
-_SELECTION_KEYS = {("explore", "weight_functions"), ("explore", "restarts")}
-
 
 class GridError(CuriosityError):
     """Some runs of a grid failed; the others were written."""
@@ -99,25 +95,6 @@ def start_cells(seed: int, dataset: str, n_cells: int, restarts: int) -> np.ndar
     return rng.permutation(n_cells)[:restarts].astype(np.int64)
 
 
-def run_recipe(
-    config: ExperimentConfig, dataset: str, store: str, vocabulary_hashes: list[str], weight_function: str, restart: int,
-) -> Recipe:
-    """What one run's numbers depend on (:mod:`curiosity_cli.recipes`).
-
-    ``store`` is the file name of the map's word store, which hashes the image's pixels,
-    the word settings and the vocabularies. The start cell and the seed entropy follow
-    from the map, the experiment seed and the restart.
-    """
-    explore = {
-        key: value for key, value in config.explore.run_settings().items() if ("explore", key) not in _SELECTION_KEYS
-    }
-    return Recipe({
-        "store": store, "vocabulary_hashes": vocabulary_hashes, "dataset": dataset,
-        "weight_function": weight_function, "restart": restart, "seed": config.seed,
-        "model": to_dict(config.model), "explore": explore,
-    })
-
-
 def plan_runs(config: ExperimentConfig, stores: dict[str, StoreInfo]) -> list[RunTask]:
     """Every run of the grid, ordered by map, restart, then weight function.
 
@@ -148,33 +125,6 @@ def plan_runs(config: ExperimentConfig, stores: dict[str, StoreInfo]) -> list[Ru
                 seed = (config.seed, name_key(dataset), name_key(weight_function), restart)
                 tasks.append(RunTask(dataset, weight_function, restart, int(start), seed, str(stores[entry].path)))
     return tasks
-
-
-def check_saved_config(folder: Path, config: ExperimentConfig) -> None:
-    """Refuse to add runs to an experiment folder whose saved config computes runs differently.
-
-    Raises
-    ------
-    ConfigError
-        Naming the first key that differs, with both values; or the saved config itself
-        does not validate (empty, not YAML, not a mapping, a bad key), naming it.
-    """
-    saved_path = ExperimentFolder(folder).config
-    if not saved_path.is_file():
-        return
-    saved, current = (_run_sections(load_config(saved_path)), _run_sections(config))
-    for keys, old, new in differences(saved, current):
-        if keys not in _SELECTION_KEYS:
-            raise ConfigError(
-                f"{display_path(saved_path)}: {'.'.join(keys)} was {old!r} for the runs already there, now {new!r}; "
-                "use another experiment name or another results folder"
-            )
-
-
-def _run_sections(config: ExperimentConfig) -> dict:
-    sections = {key: to_dict(getattr(config, key)) for key in _RUN_SECTIONS}
-    sections["explore"] = config.explore.run_settings()
-    return sections
 
 
 def run_grid(
@@ -233,8 +183,7 @@ def run_grid(
     from curiosity_cli.words.store import load_store
 
     started = time.perf_counter()
-    owned = Workers(backend, scheduler, jobs) if workers is None else None  # checks the backend before any work
-    workers = workers or owned
+    computing = Workers.shared(workers, backend, scheduler, jobs)
     folder = experiment_root(results_dir, config.name)
     check_inside(folder, results_dir, "name")
     check_saved_config(folder, config)
@@ -243,11 +192,8 @@ def run_grid(
     for task in tasks:
         check_inside(ExperimentFolder(folder).run(task.dataset, task.weight_function, task.restart), folder, task.dataset)
     by_name = {info.name: info for info in stores.values()}
-    recipes = {
-        t: run_recipe(config, t.dataset, Path(t.store_path).name, by_name[t.dataset].vocabulary_hashes, t.weight_function,
-                      t.restart)
-        for t in tasks
-    }
+    experiment = Experiment(folder, config, {name: info.facts for name, info in by_name.items()})
+    recipes = {t: experiment.run_recipe(t.dataset, t.weight_function, t.restart) for t in tasks}
     todo, stale = [], []
     for task in tasks:
         run_path = ExperimentFolder(folder).run(task.dataset, task.weight_function, task.restart)
@@ -268,7 +214,7 @@ def run_grid(
     if on_prepared is not None:
         on_prepared(len(todo), len(tasks) - len(todo))
     failed, fallbacks, written = [], 0, 0
-    with owned or contextlib.nullcontext():  # new workers (a local cluster) stop with the grid
+    with computing as workers:
         shipped = {}  # loky workers load the stores from the cache themselves
         if workers.ships:
             shipped = {path: workers.ship_file(path, load_store) for path in sorted({t.store_path for t in todo})}
@@ -336,8 +282,8 @@ def _write(
         "start_row": int(start_row),
         "start_col": int(start_col),
         "seed": list(task.seed),
-        "store": store.path.name,
-        "vocabulary_hashes": store.vocabulary_hashes,
+        "store": store.facts.store,
+        "vocabulary_hashes": store.facts.vocabulary_hashes,
         "grid_shape": list(store.grid.shape),
         "vocabulary_size": store.vocabulary_size,
         "n_topics": config.model.topics,
@@ -355,7 +301,7 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
     import pandas as pd
     import yaml
 
-    from curiosity_cli.provenance import provenance
+    from curiosity_cli.experiment.provenance import provenance
 
     folder.mkdir(parents=True, exist_ok=True)
     layout = ExperimentFolder(folder)
@@ -377,7 +323,7 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
     for name, info in stores.items():
         total = sum(info.word_counts.values())
         maps.append(
-            {"dataset": name, "stands_in_for": info.stands_in_for or "", "cells": info.grid.n_cells,
+            {"dataset": name, "stands_in_for": info.facts.stands_in_for or "", "cells": info.grid.n_cells,
              "words": total, **{f"{kind}_words": n for kind, n in info.word_counts.items()},
              "orb_share": info.word_counts.get("orb", 0) / total if total else float("nan"), "store": info.path.name}
         )

@@ -1,6 +1,6 @@
 """One run's folder on disk: written whole or not at all, and read back.
 
-A run's folder (:meth:`~curiosity_cli.layout.ExperimentFolder.run`) holds:
+A run's folder (:meth:`~curiosity_cli.experiment.layout.ExperimentFolder.run`) holds:
 
 - ``path.csv``: one row per step: ``step, row, col, cell, first_visit, words_sampled,
   log_likelihood, fallback, boxed_in``;
@@ -10,12 +10,15 @@ A run's folder (:meth:`~curiosity_cli.layout.ExperimentFolder.run`) holds:
   ``L``, the non-zero word-topic counts Φ_p as ``L/words``, ``L/topics``, ``L/counts``;
 - ``run.json``: what the run was (dataset, weight function, restart, start cell, seed,
   word store, vocabulary hashes, model parameters), its ``recipe``
-  (:mod:`curiosity_cli.recipes`) and what it cost (seconds, and ``bytes``: the size of
-  the three files above).
+  (:mod:`curiosity_cli.experiment.recipes`), the size and SHA-256 of each of the three
+  files above (``files``, :mod:`curiosity_cli.experiment.wholeness`) and what it cost
+  (seconds, and ``bytes``: the size of the whole folder).
 
 The folder is built under a hidden temporary name and renamed into place, so a folder
-under its real name is always complete; a killed writer leaves only a hidden
-``.restart-NNN.tmp-*`` folder, which the next grid run removes.
+under its real name was complete when written; a killed writer leaves only a hidden
+``.restart-NNN.tmp-*`` folder, which the next grid run removes. What happens to it
+afterwards (a full disk, a copy, an edit) is caught by the recorded sizes and digests:
+a run whose files are not those it wrote is not finished, and is redone.
 """
 
 from __future__ import annotations
@@ -30,10 +33,11 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.cell_grid import SquareGrid
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import RERUN, CuriosityError
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.experiment.wholeness import FILES_KEY, changed, records
 from curiosity_cli.explore.walker import Exploration, SparseCounts
 from curiosity_cli.files import CorruptFileError, display_path, naming_os_errors, note, open_npz
-from curiosity_cli.layout import ExperimentFolder
 
 RUN_FORMAT = 1
 #: What readers of a run take from its ``run.json``: a file without one of them is corrupt.
@@ -42,6 +46,8 @@ _RUN_KEYS = (
     "n_topics", "checkpoints",
 )
 _TMP_MARK = ".tmp-"
+#: The files of a run besides ``run.json``, which records their sizes and digests.
+_RUN_FILES = ["path.csv", "candidates.csv", "checkpoints.npz"]
 
 
 class RunError(CuriosityError):
@@ -63,7 +69,7 @@ def write_run(folder: Path, exploration: Exploration, meta: dict, grid: SquareGr
     Parameters
     ----------
     folder : Path
-        From :meth:`~curiosity_cli.layout.ExperimentFolder.run`.
+        From :meth:`~curiosity_cli.experiment.layout.ExperimentFolder.run`.
     exploration : Exploration
     meta : dict
         JSON-ready facts about the run; ``format``, ``checkpoints`` and ``bytes`` are added.
@@ -110,8 +116,9 @@ def _write_files(tmp: Path, exploration: Exploration, meta: dict, grid: SquareGr
     for length, counts in e.checkpoints.items():
         arrays.update({f"{length}/words": counts.words, f"{length}/topics": counts.topics, f"{length}/counts": counts.counts})
     np.savez_compressed(tmp / "checkpoints.npz", **arrays)
-    size = sum(p.stat().st_size for p in tmp.iterdir())
-    meta = {"format": RUN_FORMAT, **meta, "checkpoints": sorted(e.checkpoints), "bytes": size}
+    files = records(tmp, _RUN_FILES)
+    size = sum(f["size"] for f in files.values())
+    meta = {"format": RUN_FORMAT, **meta, "checkpoints": sorted(e.checkpoints), "bytes": size, FILES_KEY: files}
     (tmp / "run.json").write_text(json.dumps(meta, indent=2) + "\n")
     size += (tmp / "run.json").stat().st_size
     return size
@@ -174,9 +181,9 @@ class Run:
 def finished_meta(folder: Path) -> dict | None:
     """The ``run.json`` of a run folder that exists under its real name (so it was written whole) and reads back.
 
-    ``None`` for a folder not there; also for one whose ``run.json`` or
-    ``checkpoints.npz`` is corrupt, with a note on stderr, so that the grid redoes just
-    that run.
+    ``None`` for a folder not there; also for one with a corrupt ``run.json`` or
+    ``checkpoints.npz``, or a file that is not as it was written, with a note on stderr,
+    so that the grid redoes just that run.
     """
     if not (Path(folder) / "run.json").is_file():
         return None
@@ -193,13 +200,14 @@ def read_run(folder: Path) -> Run:
     Raises
     ------
     RunError
-        A missing or corrupt ``run.json`` or ``checkpoints.npz``, or a ``path.csv``
-        without a row per step, naming the file.
+        A missing or corrupt ``run.json`` or ``checkpoints.npz``, a ``path.csv``
+        without a row per step, or a file whose size or digest is not what ``run.json``
+        records, naming the file; explore redoes such a run.
     """
     try:
         return _read(Path(folder))
     except RunError as exc:
-        raise RunError(f"{exc}; run `curiosity explore` to redo it") from None
+        raise RunError(f"{exc}; {RERUN} redoes the run", rerun="explore", force=False) from None
 
 
 def _read(folder: Path) -> Run:
@@ -207,6 +215,9 @@ def _read(folder: Path) -> Run:
     meta = _read_meta(folder / "run.json")
     (path,) = _load_arrays(folder / "checkpoints.npz", ["path"])
     _check_steps(folder / "path.csv", path.size)
+    # runs written before their files were recorded have no FILES_KEY; their checks end above
+    if (change := changed(folder, meta.get(FILES_KEY, {}))) is not None:
+        raise RunError(f"{display_path(change[0])}: {change[1]}")
     return Run(folder, meta, path.astype(np.int64))
 
 

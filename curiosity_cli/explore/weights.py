@@ -36,11 +36,12 @@ mission, a path compared with the weight functions; and the two **ceilings**
 ``scattered-cells`` and ``compact-block``, models learned from cells chosen without
 walking, which say what any walker could hope for and are reported apart (:data:`CEILINGS`).
 
-To add a walker, write ``def mine(candidates: Candidates) -> np.ndarray`` (or a plan),
-add it to :data:`WEIGHT_FUNCTIONS` under a name, and the name to
-:data:`curiosity_cli.config.WALKER_NAMES` at the same place; configs can then name it in
-``explore.weight_functions`` (the config layer checks the names it loads without
-importing this stage).
+To add a walker, write ``def my_walker(candidates: Candidates) -> np.ndarray`` here (or
+a plan, ``my_walker = Plan(...)``) and put its name, ``my-walker``, in
+:data:`curiosity_cli.config.WALKER_NAMES`, the one list of walkers: configs can then name
+it in ``explore.weight_functions``. The names live in the config layer because it checks
+the names it loads without importing this stage; :data:`WEIGHT_FUNCTIONS` finds each
+walker here by its name.
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from curiosity_cli.cell_grid import SquareGrid
-from curiosity_cli.config import COVERAGE_READINGS
+from curiosity_cli.config import COVERAGE_READINGS, WALKER_NAMES
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.explore import plans
 
@@ -121,17 +122,14 @@ class Plan:
     ceiling: bool = False
 
 
-#: Every walker by the name configs use (:data:`curiosity_cli.config.WALKER_NAMES`, in its
-#: order): the paper's four weight functions first, then the lawnmower baseline, then the ceilings.
-WEIGHT_FUNCTIONS: dict[str, WeightFunction | Plan] = {
-    "random-walk": random_walk,
-    "stochastic-coverage": stochastic_coverage,
-    "word-perplexity": word_perplexity,
-    "topic-perplexity": topic_perplexity,
-    "lawnmower": Plan(plans.lawnmower),
-    "scattered-cells": Plan(plans.scattered_cells, ceiling=True),
-    "compact-block": Plan(plans.compact_block, ceiling=True),
-}
+lawnmower = Plan(plans.lawnmower)
+scattered_cells = Plan(plans.scattered_cells, ceiling=True)
+compact_block = Plan(plans.compact_block, ceiling=True)
+
+#: Every walker by the name configs use, in the order of :data:`curiosity_cli.config.WALKER_NAMES`
+#: (the paper's four weight functions, the lawnmower baseline, the ceilings): the function or plan
+#: of this module that has the name, spelt as Python spells it (``random-walk``: :func:`random_walk`).
+WEIGHT_FUNCTIONS: dict[str, WeightFunction | Plan] = {name: globals()[name.replace("-", "_")] for name in WALKER_NAMES}
 
 #: Names of the runs that are ceilings, not walkers: reported apart, never the "next best".
 CEILINGS: tuple[str, ...] = tuple(n for n, w in WEIGHT_FUNCTIONS.items() if isinstance(w, Plan) and w.ceiling)

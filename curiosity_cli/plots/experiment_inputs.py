@@ -18,12 +18,16 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import RERUN, CuriosityError
+from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import CorruptFileError, display_path, open_npz
-from curiosity_cli.layout import ExperimentFolder
+
+if TYPE_CHECKING:
+    from curiosity_cli.config import ExperimentConfig
 
 MI_COLUMNS = (
     "dataset", "weight_function", "restart", "path_length",
@@ -38,16 +42,14 @@ class PlotError(CuriosityError):
     """An experiment folder the figures cannot be drawn from."""
 
 
-def read_table(path: Path, columns: tuple[str, ...], made_by: str):
-    """Read a results CSV and check its columns.
+def read_table(path: Path, columns: tuple[str, ...]):
+    """Read a results CSV of ``evaluate`` and check its columns.
 
     Parameters
     ----------
     path : Path
     columns : tuple of str
         Columns it must have (others are kept).
-    made_by : str
-        The command that writes it, for the error message, e.g. ``curiosity evaluate``.
 
     Returns
     -------
@@ -61,46 +63,38 @@ def read_table(path: Path, columns: tuple[str, ...], made_by: str):
     import pandas as pd
 
     path = Path(path)
+    again = {"rerun": "evaluate", "force": False}
     if not path.is_file():
-        raise PlotError(f"{display_path(path)}: not found; run `{made_by}` first")
+        raise PlotError(f"{display_path(path)}: not found; {RERUN} makes it", **again)
     try:
         table = pd.read_csv(path)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise PlotError(f"{display_path(path)}: not a readable CSV table ({exc}); run `{made_by}` again") from None
+        raise PlotError(f"{display_path(path)}: not a readable CSV table ({exc}); {RERUN} makes it again", **again) from None
     missing = [c for c in columns if c not in table.columns]
     if missing:
         raise PlotError(
-            f"{display_path(path)}: no column {missing[0]!r}; expected {', '.join(columns)} "
-            f"(run `{made_by}` again)"
+            f"{display_path(path)}: no column {missing[0]!r}; expected {', '.join(columns)} ({RERUN} makes it again)",
+            **again,
         )
     return table
 
 
-def load_maps(experiment_dir: Path, notes: list[str]) -> dict:
+def load_maps(config: ExperimentConfig, notes: list[str]) -> dict:
     """The experiment's maps by dataset name, in the config's order.
 
     Parameters
     ----------
-    experiment_dir : Path
+    config : ExperimentConfig
+        The experiment's saved config.
     notes : list of str
-        Appended to: one line per map (or the config) that cannot be loaded.
+        Appended to: one line per map that cannot be loaded.
 
     Returns
     -------
     dict of str to MapData
     """
-    from curiosity_cli.config import load_config
     from curiosity_cli.data import load_map
 
-    config_path = ExperimentFolder(experiment_dir).config
-    if not config_path.is_file():
-        notes.append(f"{display_path(config_path)}: not found, so no map figures (run `curiosity explore` first)")
-        return {}
-    try:
-        config = load_config(config_path)
-    except CuriosityError as exc:
-        notes.append(f"no map figures: {exc}")
-        return {}
     maps = {}
     for entry in config.datasets:
         try:
@@ -189,7 +183,7 @@ def read_path(experiment_dir: Path, dataset: str, weight_function: str, restart:
 
     path = ExperimentFolder(experiment_dir).run(dataset, weight_function, restart) / "path.csv"
     if not path.is_file():
-        notes.append(f"{display_path(path)}: not found; no path figure (run `curiosity explore` first)")
+        notes.append(f"{display_path(path)}: not found; no path figure (explore the experiment first)")
         return None
     try:
         table = pd.read_csv(path, usecols=["step", "cell"])
@@ -203,7 +197,7 @@ def read_path(experiment_dir: Path, dataset: str, weight_function: str, restart:
 def _read_npz(path: Path, keys: list[str], notes: list[str]) -> dict | None:
     path = Path(path)
     if not path.is_file():
-        notes.append(f"{display_path(path)}: not found (run `curiosity label` first)")
+        notes.append(f"{display_path(path)}: not found (label the experiment first)")
         return None
     try:
         with open_npz(path) as npz:

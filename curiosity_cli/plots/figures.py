@@ -26,11 +26,12 @@ from pathlib import Path
 
 import numpy as np
 
+from curiosity_cli.errors import RERUN
+from curiosity_cli.experiment.experiment import Experiment
+from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import atomic_path, display_path
-from curiosity_cli.layout import ExperimentFolder
 from curiosity_cli.plots import palette
-from curiosity_cli.plots.preview import shrink_image, shrink_labels
 from curiosity_cli.plots.experiment_inputs import (
     MI_COLUMNS,
     SUMMARY_COLUMNS,
@@ -43,6 +44,7 @@ from curiosity_cli.plots.experiment_inputs import (
     read_path,
     read_table,
 )
+from curiosity_cli.plots.preview import shrink_image, shrink_labels
 
 #: (colour, marker) of the paper's weight functions and our lawnmower baseline, in the
 #: order legends list them.
@@ -111,25 +113,34 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
     ------
     PlotError
         No such folder, or ``mi.csv`` missing or malformed.
+    ConfigError
+        No ``config.yaml``, or one that does not validate.
+    StaleTablesError
+        The tables are not one complete set made from the experiment's files and maps as
+        they are now (:meth:`~curiosity_cli.experiment.experiment.Experiment.check_tables`).
     """
     import pandas as pd
 
     experiment_dir = Path(experiment_dir)
     layout = ExperimentFolder(experiment_dir)
     if not experiment_dir.is_dir():
-        raise PlotError(f"{display_path(experiment_dir)}: no such experiment folder; run `curiosity explore` first")
-    mi = read_table(layout.table("mi"), MI_COLUMNS, "curiosity evaluate")
+        raise PlotError(
+            f"{display_path(experiment_dir)}: no such experiment folder; {RERUN} makes it", rerun="explore", force=False
+        )
+    mi = read_table(layout.table("mi"), MI_COLUMNS)
     if mi.empty:
-        raise PlotError(f"{display_path(layout.table('mi'))}: no rows; run `curiosity evaluate` first")
+        raise PlotError(f"{display_path(layout.table('mi'))}: no rows; {RERUN} makes it", rerun="evaluate", force=False)
+    experiment = Experiment.open(experiment_dir)
+    experiment.check_tables()
     out = layout.figures
     written = WrittenFigures()
     notes = written.skipped
-    maps = load_maps(experiment_dir, notes)
+    maps = load_maps(experiment.config, notes)
     order = list(maps) + [d for d in dict.fromkeys(mi["dataset"].astype(str)) if d not in maps]
 
     summary_path = layout.table("summary")
     try:
-        summary = read_table(summary_path, SUMMARY_COLUMNS, "curiosity evaluate")
+        summary = read_table(summary_path, SUMMARY_COLUMNS)
         for column in ("path_length", "n", "mean", "std", "ci_low", "ci_high"):
             summary[column] = pd.to_numeric(summary[column], errors="coerce")  # a stray text cell: NaN, not a crash
         summary = summary.dropna(subset=["path_length"])
@@ -148,7 +159,7 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
         if "distinct_cells" in mi:
             written += _save(distinct_figure(mi, order), out / "mi-vs-distinct")
         else:
-            notes.append("mi-vs-distinct: mi.csv has no distinct_cells column (run `curiosity evaluate` again)")
+            notes.append("mi-vs-distinct: mi.csv has no distinct_cells column (evaluate the experiment again)")
 
         traces = {}
         for name, m in maps.items():
@@ -166,7 +177,7 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
                 if path is not None:
                     written += _save(path_figure(m, path, example, z_p, z_b), out / f"path-{name}")
             elif not examples:
-                notes.append(f"path-{name}: no example path labelling under labels/{name}/examples/ (run `curiosity label`)")
+                notes.append(f"path-{name}: no example path labelling under labels/{name}/examples/ (label the experiment)")
             if z_b is None and not z_ps:
                 notes.append(f"labelings-{name}: neither a batch nor a path labelling to draw")
             else:
@@ -175,7 +186,7 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
         if traces:
             written += _save(convergence_figure(traces), out / "batch-convergence")
         else:
-            notes.append("batch-convergence: no batch log-likelihood trace under batch/ (run `curiosity label`)")
+            notes.append("batch-convergence: no batch log-likelihood trace under batch/ (label the experiment)")
     written.skipped[:] = list(dict.fromkeys(notes))  # a corrupt file is named once, not once per figure
     return written
 

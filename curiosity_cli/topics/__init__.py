@@ -4,6 +4,8 @@
   (a map's table is its grid's, :mod:`curiosity_cli.cell_grid`).
 - :mod:`~curiosity_cli.topics.model`: :class:`TopicModel`, its Gibbs refinement
   (batch, realtime, frozen Φ), ML topics.
+- :mod:`~curiosity_cli.topics.batch_sweeps`: a batch refinement's phases and the threads
+  that sweep them (Algorithm 1).
 - :mod:`~curiosity_cli.topics.persistence`: snapshots of a model's state, and model files.
 - :mod:`~curiosity_cli.topics.perplexity`: word and topic perplexity of a candidate cell.
 

@@ -30,12 +30,10 @@ import numpy as np
 
 from curiosity_cli.checks import check_float, check_int
 from curiosity_cli.errors import ParameterError
+from curiosity_cli.topics.batch_sweeps import aligned_zeros, batch_phases, sweep_phases
 from curiosity_cli.topics.neighbours import check_neighbours
 
 _MIN_CAPACITY = 1024
-_CACHE_LINE = 64
-# a batch phase holds at most 1/_PHASES of the observed cells (TopicModel.refine_batch)
-_PHASES = 16
 
 
 class TopicModel:
@@ -103,11 +101,11 @@ class TopicModel:
         self._order = np.zeros(n_cells, np.int32)
         self._times = np.zeros(n_cells, np.int64)
         self._n_observed = 0
-        self._nwk = _aligned_zeros((self._v, self._kp), np.int32)
-        self._nk = _aligned_zeros(self._kp, np.int32)
-        self._inv = _aligned_zeros(self._kp, np.float32)
-        self._ncz = _aligned_zeros((n_cells, self._kp), np.int32)
-        self._ng = _aligned_zeros((n_cells, self._kp), np.int32)
+        self._nwk = aligned_zeros((self._v, self._kp), np.int32)
+        self._nk = aligned_zeros(self._kp, np.int32)
+        self._inv = aligned_zeros(self._kp, np.float32)
+        self._ncz = aligned_zeros((n_cells, self._kp), np.int32)
+        self._ng = aligned_zeros((n_cells, self._kp), np.int32)
         self._counter = 0
         self._frozen = frozen_counts is not None
         if self._frozen:
@@ -387,14 +385,10 @@ class TopicModel:
     def refine_batch(self, sweeps: int, *, threads: int = 1) -> int:
         """Algorithm 1: ``sweeps`` Gibbs sweeps over every observed cell, in parallel phases.
 
-        A sweep visits the observed cells in phases, and the cells of a phase at once on
-        ``threads`` threads. Phases: for each colour of a distance-2 colouring of the
-        neighbour table in increasing order (two cells of one colour share no cell count
-        and no neighbourhood sum), the ``n_c`` observed cells of that colour in cell
-        order, cut into ``ceil(n_c / m)`` runs of consecutive cells as equal in size as
-        can be (the first ``n_c mod runs`` one cell longer), ``m = ceil(n_observed /
-        16)``. So no phase holds more than 1/16 of the cells, even without neighbours
-        (one colour), whatever ``threads`` is.
+        A sweep visits the observed cells in phases of at most ``m = ceil(n_observed / 16)``
+        cells, no two of which share a cell count or a neighbourhood sum, whatever
+        ``threads`` is (:func:`~curiosity_cli.topics.batch_sweeps.batch_phases`), and the
+        cells of a phase at once on ``threads`` threads.
 
         Within a phase every cell sees the word-topic counts (``n_kw``, ``n_k``) as at
         the start of the phase plus its own changes, and in sweep ``s`` draws from the
@@ -417,105 +411,14 @@ class TopicModel:
         int
             Words sampled.
         """
-        from concurrent.futures import ThreadPoolExecutor
-
-        from curiosity_cli.topics._gibbs_kernels import merge_phase, refine_phase_share
-
         sweeps = check_int("sweeps", sweeps, 0)
         threads = check_int("threads", threads, 1)
         if sweeps == 0 or self._n_observed == 0:
             return 0
-        phases = self._phases()
-        if self._frozen:
-            return self._refine_frozen(sweeps, threads, phases)
-        if len(phases) == 1:
-            # one observed cell: the threads would merge the one phase into their copies
-            # while it is being refined, and only one of them would have work
-            threads = 1
-        kp = self._kp
-        own = (self._nwk, self._nk, self._inv)
-        copies = [own] + [tuple(_aligned_copy(a) for a in own) for _ in range(threads - 1)]
-        # each thread's scratch, and the shared chunk counter, on cache lines of their own:
-        # two threads writing one line (false sharing) halved the speed
-        scratch = [(*copy, _aligned_zeros(kp, np.int32), _aligned_zeros(kp, np.float32)) for copy in copies]
-        taken = _aligned_zeros(1, np.int64)
-        before = np.empty_like(self._topics)
-        (cell_first, cell_count, words, topics, _, _, _, ncz, ng, table, alpha, beta, vbeta,
-         key) = self._sampler_arrays()  # fmt: skip
-
-        def refine(mine: tuple, phase: np.ndarray, previous: np.ndarray, counter: np.uint64) -> None:
-            refine_phase_share(
-                taken, phase, previous, before, *mine, cell_first, cell_count, words, topics, ncz, ng, table,
-                self._k, alpha, beta, vbeta, key, counter,
-            )
-
-        # the phase whose changes are not yet in the counts: every thread merges it into
-        # its copy when the next phase starts, and this thread into the model's at the end
-        previous = np.zeros(0, np.int64)
-        # this thread refines too, on the model's own counts; the pool starts no thread for threads == 1
-        with ThreadPoolExecutor(max(threads - 1, 1)) as pool:
-            for sweep in range(sweeps):
-                counter = np.uint64(self._counter + sweep)
-                for phase in phases:
-                    taken[0] = 0
-                    others = [pool.submit(refine, mine, phase, previous, counter) for mine in scratch[1:]]
-                    refine(scratch[0], phase, previous, counter)
-                    for other in others:
-                        other.result()  # waits, and re-raises an error of that thread
-                    previous = phase
-        merge_phase(previous, cell_first, cell_count, words, before, topics, *own, self._k, vbeta)
+        phases = batch_phases(self._cells_in_order(), self._colouring())
+        sweep_phases(phases, self._sampler_arrays(), self._k, self._counter, sweeps, threads, frozen=self._frozen)
         self._counter += sweeps
         return sweeps * self._n_words
-
-    def _refine_frozen(self, sweeps: int, threads: int, phases: list[np.ndarray]) -> int:
-        """:meth:`refine_batch` of a frozen model: the same draws, on shared read-only weights.
-
-        With Φ fixed, ``(n_kw + β) / (n_k + Vβ)`` is computed once per call, and the
-        threads of a phase share it: no copies of the counts, nothing to merge.
-        """
-        from concurrent.futures import ThreadPoolExecutor
-
-        from curiosity_cli.topics._gibbs_kernels import refine_frozen_phase
-
-        phiw = self._frozen_weights()
-        taken = _aligned_zeros(1, np.int64)
-        alpha, key = np.float32(self._alpha), self._key()
-
-        def refine(phase: np.ndarray, counter: np.uint64) -> None:
-            refine_frozen_phase(
-                taken, phase, phiw, self._cell_first, self._cell_count, self._words, self._topics, self._ncz,
-                self._ng, self._table, alpha, key, counter,
-            )
-
-        with ThreadPoolExecutor(max(threads - 1, 1)) as pool:
-            for sweep in range(sweeps):
-                counter = np.uint64(self._counter + sweep)
-                for phase in phases:
-                    taken[0] = 0
-                    others = [pool.submit(refine, phase, counter) for _ in range(threads - 1)]
-                    refine(phase, counter)
-                    for other in others:
-                        other.result()
-        self._counter += sweeps
-        return sweeps * self._n_words
-
-    def _frozen_weights(self) -> np.ndarray:
-        """(V, Kp) float32: ``(float32(n_kw) + β) * inv[k]``, the factors of eq. 5 that frozen counts fix."""
-        phiw = _aligned_zeros(self._nwk.shape, np.float32)
-        np.multiply(self._nwk.astype(np.float32) + np.float32(self._beta), self._inv, out=phiw)
-        return phiw
-
-    def _phases(self) -> list[np.ndarray]:
-        """The phases of a batch sweep (see :meth:`refine_batch`): a list of (n,) int64 cell arrays."""
-        cells = self._cells_in_order()
-        colour = self._colouring()[cells]
-        most = -(-cells.size // _PHASES)
-        phases = []
-        for c in np.unique(colour):
-            group = cells[colour == c]
-            parts = -(-group.size // most)
-            phases += np.array_split(group, parts)
-        return phases
 
     def refine_realtime(self, word_budget: int, *, eta: float) -> int:
         """Algorithm 2: refine picked observations until ``word_budget`` words are sampled.
@@ -767,27 +670,6 @@ class TopicModel:
             return per_word[:0].copy()
         first, count = self._cell_first, self._cell_count
         return np.concatenate([per_word[first[c] : first[c] + count[c]] for c in cells])
-
-
-def _aligned_zeros(shape, dtype) -> np.ndarray:
-    """Zeros starting on a 64-byte cache line (numpy only promises 16 bytes).
-
-    Count rows of 64 topics are 256 bytes: aligned, each is 4 cache lines, not 5 shared
-    with its neighbours, which matters for speed and, when threads refine cells whose
-    rows are adjacent, for false sharing.
-    """
-    dtype = np.dtype(dtype)
-    size = int(np.prod(shape))
-    buffer = np.zeros(size * dtype.itemsize + _CACHE_LINE, np.uint8)
-    start = -buffer.ctypes.data % _CACHE_LINE
-    return buffer[start : start + size * dtype.itemsize].view(dtype).reshape(shape)
-
-
-def _aligned_copy(array: np.ndarray) -> np.ndarray:
-    """A copy of ``array`` starting on a cache line (see :func:`_aligned_zeros`)."""
-    copy = _aligned_zeros(array.shape, array.dtype)
-    copy[...] = array
-    return copy
 
 
 def _check_hashes(hashes):

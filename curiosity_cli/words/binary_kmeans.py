@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from curiosity_cli.checks import check_int
+from curiosity_cli.errors import ParameterError
 from curiosity_cli.words.hamming import as_words64, check_descriptors, nearest_with_distance
 
 _INITS = ("k-means++", "random")
@@ -23,8 +24,8 @@ def _distinct_first_indices(descriptors: np.ndarray) -> np.ndarray:
     return np.sort(first)
 
 
-def _too_few(k: int, n_distinct: int) -> ValueError:
-    return ValueError(f"k: got {k}, expected at most {n_distinct} (the number of distinct descriptors)")
+def _too_few(k: int, n_distinct: int) -> ParameterError:
+    return ParameterError(f"k: got {k}, expected at most {n_distinct} (the number of distinct descriptors)")
 
 
 def _initial_centres(descriptors: np.ndarray, k: int, init: str, rng: np.random.Generator) -> np.ndarray:
@@ -124,23 +125,21 @@ def binary_kmeans(
 
     Raises
     ------
-    ValueError
+    ParameterError
         Naming the parameter: bad shapes or settings, or ``k`` above the number of
         distinct descriptors.
     """
     descriptors = check_descriptors("descriptors", descriptors)
-    k = check_int("k", k, 1)
-    if k >= 2**31:
-        raise ValueError(f"k: got {k}, expected fewer than 2**31")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed: got {seed!r}, expected an integer >= 0")
+    # centre ids are int32 in the kernels
+    k = check_int("k", k, 1, 2**31 - 1)
+    seed = check_int("seed", seed, 0)
     iterations = check_int("iterations", iterations, 0)
     if init not in _INITS:
-        raise ValueError(f"init: got {init!r}, expected one of {', '.join(map(repr, _INITS))}")
+        raise ParameterError(f"init: got {init!r}, expected one of {', '.join(map(repr, _INITS))}")
     if descriptors.shape[0] < k:
-        raise ValueError(f"k: got {k}, expected at most {descriptors.shape[0]} (the number of descriptors)")
+        raise ParameterError(f"k: got {k}, expected at most {descriptors.shape[0]} (the number of descriptors)")
 
-    rng = np.random.default_rng(int(seed))
+    rng = np.random.default_rng(seed)
     centres = _initial_centres(descriptors, k, init, rng)
     words64 = as_words64(descriptors)
     for _ in range(iterations):

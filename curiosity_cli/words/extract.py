@@ -20,7 +20,7 @@ from curiosity_cli.config import WordsConfig
 from curiosity_cli.data import MapData
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import CorruptFileError, note
-from curiosity_cli.layout import DEFAULT_CACHE
+from curiosity_cli.paths import DEFAULT_CACHE
 from curiosity_cli.words.kinds import OrbSettings, Picture, WordRecipe
 from curiosity_cli.words.store import STORE_FORMAT, WordStore, WordType, build_store, load_store, save_store
 
@@ -62,6 +62,15 @@ def store_path(cache_dir: Path, params: dict, types: tuple[WordType, ...]) -> Pa
     """``<cache_dir>/<dataset>-<hash>.npz``, the hash covering params, vocabularies and format."""
     key = json.dumps({"params": params, "types": [t.__dict__ for t in types], "format": STORE_FORMAT}, sort_keys=True)
     return Path(cache_dir) / f"{params['dataset']}-{hashlib.sha256(key.encode()).hexdigest()[:16]}.npz"
+
+
+def store_name(map_data: MapData, words: WordsConfig) -> tuple[str, list[str]]:
+    """The file name of the word store a map's image and ``words`` give at the dataset's stride and cell width,
+    and the vocabularies' hashes, without extracting: what a run made from them records.
+    """
+    types = WordRecipe(words).types
+    params = _params(map_data, words, map_data.config.word_stride, map_data.config.cell_width)
+    return store_path(Path(), params, types).name, [t.sha256 for t in types]
 
 
 def extract_words(

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from curiosity_cli.config import DriveConfig, WordsConfig
+from curiosity_cli.config import WordsConfig
 from curiosity_cli.words.store import WordType
 
 #: Hue words: OpenCV's 8-bit hue, 0..179.
@@ -43,10 +43,14 @@ class OrbSettings:
                    words.orb_fill_threshold)
 
     @classmethod
-    def for_frames(cls, words: WordsConfig, drive: DriveConfig) -> OrbSettings:
-        """A frame of ``drive.frame_width`` px: the driver's cap per tile, top-up and pyramid depth."""
-        return cls(words.orb_tile, drive.orb_per_tile, words.orb_max_features, words.orb_fast_threshold,
-                   drive.orb_fill_threshold, drive.orb_levels)
+    def for_frames(cls, words: WordsConfig, *, per_tile: int, fill_threshold: int | None, n_levels: int) -> OrbSettings:
+        """The ORB settings of a camera frame, which is too small for a map's.
+
+        The map's tiling, feature cap and FAST threshold, with the driver's own cap per
+        tile, top-up threshold and pyramid depth (``drive.orb_per_tile``,
+        ``drive.orb_fill_threshold``, ``drive.orb_levels``).
+        """
+        return cls(words.orb_tile, per_tile, words.orb_max_features, words.orb_fast_threshold, fill_threshold, n_levels)
 
 
 def orb_features(grey: np.ndarray, settings: OrbSettings):

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from curiosity_cli.words.textons import nearest_centres
+from curiosity_cli.checks import check_int
+from curiosity_cli.errors import ParameterError
+from curiosity_cli.words.textons import as_float32_matrix, nearest_centres
 
 
 def kmeans(vectors: np.ndarray, k: int, *, seed: int, iterations: int = 30) -> np.ndarray:
@@ -23,15 +25,26 @@ def kmeans(vectors: np.ndarray, k: int, *, seed: int, iterations: int = 30) -> n
     k : int
         Number of centres, >= 1.
     seed : int
+        Seed (>= 0) of the k-means++ start, the only random step.
     iterations : int, default 30
+        Most Lloyd iterations, >= 0; 0 returns the k-means++ start.
 
     Returns
     -------
     (k, D) float32 ndarray
+
+    Raises
+    ------
+    ParameterError
+        Naming the parameter: a bad setting, fewer vectors than ``k``, or ``vectors`` not
+        a finite 2-D real array.
     """
-    vectors = np.ascontiguousarray(vectors, dtype=np.float32)
-    if vectors.ndim != 2 or vectors.shape[0] < k or k < 1:
-        raise ValueError(f"vectors: got shape {vectors.shape}, expected (N, D) with N >= k = {k}")
+    k = check_int("k", k, 1)
+    seed = check_int("seed", seed, 0)
+    iterations = check_int("iterations", iterations, 0)
+    vectors = as_float32_matrix(vectors, "vectors", "(N, D)")
+    if vectors.shape[0] < k:
+        raise ParameterError(f"vectors: got shape {vectors.shape}, expected (N, D) with N >= k = {k}")
     rng = np.random.default_rng(seed)
     data = vectors.astype(np.float64)
     centres = np.empty((k, data.shape[1]))

@@ -181,7 +181,7 @@ def load_store(path: Path) -> WordStore:
             meta = json.loads(str(data["meta"]))
             arrays = {k: data[k] for k in ("rows", "cols", "words", "cell_start")}
     except FileNotFoundError:
-        raise CuriosityError(f"{display_path(path)}: not found; run `curiosity extract` to make it") from None
+        raise CuriosityError(f"{display_path(path)}: not found; {RERUN} makes it", rerun="extract", force=False) from None
     if meta.get("format") != STORE_FORMAT:
         raise CuriosityError(
             f"{display_path(path)}: format: got {meta.get('format')!r}, expected {STORE_FORMAT}; "

@@ -21,7 +21,7 @@ import numpy as np
 
 from curiosity_cli.checks import check_int
 from curiosity_cli.config import MAX_VOCABULARY
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 
 #: scikit-image's bundled photographs used for the vocabularies; the maps use none of them.
@@ -84,7 +84,8 @@ def load_vocabulary(directory: Path, kind: str, size: int) -> Vocabulary:
     where = display_path(path)
     if not path.is_file():
         raise CuriosityError(
-            f"{where}: vocabulary not found; build it with `curiosity vocab build --{kind}-words {size}`"
+            f"{where}: vocabulary not found; {RERUN} builds the {kind} vocabulary of {size} words",
+            rerun="vocab build", force=False,
         )
     try:
         with np.load(path, allow_pickle=False) as data:

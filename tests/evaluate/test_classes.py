@@ -18,16 +18,10 @@ from curiosity_cli.evaluate.information import (
     matched_recall,
     mean_recall,
 )
-from curiosity_cli.evaluate.label_stage import (
-    CLASS_SHARE_PERCENT,
-    NOT_LABELLED,
-    label_changes,
-    label_recipe,
-    write_labels,
-)
+from curiosity_cli.evaluate.label_stage import NOT_LABELLED, label_changes, write_labels
 from curiosity_cli.evaluate.tables import run_rows
-from curiosity_cli.layout import ExperimentFolder
-from curiosity_cli.recipes import Recipe
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT, Recipe, label_recipe
 
 
 def test_cell_class_pixels_counts_each_cell_with_partial_border_cells_of_their_own():

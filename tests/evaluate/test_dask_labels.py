@@ -16,8 +16,8 @@ from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
 from curiosity_cli.evaluate.label_stage import LabelError, label_experiment
-from curiosity_cli.layout import ExperimentFolder
-from curiosity_cli.parallel import dask_client
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.experiment.workers import dask_client
 
 runner = CliRunner()
 

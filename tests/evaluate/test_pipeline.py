@@ -14,10 +14,10 @@ from typer.testing import CliRunner
 from curiosity_cli.cli import app
 from curiosity_cli.evaluate.label_stage import LabelError, label_experiment
 from curiosity_cli.evaluate.tables import EvaluationError, evaluate_experiment
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.experiment.recipes import Recipe
 from curiosity_cli.explore.grid import run_grid
 from curiosity_cli.explore.runs import read_run
-from curiosity_cli.layout import ExperimentFolder
-from curiosity_cli.recipes import Recipe
 from curiosity_cli.words.store import load_store
 
 runner = CliRunner()
@@ -132,7 +132,7 @@ def test_a_corrupt_label_file_is_reported_and_left_out(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     ExperimentFolder(folder).label_file("own", "word-perplexity", 0).write_bytes(b"garbage")
-    evaluation = evaluate_experiment(folder)
+    evaluation = evaluate_experiment(folder, partial=True)
     assert len(evaluation.skipped) == 1 and "word-perplexity/restart-000.npz: corrupt" in evaluation.skipped[0]
     assert len(evaluation.mi) == 14
     assert json.loads((folder / "skipped.json").read_text()) == evaluation.skipped
@@ -148,7 +148,7 @@ def test_a_label_file_with_a_table_short_of_its_lengths_is_reported_and_left_out
     arrays[table] = arrays[table][:1]  # 1 table, 2 checkpoint lengths
     with open(path, "wb") as handle:
         np.savez_compressed(handle, **arrays)
-    evaluation = evaluate_experiment(folder)
+    evaluation = evaluate_experiment(folder, partial=True)
     assert len(evaluation.skipped) == 1 and "word-perplexity/restart-000.npz: corrupt or truncated" in evaluation.skipped[0]
     assert f"{table} has shape (1, 8, 8), expected one table for each of 2 lengths" in evaluation.skipped[0]
     assert len(evaluation.mi) == 14
@@ -168,8 +168,8 @@ def test_labels_of_a_run_made_again_from_other_words_are_refused_naming_what_cha
     meta["store"] = other
     meta["recipe"] = Recipe({**meta["recipe"]["inputs"], "store": other}).record()
     meta_path.write_text(json.dumps(meta))
-    with pytest.raises(EvaluationError, match=r"1 label files or runs were made otherwise .*random-walk/restart-000.npz: "
-                                              r"its run changed\); run `curiosity label`"):
+    with pytest.raises(EvaluationError, match=f"1 label files or runs were made otherwise .*restart-000/run.json: store was "
+                                              f"'{other}', now '{real}'\\); label makes the label files again"):
         evaluate_experiment(folder)
     with pytest.raises(LabelError, match=f"1 runs were made otherwise .*restart-000/run.json: store was '{other}', "
                                          f"now '{real}'\\); restore the config, or run explore with force=True to redo the runs"):
@@ -209,9 +209,9 @@ def test_the_headline_is_the_ratio_to_the_next_best_with_its_paired_p():
 
 def test_nothing_to_label_or_evaluate_says_which_command_comes_first(own_map, tmp_path):
     config = grid_config(own_map)
-    with pytest.raises(LabelError, match="grid/runs: no finished runs; run `curiosity explore` first"):
+    with pytest.raises(LabelError, match="grid/runs: no finished runs; explore makes them"):
         label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
-    with pytest.raises(EvaluationError, match="grid/labels: no label files; run `curiosity label` first"):
+    with pytest.raises(EvaluationError, match="grid/labels: no label files; label makes them"):
         evaluate_experiment(tmp_path / "grid")
 
 
@@ -220,7 +220,7 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
     common = ["--jobs", "1", "--cache-dir", str(tmp_path / "cache")]
     folder = tmp_path / "results" / "grid"
     result = runner.invoke(app, ["label", str(folder)])
-    assert result.exit_code == 1 and "grid/config.yaml: not found; run `curiosity explore`" in result.stderr
+    assert result.exit_code == 1 and "grid/config.yaml: not found; `curiosity explore` makes the experiment" in result.stderr
 
     sets = ["--set", "label.sweeps=2", "--set", "label.batch_sweeps=5"]
     result = runner.invoke(app, ["reproduce", str(config), *sets, *common, "--results-dir", str(tmp_path / "results")])
@@ -306,7 +306,7 @@ def test_a_failure_while_writing_the_tables_leaves_the_old_set_whole(own_map, tm
     config, folder = small_experiment(own_map, tmp_path)
     label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
     evaluate_experiment(folder)
-    tables = sorted(folder.glob("*.csv")) + [folder / "mi.parquet", folder / "skipped.json"]
+    tables = sorted(folder.glob("*.csv")) + [folder / "mi.parquet", folder / "skipped.json", folder / "tables.json"]
     before = {path: path.read_bytes() for path in tables}
     ExperimentFolder(folder).label_file("own", "random-walk", 1).unlink()  # the new tables would differ
 
@@ -315,6 +315,6 @@ def test_a_failure_while_writing_the_tables_leaves_the_old_set_whole(own_map, tm
 
     monkeypatch.setattr(pd.DataFrame, "to_parquet", full_disk)
     with pytest.raises(OSError):
-        evaluate_experiment(folder)
+        evaluate_experiment(folder, partial=True)
     assert {path: path.read_bytes() for path in tables} == before
     assert not [p for p in folder.iterdir() if ".tmp" in p.name]

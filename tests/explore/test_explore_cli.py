@@ -6,8 +6,8 @@ from small_maps import grid_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
+from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.explore.runs import read_run
-from curiosity_cli.layout import ExperimentFolder
 
 runner = CliRunner()
 

@@ -19,10 +19,10 @@ from small_maps import grid_config, grid_yaml
 
 from curiosity_cli.config import load_config
 from curiosity_cli.errors import ConfigError
+from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.explore import weights
 from curiosity_cli.explore.grid import GridError, run_grid, start_cells
 from curiosity_cli.explore.runs import RunError, read_run, remove_partial_runs
-from curiosity_cli.layout import ExperimentFolder
 
 
 def folder_contents(root: Path) -> dict:
@@ -146,7 +146,7 @@ def test_corrupt_and_partial_run_folders_are_reported_or_removed(own_map, tmp_pa
     run_grid(grid_config(own_map, restarts=1), results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
     folder = ExperimentFolder(tmp_path / "grid").run("own", "random-walk", 0)
     (folder / "checkpoints.npz").write_bytes(b"not a zip file")
-    with pytest.raises(RunError, match=r"restart-000/checkpoints.npz: corrupt or truncated \(not a .npz archive\); run `curiosity explore`"):
+    with pytest.raises(RunError, match=r"restart-000/checkpoints.npz: corrupt or truncated \(not a .npz archive\); explore redoes the run"):
         read_run(folder)
     (folder / "run.json").write_text("{")
     with pytest.raises(RunError, match=r"restart-000/run.json: corrupt"):

@@ -15,6 +15,7 @@ import pandas as pd
 
 from curiosity_cli.config import CONFIG_DIR, load_config, to_yaml
 from curiosity_cli.data import load_map
+from curiosity_cli.experiment.experiment import Experiment
 
 WEIGHTS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity")
 # plateau (bits) and speed (steps) of each weight function's MI curve
@@ -69,7 +70,7 @@ def make_experiment(
     sweeps: int = 60,
     seed: int = 0,
 ) -> Path:
-    """Write ``root/synthetic/`` as `curiosity explore`, `label` and `evaluate` would; returns it.
+    """Write ``root/synthetic/`` as `curiosity explore`, `label` and `evaluate` would, sealed (:func:`seal`); returns it.
 
     Parameters
     ----------
@@ -132,4 +133,12 @@ def make_experiment(
             summary.append(dict(dataset=dataset, weight_function=weight, path_length=length, against=against,
                                 n=n, mean=mean, std=std, ci_low=mean - half, ci_high=mean + half))
     pd.DataFrame(summary).to_csv(folder / "summary.csv", index=False)
+    seal(folder)
     return folder
+
+
+def seal(folder: Path) -> None:
+    """Record the tables as one set made from the folder's files as they are now (``tables.json``), as evaluate does."""
+    experiment = Experiment.open(folder)
+    tables = {name: folder / name for name in ("mi.csv", "summary.csv") if (folder / name).is_file()}
+    (folder / "tables.json").write_text(experiment.record_tables(tables, experiment.inputs()))

@@ -10,9 +10,10 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-from synthetic_experiment import make_experiment
+from synthetic_experiment import make_experiment, seal
 
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import ConfigError, CuriosityError
+from curiosity_cli.experiment.experiment import StaleTablesError
 from curiosity_cli.plots.experiment_inputs import PlotError
 from curiosity_cli.plots.figures import mi_figure, weight_style, write_figures
 
@@ -69,9 +70,12 @@ def test_a_map_without_human_labels_gets_no_human_panel(tmp_path, bare_map):
     assert written.skipped == ["mi-vs-length-human: summary.csv has no MI against human labels (no map has them)"]
 
 
-def test_missing_labelings_and_config_skip_their_figures_only(experiment):
+def test_missing_labelings_skip_their_figures_only(experiment):
     shutil.rmtree(experiment / "batch")
     shutil.rmtree(experiment / "labels" / "bare")
+    with pytest.raises(StaleTablesError, match=r"mi.csv: made from other files than the experiment holds now \(\S*batch/bare.npz is gone\)"):
+        write_figures(experiment)
+    seal(experiment)  # as an evaluate after the files went would
     written = write_figures(experiment)
     assert names(written) == [
         f"{stem}{suffix}"
@@ -79,17 +83,14 @@ def test_missing_labelings_and_config_skip_their_figures_only(experiment):
         for suffix in (".png", ".pdf")
     ]
     skipped = "\n".join(written.skipped)
-    assert "batch/own.npz: not found (run `curiosity label` first)" in skipped
+    assert "batch/own.npz: not found (label the experiment first)" in skipped
     assert "path-bare: no example path labelling under labels/bare/examples/" in skipped
     assert "labelings-bare: neither a batch nor a path labelling to draw" in skipped
     assert "batch-convergence: no batch log-likelihood trace" in skipped
 
     (experiment / "config.yaml").unlink()
-    written = write_figures(experiment)
-    assert names(written) == [
-        f"{stem}{suffix}" for stem in ("mi-vs-length-human", "mi-vs-length-batch", "mi-vs-distinct") for suffix in (".png", ".pdf")
-    ]
-    assert any("config.yaml: not found, so no map figures" in note for note in written.skipped)
+    with pytest.raises(ConfigError, match=r"config.yaml: not found; explore makes the experiment"):
+        write_figures(experiment)
 
 
 def test_corrupt_or_misshapen_inputs_are_named_and_skipped(experiment):
@@ -101,6 +102,9 @@ def test_corrupt_or_misshapen_inputs_are_named_and_skipped(experiment):
     summary["mean"] = summary["mean"].astype(object)
     summary.loc[0, "mean"] = "oops"  # a stray text cell: that point is left out
     summary.to_csv(experiment / "summary.csv", index=False)
+    with pytest.raises(StaleTablesError, match=r"summary.csv: not the table evaluate wrote with the others"):
+        write_figures(experiment)
+    seal(experiment)  # as if the tables and files were written so
     written = write_figures(experiment)
     skipped = written.skipped
     assert sum("batch/own.npz: corrupt" in note for note in skipped) == 1
@@ -141,19 +145,22 @@ def test_the_lawnmower_has_its_own_marker_and_ceilings_are_dashed_lines_after_th
 
 
 def test_missing_folder_or_mi_table_is_a_plot_error(tmp_path, experiment):
-    with pytest.raises(PlotError, match=r"no such experiment folder; run `curiosity explore` first"):
+    with pytest.raises(PlotError, match=r"no such experiment folder; explore makes it"):
         write_figures(tmp_path / "nowhere")
     (experiment / "summary.csv").unlink()
+    with pytest.raises(StaleTablesError, match=r"summary.csv: not the table evaluate wrote with the others \(missing\)"):
+        write_figures(experiment)
+    seal(experiment)
     written = write_figures(experiment)
     assert not any(p.name.startswith("mi-vs-length") for p in written)
-    assert any("summary.csv: not found; run `curiosity evaluate` first" in note for note in written.skipped)
+    assert any("summary.csv: not found; evaluate makes it" in note for note in written.skipped)
 
     mi = pd.read_csv(experiment / "mi.csv")
     mi.drop(columns="mi_batch").to_csv(experiment / "mi.csv", index=False)
     with pytest.raises(PlotError, match=r"mi.csv: no column 'mi_batch'"):
         write_figures(experiment)
     (experiment / "mi.csv").unlink()
-    with pytest.raises(CuriosityError, match=r"mi.csv: not found; run `curiosity evaluate` first"):
+    with pytest.raises(CuriosityError, match=r"mi.csv: not found; evaluate makes it"):
         write_figures(experiment)
 
 

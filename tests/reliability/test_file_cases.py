@@ -38,6 +38,9 @@ from curiosity_cli.files import atomic_path, display_path, os_error_message
 RUN = f"{EXPERIMENT}/runs/own/random-walk/restart-000"
 LABEL_FILE = f"{EXPERIMENT}/labels/own/random-walk/restart-000.npz"
 BATCH = f"{EXPERIMENT}/batch/own.npz"
+#: Evaluating what has usable labels: without --partial, a run left out is an error
+#: (test_a_run_left_out_is_an_error_unless_partial).
+PARTIAL = ["evaluate", EXPERIMENT, "--partial"]
 
 
 def _truncate(path: Path) -> None:
@@ -139,7 +142,7 @@ ERRORS = [
     ErrorCase("name-too-long", [*EXPLORE, "--results-dir", "x" * 300], ("x" * 300, "File name too long")),
     # corrupt pieces that cannot be made here
     ErrorCase(
-        "run-json-is-a-list-at-label", LABEL, (f"{RUN}/run.json", "a JSON list", "curiosity explore"),
+        "run-json-is-a-list-at-label", LABEL, (f"{RUN}/run.json", "a JSON list", "explore redoes the run"),
         lambda work: _edit_run_json(work, lambda meta: [meta]),
     ),
     ErrorCase(
@@ -229,15 +232,15 @@ REDOS = [
         lambda work: _truncate(work / LABEL_FILE), lambda work: _loads(work / LABEL_FILE), ("labelled 1 runs",),
     ),
     RedoCase(
-        "zero-byte-label-file-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 1", LABEL_FILE, "corrupt", "curiosity label"),
+        "zero-byte-label-file-at-evaluate", PARTIAL, ("skipped 1", LABEL_FILE, "corrupt", "label the experiment again"),
         lambda work: (work / LABEL_FILE).write_bytes(b""), lambda work: _skipped(work, LABEL_FILE),
     ),
     RedoCase(
-        "truncated-label-file-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 1", LABEL_FILE, "corrupt"),
+        "truncated-label-file-at-evaluate", PARTIAL, ("skipped 1", LABEL_FILE, "corrupt"),
         lambda work: _truncate(work / LABEL_FILE), lambda work: _skipped(work, LABEL_FILE), ("(14 rows)",),
     ),
     RedoCase(
-        "deleted-label-file-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 1", LABEL_FILE, "not found"),
+        "deleted-label-file-at-evaluate", PARTIAL, ("skipped 1", LABEL_FILE, "not found"),
         lambda work: (work / LABEL_FILE).unlink(), lambda work: _skipped(work, LABEL_FILE), ("(14 rows)",),
     ),
     RedoCase(
@@ -246,18 +249,18 @@ REDOS = [
         ("labelled 1 runs",),
     ),
     RedoCase(
-        "label-file-meta-a-list-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 1", LABEL_FILE, "not a JSON object"),
+        "label-file-meta-a-list-at-evaluate", PARTIAL, ("skipped 1", LABEL_FILE, "not a JSON object"),
         lambda work: _replace_meta(work / LABEL_FILE, [1, 2]), lambda work: _skipped(work, LABEL_FILE), ("(14 rows)",),
     ),
     RedoCase(
         # restart 0's file copied over restart 1's: it must not count restart 0 twice and restart 1 never
-        "label-file-copied-over-another-at-evaluate", ["evaluate", EXPERIMENT],
+        "label-file-copied-over-another-at-evaluate", PARTIAL,
         ("skipped 1", LABEL_FILE.replace("000", "001"), "holds the labels of own / random-walk / restart 0"),
         lambda work: shutil.copy(work / LABEL_FILE, work / LABEL_FILE.replace("000", "001")),
         lambda work: _skipped(work, LABEL_FILE.replace("000", "001")), ("(14 rows)",),
     ),
     RedoCase(
-        "many-deleted-label-files-at-evaluate", ["evaluate", EXPERIMENT], ("skipped 5", "; and 2 more"),
+        "many-deleted-label-files-at-evaluate", PARTIAL, ("skipped 5", "; and 2 more"),
         lambda work: [f.unlink() for f in sorted((work / EXPERIMENT / "labels").glob("*/*/restart-*.npz"))[:5]],
         lambda work: _skipped(work, LABEL_FILE), ("(6 rows)",),
     ),
@@ -299,6 +302,16 @@ def test_a_broken_piece_is_redone_or_left_out_in_one_line(work: Path, case: Redo
     assert_written_only_inside(before, files_under(work), work / "results")
 
 
+@pytest.mark.parametrize("case", [case for case in REDOS if case.args == PARTIAL], ids=lambda case: case.id)
+def test_a_run_left_out_is_an_error_unless_partial(work: Path, case: RedoCase):
+    case.breaks(work)
+    tables = (work / EXPERIMENT / "mi.csv").read_text()
+    named = [said for said in case.says if said.endswith(".npz")]  # the file at fault, where the case names one
+    line = assert_clean_error(run_cli(["evaluate", EXPERIMENT], cwd=work), "have no usable labels", *named)
+    assert "run `curiosity label` to make them, or `curiosity evaluate --partial` to leave them out" in line
+    assert (work / EXPERIMENT / "mi.csv").read_text() == tables  # the old set stays
+
+
 @pytest.mark.parametrize("args", [["extract", "DATASET"], EXPLORE], ids=["extract", "explore"])
 def test_a_truncated_word_store_is_extracted_again(work: Path, args: list[str]):
     (store,) = (work / "results" / "cache").glob("own-*.npz")
@@ -314,7 +327,7 @@ def test_a_truncated_word_store_is_extracted_again(work: Path, args: list[str]):
 def test_the_report_says_how_many_runs_a_mean_is_over(work: Path):
     (work / LABEL_FILE).unlink()
     folder = work / EXPERIMENT
-    evaluation = evaluate_experiment(folder)
+    evaluation = evaluate_experiment(folder, partial=True)
     config = load_config(folder / "config.yaml")
     report = write_report(folder, config, evaluation, [], [], {"total": 1.0}, {}).read_text()
     left_out = report.split("## Left out", 1)[1].split("##", 1)[0]

@@ -15,7 +15,7 @@ from pathlib import Path
 import yaml
 from cli_cases import EXPERIMENT, EXPLORE, FAST_LABELS, assert_clean_error, run_cli
 
-from curiosity_cli.layout import ExperimentFolder
+from curiosity_cli.experiment.layout import ExperimentFolder
 
 CONFIG = f"{EXPERIMENT}/config.yaml"
 
@@ -95,7 +95,7 @@ def test_force_redoes_runs_made_otherwise_and_labels_follow(work):
     assert yaml.safe_load((folder / "config.yaml").read_text())["seed"] == 5
     # the labels were made from the old runs: evaluate refuses them, label makes them again
     assert_clean_error(run_cli(["evaluate", EXPERIMENT], cwd=work), "label files or runs were made otherwise",
-                       "its run changed", "run `curiosity label`")
+                       "batch/own.npz: seed was 0, now 5", "`curiosity label` makes the label files again")
     relabel = run_cli(["label", EXPERIMENT, *FAST_LABELS], cwd=work)
     assert relabel.code == 0 and "labelling 8 runs again" in relabel.stderr, relabel.output
     assert run_cli(["evaluate", EXPERIMENT], cwd=work).code == 0
@@ -104,5 +104,5 @@ def test_force_redoes_runs_made_otherwise_and_labels_follow(work):
 def test_evaluate_refuses_labels_made_with_other_label_settings_than_the_config_says(work):
     _edit_config(work, "label", "sweeps", 3)
     assert_clean_error(
-        run_cli(["evaluate", EXPERIMENT], cwd=work), "restart-000.npz: label.sweeps was 2, now 3", "run `curiosity label`",
+        run_cli(["evaluate", EXPERIMENT], cwd=work), "restart-000.npz: label.sweeps was 2, now 3", "`curiosity label` makes the label files again",
     )

@@ -13,6 +13,8 @@ from naive import recount
 from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics import TopicModel, stream_neighbours, take_snapshot
+from curiosity_cli.topics._gibbs_kernels import distance2_colouring
+from curiosity_cli.topics.batch_sweeps import batch_phases
 from curiosity_cli.topics.neighbours import check_neighbours
 
 
@@ -281,7 +283,7 @@ def test_same_seed_same_state_on_any_thread_count_and_different_seed_differs():
 @pytest.mark.parametrize("spatial", [0, 4])
 def test_batch_phases_cover_the_cells_once_in_sixteenths_of_independent_cells(spatial):
     model = build(3, rows=9, cols=11, spatial=spatial)  # 99 cells: phases of at most 7
-    phases = model._phases()
+    phases = batch_phases(np.sort(model.observed_cells()).astype(np.int64), distance2_colouring(model.neighbours))
     cells = np.concatenate(phases)
     np.testing.assert_array_equal(np.sort(cells), np.arange(99))
     assert max(phase.size for phase in phases) <= 7

@@ -11,6 +11,7 @@ from naive import kmeanspp_seeds as naive_kmeanspp_seeds
 from naive import lower_min_distance as naive_lower_min_distance
 from naive import sample_weighted as naive_sample_weighted
 
+from curiosity_cli.errors import ParameterError
 from curiosity_cli.words import _hamming_kernels
 from curiosity_cli.words.binary_kmeans import _majority, _reseed_empty, binary_kmeans
 
@@ -173,17 +174,18 @@ def test_k_equal_to_the_number_of_distinct_rows():
 def test_too_few_distinct_descriptors_names_k(init):
     descriptors = np.zeros((10, 32), np.uint8)
     descriptors[5:] = 1
-    with pytest.raises(ValueError, match=r"^k: got 3, expected at most 2 \(the number of distinct descriptors\)$"):
+    with pytest.raises(ParameterError, match=r"^k: got 3, expected at most 2 \(the number of distinct descriptors\)$"):
         binary_kmeans(descriptors, 3, seed=0, init=init)
 
 
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"k": 0}, r"^k: got 0, expected an integer >= 1$"),
+        ({"k": 0}, r"^k: got 0, expected an integer between 1 and 2147483647$"),
+        ({"k": 2**31}, r"^k: got 2147483648, expected an integer between 1 and 2147483647$"),
         ({"k": 11}, r"^k: got 11, expected at most 10 \(the number of descriptors\)$"),
         ({"seed": -1}, r"^seed: got -1, expected an integer >= 0$"),
-        ({"seed": 1.5}, r"^seed: got 1\.5"),
+        ({"seed": 1.5}, r"^seed: got 1\.5, expected an integer >= 0$"),
         ({"iterations": -1}, r"^iterations: got -1, expected an integer >= 0$"),
         ({"init": "kmeans"}, r"^init: got 'kmeans', expected one of 'k-means\+\+', 'random'$"),
         ({"descriptors": np.zeros((10, 8), np.uint8)}, r"^descriptors: got shape \(10, 8\)"),
@@ -191,5 +193,5 @@ def test_too_few_distinct_descriptors_names_k(init):
 )
 def test_rejects_bad_settings_naming_the_parameter(kwargs, message):
     args = {"descriptors": np.arange(320, dtype=np.int64).reshape(10, 32) % 256, "k": 2, "seed": 0, **kwargs}
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(ParameterError, match=message):
         binary_kmeans(args.pop("descriptors"), args.pop("k"), **args)

@@ -133,7 +133,7 @@ def test_a_malformed_vocabulary_is_named(own_map, tmp_path, centres, message):
 
 def test_a_missing_vocabulary_says_how_to_build_it(own_map, tmp_path):
     words = load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_vocabulary=123"])
-    with pytest.raises(CuriosityError, match=r"orb-123\.npz: vocabulary not found; build it with `curiosity vocab build --orb-words 123`"):
+    with pytest.raises(CuriosityError, match=r"orb-123\.npz: vocabulary not found; vocab build builds the orb vocabulary of 123 words"):
         extract_words(load_map(own_map), words, cache_dir=tmp_path)
 
 

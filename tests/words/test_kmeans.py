@@ -3,6 +3,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from curiosity_cli.errors import ParameterError
 from curiosity_cli.words.kmeans import kmeans
 from curiosity_cli.words.textons import nearest_centres
 
@@ -35,6 +36,18 @@ def test_lloyd_lowers_inertia_below_the_seeding():
     assert inertia(vectors, kmeans(vectors, 12, seed=0)) < inertia(vectors, kmeans(vectors, 12, seed=0, iterations=0))
 
 
-def test_kmeans_refuses_fewer_vectors_than_centres():
-    with pytest.raises(ValueError, match=r"vectors: got shape \(3, 2\), expected \(N, D\) with N >= k = 5"):
-        kmeans(np.zeros((3, 2)), 5, seed=0)
+@pytest.mark.parametrize(
+    ("vectors", "kwargs", "message"),
+    [
+        (np.zeros((3, 2)), {"k": 5}, r"^vectors: got shape \(3, 2\), expected \(N, D\) with N >= k = 5$"),
+        (np.zeros(6), {}, r"^vectors: got shape \(6,\), expected a 2-D \(N, D\) array$"),
+        (np.full((6, 2), np.nan), {}, r"^vectors: got NaN or infinite values .*, expected finite numbers$"),
+        (np.zeros((6, 2)), {"k": 0}, r"^k: got 0, expected an integer >= 1$"),
+        (np.zeros((6, 2)), {"seed": -1}, r"^seed: got -1, expected an integer >= 0$"),
+        (np.zeros((6, 2)), {"iterations": 2.5}, r"^iterations: got 2\.5, expected an integer >= 0$"),
+    ],
+)
+def test_kmeans_rejects_bad_arguments_naming_the_parameter(vectors, kwargs, message):
+    args = {"k": 2, "seed": 0, **kwargs}
+    with pytest.raises(ParameterError, match=message):
+        kmeans(vectors, args.pop("k"), **args)

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from naive import nearest_centres_naive
 
+from curiosity_cli.errors import ParameterError
 from curiosity_cli.words._texton_kernels import nearest_centres_kernel
 from curiosity_cli.words.filterbank import mr8_responses, normalise_responses
 from curiosity_cli.words.textons import nearest_centres, texton_words
@@ -153,13 +154,13 @@ def test_inputs_of_any_real_dtype_and_layout_are_accepted():
         (np.zeros((4, 0)), np.zeros((3, 0)), r"vectors: got shape \(4, 0\), expected D >= 1"),
         (np.zeros((4, 8), complex), np.zeros((3, 8)), "vectors: got dtype complex128"),
         (np.zeros((4, 8)), np.zeros((3, 8), bool), "centres: got dtype bool"),
-        (np.full((4, 8), np.nan), np.zeros((3, 8)), "vectors: contains NaN"),
-        (np.zeros((4, 8)), np.full((3, 8), np.inf), "centres: contains NaN or infinite"),
-        (np.zeros((4, 8)), np.full((3, 8), 1e300), "centres: .*too large for float32"),
+        (np.full((4, 8), np.nan), np.zeros((3, 8)), "vectors: got NaN or infinite values .*, expected finite numbers"),
+        (np.zeros((4, 8)), np.full((3, 8), np.inf), "centres: got NaN or infinite values"),
+        (np.zeros((4, 8)), np.full((3, 8), 1e300), r"centres: got .*too large for float32\), expected finite numbers"),
     ],
 )
 def test_bad_arguments_are_named(vectors, centres, message):
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(ParameterError, match=f"^{message}"):
         nearest_centres(vectors, centres)
 
 
@@ -186,11 +187,11 @@ def test_texton_words_samples_every_stride_th_pixel_in_row_major_order(stride):
 def test_texton_words_validates_its_arguments():
     image = np.zeros((10, 10))
     centres = np.zeros((5, 8))
-    with pytest.raises(ValueError, match="stride: got 0, expected an integer >= 1"):
+    with pytest.raises(ParameterError, match="stride: got 0, expected an integer >= 1"):
         texton_words(image, centres, 0)
-    with pytest.raises(ValueError, match=r"centres: got shape \(5, 7\), expected \(K, 8\)"):
+    with pytest.raises(ParameterError, match=r"centres: got shape \(5, 7\), expected \(K, 8\)"):
         texton_words(image, np.zeros((5, 7)), 1)
-    with pytest.raises(ValueError, match=r"centres: got shape \(0, 8\), expected at least one centre"):
+    with pytest.raises(ParameterError, match=r"centres: got shape \(0, 8\), expected at least one centre"):
         texton_words(image, np.zeros((0, 8)), 1)
-    with pytest.raises(ValueError, match=r"image: got shape \(10, 10, 3\).*grayscale"):
+    with pytest.raises(ParameterError, match=r"image: got shape \(10, 10, 3\).*grayscale"):
         texton_words(np.zeros((10, 10, 3)), centres, 1)

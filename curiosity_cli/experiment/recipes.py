@@ -7,17 +7,20 @@ settings its contents depend on, and their digest. A stage compares the recipe a
 recorded with the one its inputs give now; a file whose digests differ is redone or
 refused, and :meth:`Recipe.changes` says what differs in words.
 
-The recipes, each built by the module that writes the file:
+The recipes, all built here so that every stage asks the same question:
 
-- a run (``run.json``, :func:`curiosity_cli.explore.grid.run_recipe`): its map's word
-  store (named by a hash of the image's pixels, the word settings and the vocabularies),
-  weight function, restart and the experiment seed, and the model and exploration
-  settings except those that only choose which runs a grid holds;
-- a map's batch reference (:func:`curiosity_cli.evaluate.label_stage.batch_recipe`): the word
-  store, the experiment seed, the model settings and the batch sweeps;
-- a run's label file (:func:`curiosity_cli.evaluate.label_stage.label_recipe`): the digests of
-  its run and of the batch reference it is compared with, the label settings, the share
-  that makes a class found and a digest of the map's human labels.
+- a run (``run.json``, :func:`run_recipe`): its map's word store (named by a hash of the
+  image's pixels, the word settings and the vocabularies), weight function, restart and
+  the experiment seed, and the model and exploration settings except those that only
+  choose which runs a grid holds;
+- a map's batch reference (:func:`batch_recipe`): the word store, the experiment seed,
+  the model settings and the batch sweeps;
+- a run's label file (:func:`label_recipe`): the digests of its run and of the batch
+  reference it is compared with, the label settings, the share that makes a class found
+  and a digest of the map's human labels.
+
+A recipe says what a file was made from; :mod:`~curiosity_cli.experiment.wholeness` says
+whether the files are still the ones that were written.
 """
 
 from __future__ import annotations
@@ -27,8 +30,21 @@ import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
+from curiosity_cli.config import ExperimentConfig, to_dict
+
 #: Where a file's meta (``run.json``, an ``.npz``'s ``meta``) holds its recipe.
 RECIPE_KEY = "recipe"
+#: The config keys that choose which runs a grid holds, not what a run computes.
+SELECTION_KEYS = {("explore", "weight_functions"), ("explore", "restarts")}
+#: Label files: 2 since the chains of a map's runs advance in lock-step (their draws changed).
+LABEL_FORMAT = 2
+#: Batch references, whose draws did not change with the label files'.
+BATCH_FORMAT = 1
+#: A human class counts as found in a visited cell when it covers at least this share
+#: (percent) of the cell's pixels: enough to be seen, not a sliver at the cell's edge.
+CLASS_SHARE_PERCENT = 10
+#: How the second labelling chain of a checked run (``label.check_restarts``) starts.
+SECOND_START = "placed"
 #: Inputs whose values are other files' digests, named in words when they differ.
 _DIGEST_INPUTS = {"run": "its run", "batch": "the batch reference", "human": "the map's human labels"}
 
@@ -110,3 +126,51 @@ def _in_words(keys: tuple, old, new) -> str:
     if name in _DIGEST_INPUTS:
         return f"{_DIGEST_INPUTS[name]} changed"
     return f"{name} was {old!r}, now {new!r}"
+
+
+def run_recipe(
+    config: ExperimentConfig, dataset: str, store: str, vocabulary_hashes: list[str], weight_function: str, restart: int,
+) -> Recipe:
+    """What one run's numbers depend on.
+
+    ``store`` is the file name of the map's word store, which hashes the image's pixels,
+    the word settings and the vocabularies. The start cell and the seed entropy follow
+    from the map, the experiment seed and the restart.
+    """
+    explore = {
+        key: value for key, value in config.explore.run_settings().items() if ("explore", key) not in SELECTION_KEYS
+    }
+    return Recipe({
+        "store": store, "vocabulary_hashes": vocabulary_hashes, "dataset": dataset,
+        "weight_function": weight_function, "restart": restart, "seed": config.seed,
+        "model": to_dict(config.model), "explore": explore,
+    })
+
+
+def batch_recipe(config: ExperimentConfig, store: str, vocabulary_hashes: list[str]) -> Recipe:
+    """What a map's batch reference depends on: its word store (file name), vocabularies and the model."""
+    return Recipe({
+        "format": BATCH_FORMAT, "store": store, "vocabulary_hashes": vocabulary_hashes,
+        "seed": config.seed, "sweeps": config.label.batch_sweeps, "model": to_dict(config.model),
+    })
+
+
+def label_recipe(run: str, batch: str, config: ExperimentConfig, human: str | None, restart: int) -> Recipe:
+    """What a run's label file depends on: the digests of its ``run`` and ``batch`` reference, and of the ``human`` labels.
+
+    ``label.check_restarts`` enters only as whether this ``restart`` is checked (a
+    second chain), so changing it relabels only the runs it adds or drops.
+    """
+    label = {key: value for key, value in to_dict(config.label).items() if key != "check_restarts"}
+    inputs = {
+        "format": LABEL_FORMAT, "run": run, "batch": batch, "label": label,
+        "class_share_percent": CLASS_SHARE_PERCENT, "human": human,
+    }
+    if is_checked(config, restart):
+        inputs["second_start"] = SECOND_START
+    return Recipe(inputs)
+
+
+def is_checked(config: ExperimentConfig, restart: int) -> bool:
+    """Whether a run of this ``restart`` is labelled a second time, from a placed start (``label.check_restarts``)."""
+    return restart < config.label.check_restarts

@@ -10,29 +10,20 @@ are the models)::
         batch/<map>.npz                                           (label, Z_b)
         labels/<map>/<walker>/restart-NNN.npz                     (label, Z_p tables)
         labels/<map>/examples/<walker>-restart-NNN-<length>.npz   (label, Z_p maps)
-        <table>.csv  mi.parquet  skipped.json                     (evaluate)
+        <table>.csv  mi.parquet  skipped.json  tables.json        (evaluate)
         figures/  REPORT.md                                       (plot, reproduce)
 
-:func:`experiment_root` says where an experiment of a name lives under a results folder,
-and the default places of experiment folders and of the word-store cache are
-:data:`DEFAULT_RESULTS` and :data:`DEFAULT_CACHE`.
+Where an experiment of a name lives by default is :mod:`curiosity_cli.paths`' business.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
-#: Where experiment folders go unless ``--results-dir`` says otherwise.
-DEFAULT_RESULTS = Path("results")
-#: Where word stores are cached unless ``--cache-dir`` says otherwise.
-DEFAULT_CACHE = DEFAULT_RESULTS / "cache"
-
-
-def experiment_root(results_dir: Path, name: str) -> Path:
-    """Where the experiment ``name`` lives: ``results_dir/<name>``."""
-    return Path(results_dir) / name
-
+#: A run folder's name: ``restart-NNN`` (a killed writer's ``.restart-NNN.tmp-*`` is not one).
+_RUN_NAME = re.compile(r"restart-\d+")
 
 @dataclass(frozen=True)
 class ExperimentFolder:
@@ -85,6 +76,11 @@ class ExperimentFolder:
     def skipped(self) -> Path:
         return self.root / "skipped.json"
 
+    @property
+    def tables_record(self) -> Path:
+        """``tables.json``: what ``evaluate``'s tables are and were made from (:class:`~curiosity_cli.experiment.experiment.Experiment`)."""
+        return self.root / "tables.json"
+
     def table(self, name: str, suffix: str = ".csv") -> Path:
         """An evaluation table, e.g. ``table("mi")`` or ``table("mi", ".parquet")``."""
         return self.root / f"{name}{suffix}"
@@ -93,9 +89,15 @@ class ExperimentFolder:
         """A run's folder."""
         return self.runs / dataset / weight_function / f"restart-{restart:03d}"
 
+    @staticmethod
+    def run_of(folder: Path) -> tuple[str, str, int]:
+        """``(dataset, weight function, restart)`` of the run folder :meth:`run` names ``folder``."""
+        folder = Path(folder)
+        return folder.parent.parent.name, folder.parent.name, int(folder.name.removeprefix("restart-"))
+
     def run_folders(self) -> list[Path]:
         """Every run folder under its real name (finished or not), sorted."""
-        return sorted(self.runs.glob("*/*/restart-*"))
+        return sorted(p for p in self.runs.glob("*/*/restart-*") if _RUN_NAME.fullmatch(p.name))
 
     @property
     def batches(self) -> Path:
@@ -108,6 +110,11 @@ class ExperimentFolder:
     def label_file(self, dataset: str, weight_function: str, restart: int) -> Path:
         """A run's label file (Z_p's contingency tables)."""
         return self.labels / dataset / weight_function / f"restart-{restart:03d}.npz"
+
+    @classmethod
+    def holding_label_file(cls, path: Path) -> ExperimentFolder:
+        """The experiment folder a run's label file (:meth:`label_file`) lies in."""
+        return cls(Path(path).parents[3])
 
     def label_files(self) -> list[Path]:
         """Every run's label file there is, sorted."""

@@ -155,6 +155,15 @@ class Workers:
         self._dask = None  # (client, threads per task) once reached
         self._files = {}  # shipped files' futures, by (path, loader)
 
+    @classmethod
+    def shared(
+        cls, workers: Workers | None, backend: str = "loky", scheduler: str | None = None, jobs: int | None = None,
+    ) -> contextlib.AbstractContextManager[Workers]:
+        """What a stage computes on: ``workers`` another stage shares (left open when the stage
+        ends), else new ones from ``backend``, ``scheduler`` and ``jobs``, checked now, before
+        any work, and stopped when the stage ends (a local cluster with them)."""
+        return contextlib.nullcontext(workers) if workers is not None else cls(backend, scheduler, jobs)
+
     def __enter__(self) -> Workers:
         return self
 
