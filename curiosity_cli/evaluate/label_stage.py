@@ -650,7 +650,6 @@ def _batch_references(
     map's sweeps counted when it arrives; a map whose reference failed is left out of the
     files and named in the problems.
     """
-    from curiosity_cli.data import load_map
     from curiosity_cli.words.store import load_store
 
     sweeps = config.label.batch_sweeps
@@ -665,20 +664,20 @@ def _batch_references(
             on_done()
 
     if not workers.ships:
-        for entry, info in stale.items():
+        for info in stale.values():
             if on_stage is not None:
                 on_stage(f"batch reference {info.name}", sweeps)
-            image_shape = load_map(entry).image.shape[:2]
-            computed = _compute_batch(info, config, load_store(info.path), image_shape, threads=workers.jobs, on_sweep=swept)
+            computed = _compute_batch(
+                info, config, load_store(info.path), info.facts.shape, threads=workers.jobs, on_sweep=swept
+            )
             _write_batch(files[info.name], recipes[info.name], *computed)
     elif stale:
         threads = workers.whole_machine_threads(len(stale))  # reaches a scheduler first: no stage for an unusable one
-        shapes = {info.name: load_map(entry).image.shape[:2] for entry, info in stale.items()}
         if on_stage is not None:
             on_stage(f"batch references of {', '.join(info.name for info in stale.values())}", len(stale) * sweeps)
         computed = workers.compute(
             _compute_batch, list(stale.values()),
-            args=lambda info: (config, workers.ship_file(info.path, load_store), shapes[info.name]),
+            args=lambda info: (config, workers.ship_file(info.path, load_store), info.facts.shape),
             key=lambda info: f"batch-{info.name}", threads=threads,
         )
         with computed as results:

@@ -21,12 +21,11 @@ from curiosity_cli.evaluate.tables import (
     headline,
     paired_effects,
     paired_tests,
-    paper_maps_of,
-    read_maps,
     summarise,
     summarise_revisits,
     with_power,
 )
+from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import display_path
 
@@ -90,5 +89,6 @@ def pool(folders: Sequence[Path]) -> Pooled:
         raise EvaluationError(f"seeds {seeds}: two experiments of the same seed cannot be pooled as replicates")
     mi = pd.concat(tables, ignore_index=True)
     tests = paired_tests(mi)
-    top = with_power(headline(summarise(mi), tests, paper_maps_of(read_maps(folders[0])), paired_effects(mi, tests)), mi)
+    paper_maps = Experiment.open(folders[0]).paper_maps()
+    top = with_power(headline(summarise(mi), tests, paper_maps, paired_effects(mi, tests)), mi)
     return Pooled(top, summarise_revisits(mi), tuple(sorted(seeds)))

@@ -306,34 +306,29 @@ def _batch_change(path: Path, recipe) -> str | None:
     return None if change is None else f"{display_path(path)}: {change}"
 
 
-def _planned_label_files(experiment: Experiment) -> list[Path] | None:
-    """The label file of each run of the grid; None for a folder from before the grid recorded its runs."""
-    planned = experiment.planned()
-    if planned is None:
-        return None
-    return [experiment.folder.label_file(r.dataset, r.weight_function, r.restart) for r in planned]
+def _planned_label_files(experiment: Experiment) -> list[Path]:
+    """The label file of each run of the grid."""
+    return [experiment.folder.label_file(r.dataset, r.weight_function, r.restart) for r in experiment.planned()]
 
 
-def _in_grid(layout: ExperimentFolder, files: list[Path], planned: list[Path] | None) -> tuple[list[Path], list[str]]:
+def _in_grid(layout: ExperimentFolder, files: list[Path], planned: list[Path]) -> tuple[list[Path], list[str]]:
     """``files`` of runs in the grid (``planned``: :func:`_planned_label_files`), and a line
     for those of runs outside it (a config narrowed since)."""
-    if planned is None:
-        return files, []
     keep = set(planned)
     outside = [path for path in files if path not in keep]
     if not outside:
         return files, []
     note = (
-        f"{len(outside)} label files of runs outside the grid of {display_path(layout.runs_csv)} "
+        f"{len(outside)} label files of runs outside the grid of {display_path(layout.config)} "
         f"(explore.weight_functions or explore.restarts narrowed since), e.g. {display_path(outside[0])}"
     )
     return [path for path in files if path in keep], [note]
 
 
-def _unlabelled_runs(files: list[Path], planned: list[Path] | None) -> list[str]:
+def _unlabelled_runs(files: list[Path], planned: list[Path]) -> list[str]:
     """A line for each run of the grid (``planned``) that has no label file, naming the file it lacks."""
     present = set(files)
-    return [f"{display_path(path)}: not found; label the experiment to make it" for path in planned or [] if path not in present]
+    return [f"{display_path(path)}: not found; label the experiment to make it" for path in planned if path not in present]
 
 
 def _mean_ci(grouped) -> pd.DataFrame:
@@ -648,13 +643,6 @@ def read_maps(folder: Path):
         raise EvaluationError(f"{display_path(path)}: cannot read the table of maps: {exc}") from None
 
 
-def paper_maps_of(maps) -> dict[str, str]:
-    """Dataset name to the paper's map it stands in for, from :func:`read_maps` (None: none)."""
-    if maps is None:
-        return {}
-    return {r.dataset: r.stands_in_for for r in maps.itertuples() if isinstance(r.stands_in_for, str)}
-
-
 def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
     """Compute and write every table of an experiment folder (module docstring), and
     ``tables.json``: the tables' sizes and digests and what they were made from
@@ -698,7 +686,7 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
     tests = paired_tests(mi)
     effects = paired_effects(mi, tests)
     maps = read_maps(folder)
-    top = with_power(headline(summary, tests, paper_maps_of(maps), effects), mi)
+    top = with_power(headline(summary, tests, experiment.paper_maps(), effects), mi)
     revisits = summarise_revisits(mi)
     convergence = label_convergence(mi)
     tables = {

@@ -9,7 +9,7 @@ folder, and ask it before reading anything:
   :meth:`~Experiment.label_recipe`), built from the saved config and the maps' facts as
   they are now (:mod:`~curiosity_cli.experiment.maps`), never as a file recorded
   them;
-- the grid's runs (``runs.csv``) and their label files (:meth:`~Experiment.planned`);
+- the grid's runs, from the config (:meth:`~Experiment.planned`);
 - whether the tables of ``evaluate`` are one complete set made from the files there are
   now (:meth:`~Experiment.check_tables`): ``evaluate`` records, beside the tables, the
   size and digest of each table and of every file and map fact they were made from
@@ -43,7 +43,7 @@ class StaleTablesError(CuriosityError):
 
 @dataclass(frozen=True)
 class PlannedRun:
-    """One run of the grid ``runs.csv`` records."""
+    """One run of an experiment's grid."""
 
     dataset: str
     weight_function: str
@@ -95,6 +95,10 @@ class Experiment:
             self._maps = {f.name: f for f in facts}
         return self._maps
 
+    def paper_maps(self) -> dict[str, str]:
+        """The paper's map each of the experiment's maps stands in for, by map name (maps that stand in for none left out)."""
+        return {name: facts.stands_in_for for name, facts in self.maps.items() if facts.stands_in_for}
+
     def run_recipe(self, dataset: str, weight_function: str, restart: int) -> Recipe:
         """What a run of the grid must have been made from, given the config and the map now."""
         facts = self.maps[dataset]
@@ -113,38 +117,23 @@ class Experiment:
             self.maps[dataset].labels_digest, run_meta["restart"],
         )
 
-    def planned(self) -> list[PlannedRun] | None:
-        """The runs of the grid ``runs.csv`` records (rewritten by every ``explore``); None
-        for a folder from before the grid recorded its runs.
-
-        Raises
-        ------
-        StaleTablesError
-            ``runs.csv`` cannot be read, naming it.
-        """
-        import pandas as pd
-
-        path = self.folder.runs_csv
-        if not path.is_file():
-            return None
-        try:
-            runs = pd.read_csv(path, usecols=["dataset", "weight_function", "restart"])
-            return [PlannedRun(str(r.dataset), str(r.weight_function), int(r.restart)) for r in runs.itertuples()]
-        except (ValueError, OSError) as exc:
-            raise StaleTablesError(
-                f"{display_path(path)}: not the table of runs explore writes ({exc}); {RERUN} writes it again",
-                rerun="explore", force=False,
-            ) from None
+    def planned(self) -> list[PlannedRun]:
+        """Every run of the grid the config holds: each map's restarts, each with every weight function."""
+        explore = self.config.explore
+        return [
+            PlannedRun(name, weight_function, restart)
+            for name in self.maps for restart in range(explore.restarts) for weight_function in explore.weight_functions
+        ]
 
     # ------------------------------------------------------------------ the tables as one set
 
     def inputs(self) -> dict:
-        """What the tables are made from, as it is now: the saved config, the grid, every
+        """What the tables are made from, as it is now: the saved config, the maps table, every
         run's ``run.json`` and ``path.csv``, label file, example map and batch reference
         (size and digest), and each map's facts."""
         layout = self.folder
         root = layout.root
-        files = [layout.config, layout.runs_csv, layout.maps_csv]
+        files = [layout.config, layout.maps_csv]
         files += [run / name for run in layout.run_folders() for name in ("run.json", "path.csv")]
         files += layout.label_files() + sorted(layout.labels.glob("*/examples/*.npz")) + sorted(layout.batches.glob("*.npz"))
         names = [str(path.relative_to(root)) for path in files if path.is_file()]

@@ -38,6 +38,8 @@ class MapFacts:
         The file name of the word store the image and word settings give now.
     vocabulary_hashes : list of str
         Of each word kind's vocabulary.
+    shape : (int, int)
+        The image's rows and columns of pixels.
     labels_digest : str or None
         Of the human labels (:attr:`curiosity_cli.data.MapData.labels_digest`); None without.
     stands_in_for : str or None
@@ -48,6 +50,7 @@ class MapFacts:
     name: str
     store: str
     vocabulary_hashes: list[str]
+    shape: tuple[int, int]
     labels_digest: str | None
     stands_in_for: str | None
 
@@ -57,7 +60,10 @@ class MapFacts:
         from curiosity_cli.words.extract import store_name
 
         store, hashes = store_name(map_data, words)
-        return cls(entry, map_data.config.name, store, hashes, map_data.labels_digest, map_data.config.stands_in_for)
+        return cls(
+            entry, map_data.config.name, store, hashes, tuple(map_data.image.shape[:2]), map_data.labels_digest,
+            map_data.config.stands_in_for,
+        )
 
     def record(self) -> dict:
         """The facts later files must still agree with (JSON-ready)."""
