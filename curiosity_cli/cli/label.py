@@ -67,8 +67,8 @@ def evaluate(
         result = evaluate_experiment(folder, partial=partial)
     except IncompleteLabelsError as exc:
         raise CuriosityError(
-            f"{len(exc.left_out)} runs of the grid have no usable labels ({first_of(exc.left_out)}); run `curiosity label` "
-            "to make them, or `curiosity evaluate --partial` to leave them out"
+            f"{len(exc.left_out)} runs of the grid have no usable labels ({first_of(exc.left_out)}); `curiosity label` "
+            "makes them once their runs are explored, or `curiosity evaluate --partial` leaves them out"
         ) from None
     if result.skipped:
         # the first few on the terminal; every one is in skipped.json

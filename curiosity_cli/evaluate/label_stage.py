@@ -521,14 +521,16 @@ def label_experiment(
         remove_leftovers(written)
     stores = prepare_stores(config, cache_dir)
     by_name = {info.name: info for info in stores.values()}
-    folders = [p for p in layout.run_folders() if p.parent.parent.name in by_name]
-    runs = [p for p in folders if (p / "run.json").is_file()]
-    left_out = [
-        f"{display_path(p)}: no run.json; explore redoes the run" for p in folders if p not in runs
-    ]
-    if not runs:
-        raise LabelError(f"{display_path(layout.runs)}: no finished runs; {RERUN} makes them", rerun="explore", force=False)
     experiment = Experiment(folder, config, {name: info.facts for name, info in by_name.items()})
+    # the runs of the grid the config holds, as they sit: a run folder outside it (a config narrowed since) is not labelled
+    folders = [layout.run(r.dataset, r.weight_function, r.restart) for r in experiment.planned()]
+    runs = [p for p in folders if (p / "run.json").is_file()]
+    left_out = [_unexplored(p, layout) for p in folders if p not in runs]
+    if not runs:
+        raise LabelError(
+            f"{display_path(layout.runs)}: none of the runs of the grid of {display_path(layout.config)} is explored "
+            f"({first_of(left_out)}); {RERUN} makes them", rerun="explore", force=False,
+        )
     finished, problems = _runs_as_configured(experiment, runs)
 
     with computing as workers:
@@ -602,6 +604,16 @@ def label_experiment(
         "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": time.perf_counter() - started,
         "relabelled": relabelled,
     }
+
+
+def _unexplored(run: Path, layout: ExperimentFolder) -> str:
+    """Why a run of the grid has no ``run.json``, in words: never explored, or its folder is not whole."""
+    if run.is_dir():
+        return f"{display_path(run)}: no run.json; explore redoes the run"
+    return (
+        f"{display_path(run)}: not explored, though the grid of {display_path(layout.config)} holds it "
+        "(explore.weight_functions, explore.restarts, datasets); explore makes it"
+    )
 
 
 def _runs_as_configured(experiment: Experiment, runs: list[Path]) -> tuple[list, list[str]]:

@@ -96,8 +96,8 @@ class IncompleteLabelsError(EvaluationError):
 
     def __init__(self, left_out: list[str]):
         super().__init__(
-            f"{len(left_out)} runs of the grid have no usable labels ({first_of(left_out)}); {RERUN} makes them, "
-            "or evaluate with partial=True to leave them out", rerun="label", force=False,
+            f"{len(left_out)} runs of the grid have no usable labels ({first_of(left_out)}); {RERUN} makes them "
+            "once their runs are explored, or evaluate with partial=True to leave them out", rerun="label", force=False,
         )
         self.left_out = left_out
 
@@ -286,7 +286,7 @@ def label_rows(experiment: Experiment) -> LabelRows:
             "again (explore first, for runs made otherwise)",
             rerun="label", force=False,
         )
-    skipped += _unlabelled_runs(files, planned)
+    skipped += _unlabelled_runs(layout, files, planned)
     return LabelRows(rows, class_rows, skipped, notes)
 
 
@@ -325,10 +325,18 @@ def _in_grid(layout: ExperimentFolder, files: list[Path], planned: list[Path]) -
     return [path for path in files if path in keep], [note]
 
 
-def _unlabelled_runs(files: list[Path], planned: list[Path]) -> list[str]:
-    """A line for each run of the grid (``planned``) that has no label file, naming the file it lacks."""
-    present = set(files)
-    return [f"{display_path(path)}: not found; label the experiment to make it" for path in planned if path not in present]
+def _unlabelled_runs(layout: ExperimentFolder, files: list[Path], planned: list[Path]) -> list[str]:
+    """A line for each run of the grid (``planned``) that has no label file, naming the file it lacks, or the run
+    folder when the run was never explored."""
+    lines = []
+    for path in planned:
+        if path not in files:
+            run = layout.run(*layout.run_of_label_file(path))
+            if (run / "run.json").is_file():
+                lines.append(f"{display_path(path)}: not found; label the experiment to make it")
+            else:
+                lines.append(f"{display_path(run)}: not explored, though the grid of {display_path(layout.config)} holds it")
+    return lines
 
 
 def _mean_ci(grouped) -> pd.DataFrame:

@@ -116,6 +116,12 @@ class ExperimentFolder:
         """The experiment folder a run's label file (:meth:`label_file`) lies in."""
         return cls(Path(path).parents[3])
 
+    @staticmethod
+    def run_of_label_file(path: Path) -> tuple[str, str, int]:
+        """``(dataset, weight function, restart)`` of the run whose label file :meth:`label_file` names ``path``."""
+        path = Path(path)
+        return path.parent.parent.name, path.parent.name, int(path.stem.removeprefix("restart-"))
+
     def label_files(self) -> list[Path]:
         """Every run's label file there is, sorted."""
         return sorted(self.labels.glob("*/*/restart-*.npz"))

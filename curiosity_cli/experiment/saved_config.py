@@ -35,7 +35,8 @@ def load_saved_config(folder: str | Path, overrides: typing.Iterable[str] = ()) 
     saved = ExperimentFolder(folder).config
     if not saved.is_file():
         raise ConfigError(f"{display_path(saved)}: not found; {RERUN} makes the experiment", rerun="explore", force=False)
-    return load_config(saved, overrides)
+    config = load_config(saved)  # the file alone first: a broken one is named, not an override that met it
+    return load_config(saved, overrides) if overrides else config
 
 
 def run_sections(config: ExperimentConfig) -> dict:

@@ -161,6 +161,8 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
         else:
             notes.append("mi-vs-distinct: mi.csv has no distinct_cells column (evaluate the experiment again)")
 
+        # the runs of the config's grid: a narrowed config's other runs are not drawn
+        grid = {(r.dataset, r.weight_function, r.restart) for r in experiment.planned()}
         traces = {}
         for name, m in maps.items():
             batch_file = layout.batch(name)
@@ -168,7 +170,9 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
             trace = read_log_likelihood(batch_file, notes) if batch_file.is_file() else None
             if trace is not None:
                 traces[name] = trace
-            examples = _chosen_examples(find_examples(experiment_dir, name))
+            examples = _chosen_examples(
+                [e for e in find_examples(experiment_dir, name) if (name, e.weight_function, e.restart) in grid]
+            )
             z_ps = [(e, z) for e in examples if (z := read_label_map(e.path, m.image.shape[:2], notes)) is not None]
 
             if z_ps:

@@ -209,7 +209,8 @@ def test_the_headline_is_the_ratio_to_the_next_best_with_its_paired_p():
 
 def test_nothing_to_label_or_evaluate_says_which_command_comes_first(own_map, tmp_path):
     config = grid_config(own_map)
-    with pytest.raises(LabelError, match="grid/runs: no finished runs; explore makes them"):
+    with pytest.raises(LabelError, match=r"grid/runs: none of the runs of the grid of .*config.yaml is explored .*"
+                                         r"restart-000: not explored.*; explore makes them"):
         label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
     with pytest.raises(EvaluationError, match="grid/labels: no label files; label makes them"):
         evaluate_experiment(tmp_path / "grid")
