@@ -1,4 +1,7 @@
-"""curiosity: curiosity-driven exploration experiments on map mosaics (Girdhar & Dudek)."""
+"""curiosity: curiosity-driven exploration experiments on map mosaics (Girdhar & Dudek).
+
+From Python: ``from curiosity_cli import api as cur`` (:mod:`curiosity_cli.api`).
+"""
 
 from importlib.metadata import PackageNotFoundError, version
 

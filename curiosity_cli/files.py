@@ -177,19 +177,6 @@ def naming_os_errors(path: Path):
         raise OSError(exc.errno, exc.strerror, os.fspath(path)) from None
 
 
-def user_cache_dir() -> Path:
-    """The user's cache of downloads and derived data: ``$CURIOSITY_CACHE``, else
-    ``$XDG_CACHE_HOME/curiosity``, else ``~/.cache/curiosity``.
-
-    Source archives go to its ``sources/`` folder, maps made from them to ``maps/<name>/``.
-    Nothing here is committed; deleting it costs only a download.
-    """
-    env = os.environ.get("CURIOSITY_CACHE")
-    if env:
-        return Path(env).expanduser()
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "curiosity"
-
-
 def check_inside(path: Path, root: Path, what: str) -> None:
     """Refuse a ``path`` built from names that does not resolve to somewhere below ``root``.
 

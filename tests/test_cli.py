@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -207,3 +208,37 @@ def test_converged_with_a_label_sweeps_override_is_one_clear_error(command, tmp_
         "Error: --set 'label.sweeps=3': the converged schedule sets label.sweeps=256 and label.warm_sweeps=null; "
         "give either, not both"
     )
+
+
+def test_config_init_writes_a_commented_copy_named_for_the_experiment(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = run("config", "init", "my-exp", "--from", "paper-grid")
+    assert result.exit_code == 0, result.output
+    assert result.stdout.strip() == "wrote my-exp.yaml (a copy of the shipped paper-grid); run `curiosity reproduce my-exp.yaml`"
+    text = (tmp_path / "my-exp.yaml").read_text()
+    assert "# The paper's full experiment grid" in text and "\nname: my-exp " in text
+    assert "name: my-exp\n" in run("config", "show", "my-exp.yaml").stdout  # its base: paper.yaml resolves from here
+    again = run("config", "init", "my-exp")
+    assert again.exit_code == 1 and again.stderr.strip() == "Error: my-exp.yaml: already exists; choose another name or edit that file"
+    wrong = run("config", "init", "x", "--from", "paper")
+    assert wrong.exit_code == 1 and "--from: got 'paper', expected a shipped experiment config: paper-grid, quick, readings" in wrong.stderr
+    assert run("config", "init", "../x").exit_code == 1 and not (tmp_path.parent / "x.yaml").exists()
+
+
+def test_a_shipped_config_is_named_from_any_folder_and_a_path_still_means_a_path(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert "name: paper-grid\n" in run("config", "show", "paper-grid").stdout
+    (tmp_path / "quick").write_text("base: paper.yaml\nname: mine\nseed: 1\ndatasets: [aerial-mosaic]\n")
+    assert "name: mine\n" in run("config", "show", "quick").stdout  # a file of that name is the file
+    missing = run("config", "show", "qiuck")
+    assert missing.exit_code == 1 and "qiuck: config file not found; expected a path to a YAML config or the name of a shipped one" in missing.stderr
+
+
+def test_the_paths_table_follows_the_environment(tmp_path):
+    code = "from curiosity_cli import paths; print(paths.DEFAULT_RESULTS, paths.DEFAULT_CACHE, paths.user_cache())"
+    env = {**os.environ, "CURIOSITY_RESULTS": str(tmp_path / "r"), "CURIOSITY_CACHE": str(tmp_path / "c")}
+    printed = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout.split()
+    assert printed == [str(tmp_path / "r"), str(tmp_path / "c" / "stores"), str(tmp_path / "c")]
+    env = {k: v for k, v in os.environ.items() if not k.startswith("CURIOSITY_")} | {"XDG_CACHE_HOME": str(tmp_path / "x")}
+    printed = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout.split()
+    assert printed == ["results", str(tmp_path / "x" / "curiosity" / "stores"), str(tmp_path / "x" / "curiosity")]

@@ -225,7 +225,7 @@ def test_a_broken_config_file_is_refused_in_one_line(tmp_path, monkeypatch, text
 
 def test_a_missing_config_file_is_refused(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    with pytest.raises(ConfigError, match="^nope.yaml: config file not found$"):
+    with pytest.raises(ConfigError, match=r"^nope.yaml: config file not found; expected a path to a YAML config or the name of a shipped one \(paper, paper-grid, quick, readings\)$"):
         load_config("nope.yaml")
 
 

@@ -31,6 +31,7 @@ ORCHESTRATORS = {
     "__main__": "`python -m curiosity_cli`: runs the command line",
     "reproduce": "`curiosity reproduce`: extract, explore, label, evaluate and plot one experiment end to end",
     "sweep": "`curiosity reproduce --sweep`: each combination through reproduce, their headlines compared",
+    "api": "curiosity from Python: the commands as functions, an experiment's results as frames",
 }
 
 

@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
-from curiosity_cli.config import CONFIG_DIR, PROJECT_ROOT, load_dataset_config
+from curiosity_cli.config import CONFIG_DIR, load_dataset_config
 from curiosity_cli.data import dataset_names
+
+#: The repository this test checks.
+PROJECT_ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.slow

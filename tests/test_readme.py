@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import os
 import re
+import subprocess
+import sys
+from pathlib import Path
 
-from curiosity_cli.config import PROJECT_ROOT
-
+#: The repository this test checks.
+PROJECT_ROOT = Path(__file__).resolve().parents[1]
 README = (PROJECT_ROOT / "README.md").read_text()
 COMMANDS = re.findall(r"```bash\n(.+?)\n```", README)
 
@@ -30,3 +34,16 @@ def test_readme_links_to_files_that_exist():
     targets = [t for t in re.findall(r"\]\(([^)]+)\)", README) if "://" not in t]
     assert "docs/ARCHITECTURE.md" in targets
     assert all((PROJECT_ROOT / t.split("#")[0]).exists() for t in targets), targets
+
+
+def test_the_python_example_runs_as_written(tmp_path, monkeypatch):
+    (example,) = re.findall(r"```python\n(.+?)\n```", README, re.S)
+    monkeypatch.chdir(tmp_path)  # results/ of the current folder, as a notebook's
+    printed = subprocess.run(
+        [sys.executable, "-c", example], capture_output=True, text=True, timeout=600,
+        env={**os.environ, "CURIOSITY_CACHE": str(tmp_path / "cache")},
+    )
+    assert printed.returncode == 0, printed.stderr
+    assert "topic-perplexity" in printed.stdout and "20 steps; Φ_p at 20 steps has" in printed.stdout
+    assert (tmp_path / "results" / "tiny" / "mi.csv").is_file()
+    assert (tmp_path / "cache" / "stores").is_dir()  # word stores in the user cache, not beside the results

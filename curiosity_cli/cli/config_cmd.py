@@ -8,13 +8,13 @@ import typer
 
 from curiosity_cli.cli import app
 
-config_app = typer.Typer(help="Inspect experiment configs.", no_args_is_help=True)
+config_app = typer.Typer(help="Inspect experiment configs, or start one of your own.", no_args_is_help=True)
 app.add_typer(config_app, name="config")
 
 
 @config_app.command("show")
 def show(
-    config: Path = typer.Argument(..., help="Experiment YAML, e.g. configs/quick.yaml."),
+    config: Path = typer.Argument(..., help="Experiment YAML, or a shipped config's name (quick, paper, paper-grid, readings)."),
     overrides: list[str] = typer.Option(
         [], "--set", metavar="KEY=VALUE", help="Override a key, e.g. --set explore.restarts=3."
     ),
@@ -23,3 +23,19 @@ def show(
     from curiosity_cli.config import load_config, to_yaml
 
     typer.echo(to_yaml(load_config(config, overrides)), nl=False)
+
+
+@config_app.command("init")
+def init(
+    name: str = typer.Argument(..., help="The experiment's name; writes NAME.yaml in the current folder."),
+    source: str = typer.Option("quick", "--from", help="The shipped config to copy: quick, paper-grid or readings."),
+) -> None:
+    """Write an editable, commented copy of a shipped config into the current folder, named NAME.
+
+    Its `base: paper.yaml` resolves to the shipped parameters wherever the file is; edit any key to override them, then run `curiosity reproduce NAME.yaml`.
+    """
+    from curiosity_cli.config import init_config
+    from curiosity_cli.files import display_path
+
+    path = init_config(name, source)
+    typer.echo(f"wrote {display_path(path)} (a copy of the shipped {source}); run `curiosity reproduce {display_path(path)}`")

@@ -7,9 +7,8 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli import app
-from curiosity_cli.config import CONFIG_DIR
 
-_CONFIG_HELP = "Experiment config whose model, words and drive sections (and seed) to use."
+_CONFIG_HELP = "Experiment config whose model, words and drive sections (and seed) to use: a YAML file or a shipped config's name."
 _START_HELP = "Start position ROW,COL in map pixels; default the map's centre."
 
 
@@ -46,7 +45,7 @@ def drive(
     sim_map: str = typer.Option(None, "--sim-map", help="With --camera sim: the map the simulated robot is on (name or dataset YAML)."),
     start: str = typer.Option(None, "--start", metavar="ROW,COL", help="With --dry-run --camera sim: start position ROW,COL in map pixels; default the map's centre."),
     heading_deg: float = typer.Option(None, "--heading-deg", callback=_finite, help="With --dry-run --camera sim: start heading, degrees clockwise from the map's +col axis (default 0)."),
-    config: Path = typer.Option(CONFIG_DIR / "paper-grid.yaml", "--config", help=_CONFIG_HELP),
+    config: Path = typer.Option("paper-grid", "--config", help=_CONFIG_HELP),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a config key, e.g. --set drive.gamma=0.5."),
     seed: int = typer.Option(None, "--seed", min=0, help="Seed of the topic models; default the config's seed."),
     out: Path = typer.Option(None, "--out", help="Run folder (log.jsonl, config, provenance, frames/); default results/drive/<date-time>."),
@@ -126,7 +125,7 @@ def simrobot(
     estop_after: float = typer.Option(None, "--estop-after", min=0, metavar="SECONDS", callback=_finite, help="Send ESTOP this long after the first VEL."),
     link: Path = typer.Option(None, "--link", help="Also make this symlink to the pseudo-terminal (a fixed name for scripts)."),
     log_file: Path = typer.Option(None, "--log", help="Write the robot's events (frames received, watchdog, noise) as JSON Lines."),
-    config: Path = typer.Option(CONFIG_DIR / "paper-grid.yaml", "--config", help=_CONFIG_HELP),
+    config: Path = typer.Option("paper-grid", "--config", help=_CONFIG_HELP),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a config key, e.g. --set drive.watchdog=2."),
 ) -> None:
     """A simulated robot on a pseudo-terminal, for `curiosity drive --camera sim`.

@@ -10,7 +10,6 @@ import typer
 
 from curiosity_cli.cli import app
 from curiosity_cli.cli.progress import StagedProgress
-from curiosity_cli.config import CONFIG_DIR
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 
@@ -23,7 +22,7 @@ class Backend(str, enum.Enum):
 
 @app.command("explore")
 def explore(
-    config: Path = typer.Argument(CONFIG_DIR / "quick.yaml", help="Experiment YAML, e.g. configs/paper-grid.yaml."),
+    config: Path = typer.Argument("quick", help="Experiment YAML, or a shipped config's name (quick, paper-grid, readings)."),
     maps: list[str] = typer.Option([], "--map", help="Only this map (repeatable); default the config's datasets."),
     weights: str = typer.Option(None, "--weights", help="Comma-separated weight functions, e.g. random-walk,topic-perplexity."),
     restarts: int = typer.Option(None, "--restarts", min=1, help="Restarts per weight function."),

@@ -7,14 +7,13 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli import app
-from curiosity_cli.config import CONFIG_DIR
 from curiosity_cli.paths import DEFAULT_CACHE
 
 
 @app.command("extract")
 def extract(
     dataset: str = typer.Argument(..., help="A registered map name or a path to a dataset YAML."),
-    config: Path = typer.Option(CONFIG_DIR / "paper.yaml", "--config", help="Config whose `words` section to use."),
+    config: Path = typer.Option("paper", "--config", help="Config whose `words` section to use: a YAML file or a shipped config's name."),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a words key, e.g. --set words.colour_words=true."),
     stride: int = typer.Option(None, "--stride", help="Texton words every N pixels; default the dataset's word_stride."),
     cell_width: int = typer.Option(None, "--cell-width", help="Cell side in pixels; default the dataset's."),

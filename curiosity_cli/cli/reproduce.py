@@ -9,7 +9,6 @@ import typer
 from curiosity_cli.cli import app
 from curiosity_cli.cli.explore import Backend
 from curiosity_cli.cli.progress import StagedProgress
-from curiosity_cli.config import CONFIG_DIR
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 
@@ -49,7 +48,7 @@ def reproduce(
     if quick and config is not None:
         raise typer.BadParameter(f"runs configs/quick.yaml; give it or a CONFIG ({config}), not both", param_hint="--quick")
     if config is None:
-        config = CONFIG_DIR / ("quick.yaml" if quick else "paper-grid.yaml")
+        config = Path("quick" if quick else "paper-grid")
     if converged:
         overrides = with_converged_labels(overrides)
     sweeps = merge_sweeps(declared_sweeps(config), sweeps)

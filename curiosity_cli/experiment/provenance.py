@@ -10,19 +10,24 @@ import platform
 import subprocess
 import sys
 from datetime import datetime, timezone
+from pathlib import Path
 
 from curiosity_cli import __version__
-from curiosity_cli.config import PROJECT_ROOT
+#: The source checkout the package runs from, if it runs from one (an editable install).
+_CHECKOUT = Path(__file__).resolve().parents[2]
 
 
 def git_commit() -> tuple[str, bool]:
-    """``(commit, dirty)`` of the source tree the package runs from; ``("unknown", False)`` outside git."""
+    """``(commit, dirty)`` of the source checkout the package runs from; ``("unknown", False)``
+    for an installed wheel, whose folder may sit inside some other repository."""
+    if not (_CHECKOUT / ".git").exists() or not (_CHECKOUT / "pyproject.toml").is_file():
+        return "unknown", False
     try:
         commit = subprocess.run(
-            ["git", "-C", str(PROJECT_ROOT), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=10
+            ["git", "-C", str(_CHECKOUT), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=10
         )
         status = subprocess.run(
-            ["git", "-C", str(PROJECT_ROOT), "status", "--porcelain", "--untracked-files=no"],
+            ["git", "-C", str(_CHECKOUT), "status", "--porcelain", "--untracked-files=no"],
             capture_output=True, text=True, timeout=10,
         )
     except (OSError, subprocess.TimeoutExpired):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -25,7 +26,9 @@ from curiosity_cli.drive.protocol import (
     decode,
     encode,
 )
-from curiosity_cli.config import PROJECT_ROOT
+
+#: The repository this test checks.
+PROJECT_ROOT = Path(__file__).resolve().parents[2]
 
 FUZZ = settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

@@ -1,0 +1,1 @@
+"""The shipped configs, a package (``curiosity_cli.shipped.configs``) so the wheel carries them."""
