@@ -1,5 +1,5 @@
-"""The package as a user installs it: a wheel built from this checkout, installed into a fresh
-virtual environment, run from an empty folder outside the checkout.
+"""The package as a user installs it: a wheel built from this checkout's sdist, installed into a
+fresh virtual environment, run from an empty folder outside the checkout.
 
 The fresh environment gets the wheel itself, and its dependencies from this test's
 environment (one ``.pth`` line), so the test needs no download beyond the build backend
@@ -36,7 +36,8 @@ def installed(tmp_path_factory) -> tuple[Path, Path]:
     """``(the wheel, the fresh environment's site-packages)``."""
     root = tmp_path_factory.mktemp("packaging")
     built = subprocess.run(
-        [sys.executable, "-m", "build", "--wheel", "--outdir", str(root / "dist"), str(CHECKOUT)],
+        # the sdist, then the wheel from it: both must carry the shipped files
+        [sys.executable, "-m", "build", "--outdir", str(root / "dist"), str(CHECKOUT)],
         capture_output=True, text=True, timeout=600,
     )
     assert built.returncode == 0, built.stdout[-2000:] + built.stderr[-2000:]
