@@ -425,11 +425,41 @@ def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> Exper
     ConfigError
         One line naming the file (or ``overrides``), the key, the value and what was expected.
     """
+    raw = _read_chain(path, overrides)
+    return _check_experiment(_build(ExperimentConfig, raw.data, (), raw), raw)
+
+
+#: What an experiment config adds to the base it builds on (``paper.yaml`` has none of them).
+_EXPERIMENT_KEYS = ("name", "seed", "datasets")
+
+
+def show_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> str:
+    """What ``config show`` prints: an experiment config resolved, every key; or, for a base
+    config that names no experiment (``paper``), its parameter sections, each checked.
+
+    Raises
+    ------
+    ConfigError
+        As :func:`load_config`.
+    """
+    raw = _read_chain(path, overrides)
+    if any(key in raw.data for key in _EXPERIMENT_KEYS):
+        return to_yaml(_check_experiment(_build(ExperimentConfig, raw.data, (), raw), raw))
+    hints = typing.get_type_hints(ExperimentConfig)
+    sections = {
+        f.name: to_dict(_build(hints[f.name], raw.data.get(f.name), (f.name,), raw))
+        for f in dataclasses.fields(ExperimentConfig) if f.name not in _EXPERIMENT_KEYS
+    }
+    return dump_yaml(sections)
+
+
+def _read_chain(path: str | Path, overrides: typing.Iterable[str]) -> _Raw:
+    """A config file (or a shipped config's name), its chain of bases and ``overrides``, merged."""
     path = config_file(path)
     raw = _Raw(str(resolved(path)))
     _load_chain(path, raw)
     _apply_overrides(raw, overrides)
-    return _check_experiment(_build(ExperimentConfig, raw.data, (), raw), raw)
+    return raw
 
 
 #: The converged labelling schedule (README, "Reproducing the paper"): 256 sweeps from

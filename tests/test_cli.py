@@ -228,6 +228,8 @@ def test_config_init_writes_a_commented_copy_named_for_the_experiment(tmp_path, 
 def test_a_shipped_config_is_named_from_any_folder_and_a_path_still_means_a_path(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert "name: paper-grid\n" in run("config", "show", "paper-grid").stdout
+    base = run("config", "show", "paper").stdout  # the base the others build on: its parameters, checked
+    assert base.startswith("model:\n  topics: 64\n") and "name:" not in base
     (tmp_path / "quick").write_text("base: paper.yaml\nname: mine\nseed: 1\ndatasets: [aerial-mosaic]\n")
     assert "name: mine\n" in run("config", "show", "quick").stdout  # a file of that name is the file
     missing = run("config", "show", "qiuck")

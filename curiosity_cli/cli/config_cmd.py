@@ -19,10 +19,13 @@ def show(
         [], "--set", metavar="KEY=VALUE", help="Override a key, e.g. --set explore.restarts=3."
     ),
 ) -> None:
-    """Validate a config and print it resolved (base files and --set applied), as a run saves it."""
-    from curiosity_cli.config import load_config, to_yaml
+    """Validate a config and print it resolved (base files and --set applied), as a run saves it.
 
-    typer.echo(to_yaml(load_config(config, overrides)), nl=False)
+    A base config that names no experiment (paper) prints its parameter sections.
+    """
+    from curiosity_cli.config import show_config
+
+    typer.echo(show_config(config, overrides), nl=False)
 
 
 @config_app.command("init")

@@ -44,6 +44,12 @@ Written under ``results/<experiment>/``:
   ceiling's MI, and the paper's ratio for the map the dataset stands in for (1.51, 1.20
   and 1.05); then how sure the ratio is (:func:`with_power`): its bootstrap interval,
   the smallest ratio detectable at 80 % power and the pairs a 10 % lead would need.
+- ``tables.json``: each table's size and SHA-256 and those of every file and map fact the
+  tables were made from (:meth:`~curiosity_cli.experiment.experiment.Experiment.record_tables`),
+  written last with the others: ``plot`` and the report draw only a set whose record holds.
+
+Every run of the grid needs usable labels; ``partial`` evaluates the others and lists the
+runs left out in ``skipped.json``.
 """
 
 from __future__ import annotations
