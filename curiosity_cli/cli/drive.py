@@ -41,7 +41,8 @@ def drive(
     serial: str = typer.Option(None, "--serial", metavar="PORT", help="Serial device or pyserial URL of the robot; default the config's drive.port."),
     baud: int = typer.Option(None, "--baud", min=1, help="Serial speed; default the config's drive.baud (115200)."),
     dry_run: bool = typer.Option(False, "--dry-run", help="No serial port: commands are computed and logged, not sent (with --camera sim the robot is simulated in this process, one frame period per command)."),
-    camera: str = typer.Option("0", "--camera", help="A device index, a video file, a stream URL, or 'sim' for the simulated robot's camera."),
+    camera: str = typer.Option("0", "--camera", help="A device index, a video file, a stream URL, a recorded bag (ROS 1 .bag, ROS 2 bag folder, .mcap; needs the bags extra), or 'sim' for the simulated robot's camera."),
+    topic: str = typer.Option(None, "--topic", help="With a bag: its image topic; may be left out when it has one."),
     sim_map: str = typer.Option(None, "--sim-map", help="With --camera sim: the map the simulated robot is on (name or dataset YAML)."),
     start: str = typer.Option(None, "--start", metavar="ROW,COL", help="With --dry-run --camera sim: start position ROW,COL in map pixels; default the map's centre."),
     heading_deg: float = typer.Option(None, "--heading-deg", callback=_finite, help="With --dry-run --camera sim: start heading, degrees clockwise from the map's +col axis (default 0)."),
@@ -99,7 +100,7 @@ def drive(
             )
 
     outcome, folder = drive_session(
-        resolved, seed=resolved.seed if seed is None else seed, camera=camera, port=None if dry_run else port,
+        resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic, port=None if dry_run else port,
         baud=baud, sim_map=map_data, start=start_at, heading_deg=heading_deg or 0.0, out=out, video_out=video_out,
         png_every=png_every, max_frames=max_frames, on_status=lambda line: typer.echo(line, err=True), on_frame=progress,
     )

@@ -1,14 +1,14 @@
-"""Camera sources: OpenCV captures (device, video file, stream URL) and the simulated camera.
+"""Camera sources: OpenCV captures (device, video file, stream URL) and the simulated camera;
+recorded bags are in :mod:`curiosity_cli.drive.bags`.
 
-A camera's :meth:`read` returns ``(frame, time)``: an RGB ``(H, W, 3)`` uint8 frame and
-the ``time.monotonic()`` at which it was captured (the start of the frame-to-command
-latency), or None when the stream has ended.
+A camera's :meth:`read` returns a :class:`Frame`, or None when the stream has ended.
 """
 
 from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -20,6 +20,25 @@ from curiosity_cli.errors import CuriosityError
 
 class CameraError(CuriosityError):
     """A camera that cannot be opened or stops delivering frames."""
+
+
+class Frame(NamedTuple):
+    """A camera frame.
+
+    Attributes
+    ----------
+    image : (H, W, 3) uint8 ndarray
+        RGB.
+    captured : float
+        The ``time.monotonic()`` at which it was captured (or read): the start of the
+        frame-to-command latency.
+    recorded : float or None
+        A recorded frame's time, seconds since the epoch (a bag's); None for a live one.
+    """
+
+    image: np.ndarray
+    captured: float
+    recorded: float | None = None
 
 
 class OpenCVCamera:
@@ -65,8 +84,8 @@ class OpenCVCamera:
                 return None
             raise CameraError(f"camera {self.source!r}: no frame (disconnected, or the stream ended)")
         if frame.ndim == 2:
-            return np.ascontiguousarray(cv2.cvtColor(frame, cv2.COLOR_GRAY2RGB)), captured
-        return np.ascontiguousarray(frame[:, :, 2::-1]), captured  # OpenCV delivers BGR(A)
+            return Frame(np.ascontiguousarray(cv2.cvtColor(frame, cv2.COLOR_GRAY2RGB)), captured)
+        return Frame(np.ascontiguousarray(frame[:, :, 2::-1]), captured)  # OpenCV delivers BGR(A)
 
     def close(self) -> None:
         self._capture.release()
@@ -131,7 +150,7 @@ class SimCamera:
                 parameter="camera",
             )
         frame = render_view(self._image, pose_of(state), self._mpp, self._view)
-        return frame, time.monotonic()
+        return Frame(frame, time.monotonic())
 
     def close(self) -> None:
         """Nothing to release."""

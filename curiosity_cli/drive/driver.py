@@ -160,7 +160,7 @@ def run(
             if got is None:
                 outcome = Outcome("end of video", frames, "end of the video", None)
                 break
-            image, captured = got
+            image, captured, recorded = got
             state = robot.state() if robot is not None else None
             decision = pipeline.process(image)
             command = decision.command
@@ -169,6 +169,7 @@ def run(
             _flush(pending, robot, log)
             pending = {
                 "frame": frames,
+                **({} if recorded is None else {"bag_time": recorded}),
                 "latency_ms": round(latency * 1000, 2),
                 "seconds": {k: round(v, 5) for k, v in decision.seconds.items()},
                 "words": decision.words,

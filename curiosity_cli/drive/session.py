@@ -35,6 +35,25 @@ from curiosity_cli.files import display_path
 from curiosity_cli.paths import DEFAULT_RESULTS
 
 
+def open_camera(camera: str, topic: str | None = None):
+    """A bag's frames (:class:`~curiosity_cli.drive.bags.BagCamera`) or an OpenCV source's.
+
+    Raises
+    ------
+    ParameterError
+        ``topic`` with a camera that is not a bag.
+    CameraError
+        As the camera.
+    """
+    from curiosity_cli.drive.bags import BagCamera, is_bag
+
+    if is_bag(camera):
+        return BagCamera(camera, topic)
+    if topic is not None:
+        raise ParameterError(f"topic: got {topic!r}, but camera {camera!r} is not a bag; a topic names a bag's images")
+    return cameras.OpenCVCamera(camera)
+
+
 def default_run_folder() -> Path:
     """``results/drive/<date-time>``: a new folder for each run started without ``--out``."""
     from datetime import datetime
@@ -55,6 +74,7 @@ def drive_session(
     seed: int,
     camera: str,
     port: str | None,
+    topic: str | None = None,
     baud: int | None = None,
     sim_map: MapData | None = None,
     start: tuple[float, float] | None = None,
@@ -75,11 +95,13 @@ def drive_session(
     seed : int
         Seeds the stream's topic models.
     camera : str
-        A device index, a video file, a stream URL, or ``sim`` for the simulated camera
-        over ``sim_map``.
+        A device index, a video file, a stream URL, a recorded bag
+        (:mod:`~curiosity_cli.drive.bags`), or ``sim`` for the simulated camera over ``sim_map``.
     port : str or None
         Serial device or pyserial URL of the robot; None for a dry run (commands are
         logged, not sent).
+    topic : str, optional
+        With a bag: its image topic, which may be left out when it has one.
     baud : int, optional
         Serial speed; default ``config.drive.baud``.
     sim_map : MapData, optional
@@ -131,14 +153,17 @@ def drive_session(
         raise ParameterError("start: a dry run on a simulated map needs the robot's start (row, col)")
     out = default_run_folder() if out is None else out
     with stopping_on_signals(StopRequest()) as stop:
-        source = None if camera == "sim" else cameras.OpenCVCamera(camera)
+        source = None if camera == "sim" else open_camera(camera, topic)
         on_status("loading the vocabularies and the topic model's kernels")
         pipeline = CuriosityPipeline(config, seed)
         warm_up(config)
         prepare_folder(out, config, seed)
         log = JsonLines(out / "log.jsonl")
         map_name = None if sim_map is None else sim_map.config.name
-        log.write("start", seed=seed, camera=camera, sim_map=map_name, serial=port, dry_run=port is None)
+        log.write(
+            "start", seed=seed, camera=camera, topic=getattr(source, "topic", None), sim_map=map_name, serial=port,
+            dry_run=port is None,
+        )
         robot = None
         try:
             if port is not None:

@@ -1,0 +1,195 @@
+"""Recorded missions as a camera: bags written here with rosbags' own writers (ROS 1, ROS 2 sqlite3,
+ROS 2 MCAP), frames cut from an embedded map, replayed through ``curiosity drive --dry-run``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from curiosity_cli.cli import app
+from curiosity_cli.data import load_map
+from curiosity_cli.drive.bags import BagCamera, decode
+from curiosity_cli.drive.camera import CameraError
+
+pytest.importorskip("rosbags")
+from rosbags.rosbag1 import Writer as Writer1  # noqa: E402
+from rosbags.rosbag2 import StoragePlugin  # noqa: E402
+from rosbags.rosbag2 import Writer as Writer2  # noqa: E402
+from rosbags.typesys import Stores, get_typestore  # noqa: E402
+
+runner = CliRunner()
+FRAMES = 4
+START = 1_700_000_000_000_000_000  # bag time of the first frame, ns since the epoch
+PERIOD = 250_000_000  # 4 frames a second
+
+
+@pytest.fixture(scope="module")
+def frames() -> list[np.ndarray]:
+    """(120, 160, 3) RGB frames cut from the aerial mosaic along a diagonal."""
+    image = load_map("aerial-mosaic").image
+    return [np.ascontiguousarray(image[40 * i : 40 * i + 120, 50 * i : 50 * i + 160]) for i in range(FRAMES)]
+
+
+def _image(types, frame: np.ndarray, encoding: str, stamp: int):
+    fields = {"stamp": types["builtin_interfaces/msg/Time"](sec=stamp // 10**9, nanosec=stamp % 10**9), "frame_id": "camera"}
+    if "seq" in types["std_msgs/msg/Header"].__dataclass_fields__:  # ROS 1 headers count their messages
+        fields["seq"] = 0
+    header = types["std_msgs/msg/Header"](**fields)
+    if encoding == "png":
+        ok, png = cv2.imencode(".png", frame[:, :, ::-1])
+        return types["sensor_msgs/msg/CompressedImage"](header=header, format="png", data=png.ravel())
+    if encoding == "mono16":
+        data = cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY).astype(np.uint16) * 257
+    elif encoding == "mono8":
+        data = cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY)
+    elif encoding == "bgr8":
+        data = frame[:, :, ::-1]
+    else:
+        data = frame
+    data = np.ascontiguousarray(data)
+    rows, cols = data.shape[:2]
+    return types["sensor_msgs/msg/Image"](
+        header=header, height=rows, width=cols, encoding=encoding, is_bigendian=0, step=data.strides[0],
+        data=data.view(np.uint8).ravel(),
+    )
+
+
+def write_bag(path: Path, kind: str, topics: dict[str, str], frames: list[np.ndarray]) -> Path:
+    """A bag of ``kind`` (``ros1``, ``sqlite3``, ``mcap``) with each topic's frames in its encoding."""
+    store = get_typestore(Stores.ROS1_NOETIC if kind == "ros1" else Stores.ROS2_HUMBLE)
+    writer = Writer1(path) if kind == "ros1" else Writer2(
+        path, version=9, storage_plugin=StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
+    )
+    serialize = store.serialize_ros1 if kind == "ros1" else store.serialize_cdr
+    with writer:
+        for topic, encoding in topics.items():
+            msgtype = "sensor_msgs/msg/CompressedImage" if encoding == "png" else "sensor_msgs/msg/Image"
+            connection = writer.add_connection(topic, msgtype, typestore=store)
+            for i, frame in enumerate(frames):
+                stamp = START + i * PERIOD
+                writer.write(connection, stamp, serialize(_image(store.types, frame, encoding, stamp), msgtype))
+    return path
+
+
+def replay(bag: Path, out: Path, *extra: str):
+    return runner.invoke(
+        app, ["drive", "--dry-run", "--camera", str(bag), "--out", str(out), "--set", "drive.grid_rows=4",
+              "--set", "drive.grid_cols=4", *extra],
+    )
+
+
+def frame_records(out: Path) -> list[dict]:
+    return [r for r in map(json.loads, (out / "log.jsonl").read_text().splitlines()) if "frame" in r and "words" in r]
+
+
+@pytest.mark.parametrize("kind, name", [("ros1", "mission.bag"), ("sqlite3", "mission"), ("mcap", "mission")])
+def test_a_bag_replays_one_record_per_message_with_its_bag_time(tmp_path, frames, kind, name):
+    bag = write_bag(tmp_path / name, kind, {"/camera/image_raw": "rgb8"}, frames)
+    result = replay(bag, tmp_path / "run")
+    assert result.exit_code == 0, result.output
+    records = frame_records(tmp_path / "run")
+    assert [r["frame"] for r in records] == list(range(FRAMES))
+    assert [r["bag_time"] for r in records] == pytest.approx([(START + i * PERIOD) / 1e9 for i in range(FRAMES)])
+    assert f"drove {FRAMES} frames" in result.stdout
+
+
+def test_a_bare_mcap_file_is_a_bag(tmp_path, frames):
+    folder = write_bag(tmp_path / "mission", "mcap", {"/camera/image_raw": "rgb8"}, frames)
+    (mcap,) = folder.glob("*.mcap")
+    camera = BagCamera(str(mcap))
+    assert camera.topic == "/camera/image_raw" and camera.messages == FRAMES
+    np.testing.assert_array_equal(camera.read().image, frames[0])
+    camera.close()
+
+
+def test_compressed_bgr_and_mono16_frames_decode_to_what_they_were_made_from(tmp_path, frames):
+    encodings = {"/raw": "rgb8", "/png": "png", "/bgr": "bgr8", "/mono8": "mono8", "/mono16": "mono16"}
+    bag = write_bag(tmp_path / "mission", "sqlite3", encodings, frames)
+    decoded = {}
+    for topic in encodings:
+        camera = BagCamera(str(bag), topic)
+        decoded[topic] = [camera.read().image for _ in range(FRAMES)]
+        assert camera.read() is None
+        camera.close()
+    for topic in ("/png", "/bgr"):
+        np.testing.assert_array_equal(np.stack(decoded[topic]), np.stack(decoded["/raw"]))
+    np.testing.assert_array_equal(np.stack(decoded["/mono16"]), np.stack(decoded["/mono8"]))
+    # and so the same words: the replays log the same word counts
+    for topic in ("/raw", "/png", "/mono16", "/mono8"):
+        assert replay(bag, tmp_path / topic.strip("/"), "--topic", topic).exit_code == 0
+    words = {t: [r["words"] for r in frame_records(tmp_path / t.strip("/"))] for t in ("/raw", "/png", "/mono16", "/mono8")}
+    assert words["/png"] == words["/raw"] and words["/mono16"] == words["/mono8"]
+
+
+def test_a_bayer_frame_is_demosaiced_in_rosbag_naming():
+    rgb = np.zeros((8, 8, 3), np.uint8)
+    rgb[..., 0] = 200  # a red scene: in an RGGB mosaic the red sites are the top-left of each 2 x 2
+    mosaic = np.zeros((8, 8), np.uint8)
+    mosaic[0::2, 0::2] = 200
+
+    class Message:
+        encoding, height, width, step, is_bigendian, data = "bayer_rggb8", 8, 8, 8, 0, mosaic.ravel()
+
+    image = decode(Message, "sensor_msgs/msg/Image", "test")
+    assert image[2:-2, 2:-2, 0].min() > 150 and image[2:-2, 2:-2, 1:].max() < 50
+
+
+@pytest.mark.parametrize(
+    "case, says",
+    [
+        ("two-topics", "topic: expected one of the bag's image topics: /a (4 messages), /b (4 messages)"),
+        ("unknown-topic", "topic: got '/nope', which the bag does not have; its image topics: /a (4 messages)"),
+        ("missing", "no such bag file or folder"),
+        ("not-a-bag", "not a readable bag"),
+        ("truncated", "mission.bag"),
+        ("encoding", "encoding 'yuv422': expected one of rgb8"),
+    ],
+)
+def test_bad_bags_are_one_error_line(tmp_path, frames, case, says):
+    extra = []
+    if case == "two-topics":
+        bag = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "rgb8", "/b": "png"}, frames)
+    elif case == "unknown-topic":
+        bag, extra = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "rgb8"}, frames), ["--topic", "/nope"]
+    elif case == "missing":
+        bag = tmp_path / "mission.bag"
+    elif case == "not-a-bag":
+        bag = tmp_path / "mission.bag"
+        bag.write_text("not a bag\n")
+    elif case == "truncated":
+        bag = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "rgb8"}, frames)
+        bag.write_bytes(bag.read_bytes()[: bag.stat().st_size * 2 // 3])
+    else:  # the frames' bytes, labelled with an encoding the camera does not decode
+        bag = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "yuv422"}, frames)
+    result = replay(bag, tmp_path / "run", *extra)
+    assert result.exit_code == 1, result.output
+    assert "Traceback" not in result.output
+    errors = [line for line in result.stderr.splitlines() if line.startswith("Error: ")]
+    assert len(errors) == 1 and says in errors[0], result.stderr
+
+
+def test_a_topic_that_holds_no_images_is_named(tmp_path, frames):
+    store = get_typestore(Stores.ROS1_NOETIC)
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "rgb8"}, frames)
+    other = tmp_path / "imu.bag"
+    with Writer1(other) as writer:
+        connection = writer.add_connection("/imu/temp", "std_msgs/msg/Float64", typestore=store)
+        writer.write(connection, START, store.serialize_ros1(store.types["std_msgs/msg/Float64"](data=1.0), "std_msgs/msg/Float64"))
+    with pytest.raises(CameraError, match=r"topic: '/imu/temp' holds std_msgs/msg/Float64, not images; the bag's image topics: none"):
+        BagCamera(str(other), "/imu/temp")
+    camera = BagCamera(str(bag))
+    assert camera.topic == "/a"  # the one image topic, without naming it
+    camera.close()
+
+
+def test_a_topic_needs_a_bag():
+    from curiosity_cli.drive.session import open_camera
+    from curiosity_cli.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"topic: got '/a', but camera '0' is not a bag; a topic names a bag's images"):
+        open_camera("0", "/a")
