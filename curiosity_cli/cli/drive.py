@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli import app
+from curiosity_cli.cli.progress import StagedProgress
 
 _CONFIG_HELP = "Experiment config whose model, words and drive sections (and seed) to use: a YAML file or a shipped config's name."
 _START_HELP = "Start position ROW,COL in map pixels; default the map's centre."
@@ -90,8 +91,11 @@ def drive(
                 )
             start_at = _parse_start(start, map_data.image.shape[:2])
 
+    bar = StagedProgress()
+
     def progress(number, decision):
-        if number % 25 == 0:
+        bar.advance()
+        if number % 25 == 0 and not replay:
             c = decision.command
             typer.echo(
                 f"frame {number}: target (row {decision.target[0]}, col {decision.target[1]}), "
@@ -99,11 +103,19 @@ def drive(
                 err=True,
             )
 
-    outcome, folder = drive_session(
-        resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic, port=None if dry_run else port,
-        baud=baud, sim_map=map_data, start=start_at, heading_deg=heading_deg or 0.0, out=out, video_out=video_out,
-        png_every=png_every, max_frames=max_frames, on_status=lambda line: typer.echo(line, err=True), on_frame=progress,
-    )
+    replay = []  # a bag's frames get a bar; a live camera's a line every 25 frames
+
+    def replaying(description: str, frames: int) -> None:
+        replay.append(frames)
+        bar.stage(description, frames)
+
+    with bar:
+        outcome, folder = drive_session(
+            resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic,
+            port=None if dry_run else port, baud=baud, sim_map=map_data, start=start_at, heading_deg=heading_deg or 0.0,
+            out=out, video_out=video_out, png_every=png_every, max_frames=max_frames,
+            on_status=lambda line: typer.echo(line, err=True), on_frame=progress, on_replay=replaying,
+        )
     stopped = {True: "; STOP acknowledged", False: "; STOP sent, not acknowledged", None: ""}[outcome.stop_acked]
     typer.echo(f"drove {outcome.frames} frames: {outcome.detail}{stopped}; log in {display_path(folder / 'log.jsonl')}")
     if video_out is not None:

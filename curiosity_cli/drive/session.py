@@ -85,6 +85,7 @@ def drive_session(
     max_frames: int | None = None,
     on_status: Callable[[str], None] = lambda line: None,
     on_frame=lambda frame_number, decision: None,
+    on_replay: Callable[[str, int], None] = lambda description, frames: None,
 ) -> tuple[Outcome, Path]:
     """Drive until the camera ends, ``max_frames``, ESTOP, SIGINT or SIGTERM, then close everything.
 
@@ -127,6 +128,10 @@ def drive_session(
     on_frame : callable
         Called after each frame with its number and its
         :class:`~curiosity_cli.drive.pipeline.Decision`.
+    on_replay : callable
+        With a recorded bag, called once before the first frame with a description and
+        the number of frames it holds (a replay is not paced: it runs as fast as the
+        model does, with the same per-frame sample budget).
 
     Returns
     -------
@@ -179,6 +184,9 @@ def drive_session(
                 source = cameras.SimCamera(
                     sim_map.image, d.sim_metres_per_pixel, (d.sim_view_rows, d.sim_view_cols), robot, interval, d.hello_timeout
                 )
+            if hasattr(source, "messages"):  # a bag knows how many frames it holds
+                frames = source.messages if max_frames is None else min(max_frames, source.messages)
+                on_replay(f"replaying {source.topic}", frames)
             outputs = Outputs(out, video_out, png_every)
             outcome = run(pipeline, source, robot, outputs, log, max_frames=max_frames, stop=stop, on_frame=on_frame)
         except BaseException as exc:

@@ -193,3 +193,15 @@ def test_a_topic_needs_a_bag():
 
     with pytest.raises(ParameterError, match=r"topic: got '/a', but camera '0' is not a bag; a topic names a bag's images"):
         open_camera("0", "/a")
+
+
+def test_a_replay_shows_its_progress_and_the_same_seed_gives_the_same_log(tmp_path, frames):
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
+    first, second = replay(bag, tmp_path / "one"), replay(bag, tmp_path / "two")
+    assert first.exit_code == second.exit_code == 0, first.output
+    assert "replaying /camera/image_raw" in first.stderr  # the bar, with the bag's frame count
+
+    def numbers(out: Path) -> list[dict]:  # what the model made, without the times this machine took
+        return [{k: v for k, v in r.items() if k not in ("time", "latency_ms", "seconds")} for r in frame_records(out)]
+
+    assert numbers(tmp_path / "one") == numbers(tmp_path / "two") and len(numbers(tmp_path / "one")) == FRAMES
