@@ -131,7 +131,8 @@ def drive_session(
     on_replay : callable
         With a recorded bag, called once before the first frame with a description and
         the number of frames it holds (a replay is not paced: it runs as fast as the
-        model does, with the same per-frame sample budget).
+        model does, with the same per-frame sample budget). A replay's folder also gets
+        its surprise timeline (:mod:`~curiosity_cli.drive.timeline`).
 
     Returns
     -------
@@ -189,6 +190,15 @@ def drive_session(
                 on_replay(f"replaying {source.topic}", frames)
             outputs = Outputs(out, video_out, png_every)
             outcome = run(pipeline, source, robot, outputs, log, max_frames=max_frames, stop=stop, on_frame=on_frame)
+            if hasattr(source, "messages"):
+                from curiosity_cli.drive.bags import BagCamera
+                from curiosity_cli.drive.timeline import write_timeline
+
+                again = BagCamera(camera, source.topic)
+                try:
+                    write_timeline(out, again, f"{Path(camera).name}: {source.topic}, {outcome.frames} frames")
+                finally:
+                    again.close()
         except BaseException as exc:
             if not log.ended:
                 # run() closes both and logs its end itself; this covers a failure before its loop

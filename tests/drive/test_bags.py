@@ -205,3 +205,32 @@ def test_a_replay_shows_its_progress_and_the_same_seed_gives_the_same_log(tmp_pa
         return [{k: v for k, v in r.items() if k not in ("time", "latency_ms", "seconds")} for r in frame_records(out)]
 
     assert numbers(tmp_path / "one") == numbers(tmp_path / "two") and len(numbers(tmp_path / "one")) == FRAMES
+
+
+def test_a_replay_draws_its_surprise_timeline_with_the_most_surprising_frames(tmp_path, frames):
+    from curiosity_cli.drive.timeline import surprise_series, timeline_figure
+
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
+    assert replay(bag, tmp_path / "run").exit_code == 0
+    run = tmp_path / "run"
+    image = cv2.imread(str(run / "timeline.png"))
+    assert image is not None and image.shape[1] >= 1000 and image.std() > 10
+    assert (run / "timeline.pdf").read_bytes().startswith(b"%PDF")
+    surprising = sorted((run / "surprising").glob("frame-*.png"))
+    assert 1 <= len(surprising) <= FRAMES
+    series = surprise_series(run / "log.jsonl")
+    for path in surprising:  # each is the frame of that number, whole
+        number = int(path.stem.split("-")[1])
+        np.testing.assert_array_equal(cv2.imread(str(path))[:, :, ::-1], frames[number])
+    assert series["time"].tolist() == pytest.approx([(START + i * PERIOD) / 1e9 for i in range(FRAMES)])
+    (ax,) = timeline_figure(series, {0: frames[0]}, "mission").axes
+    assert ax.get_xlabel() == "bag time (s since the first frame)" and ax.get_ylabel() == "perplexity"
+
+
+def test_the_most_surprising_frames_are_peaks_apart():
+    from curiosity_cli.drive.timeline import most_surprising
+
+    perplexity = np.array([1, 9, 8.9, 2, 3, 7, 1, 1, 6, 1, 1, 1], float)
+    # 12 frames, 2 wanted: at least 3 frames apart, so 8.9 (next to 9) gives way to 7
+    assert most_surprising(perplexity, 2) == [1, 5]
+    assert most_surprising(perplexity, 3) == [1, 5, 8]
