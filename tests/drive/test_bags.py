@@ -234,3 +234,12 @@ def test_the_most_surprising_frames_are_peaks_apart():
     # 12 frames, 2 wanted: at least 3 frames apart, so 8.9 (next to 9) gives way to 7
     assert most_surprising(perplexity, 2) == [1, 5]
     assert most_surprising(perplexity, 3) == [1, 5, 8]
+
+
+def test_without_rosbags_the_error_names_the_extra(tmp_path, frames, monkeypatch):
+    import sys
+
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "rgb8"}, frames)
+    monkeypatch.setitem(sys.modules, "rosbags.highlevel", None)  # as if the extra were not installed
+    with pytest.raises(CameraError, match=r"reading a bag needs rosbags: pip install 'curiosity\[bags\]'"):
+        BagCamera(str(bag))
