@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import re
 import types
 import typing
@@ -299,25 +300,28 @@ def shipped_configs() -> list[str]:
     return sorted(p.stem for p in CONFIG_DIR.glob("*.yaml"))
 
 
-def config_file(name_or_path: str | Path, *, relative_to: Path | None = None) -> Path:
-    """The config a command line or a ``base:`` names: a file, else a shipped config by its name.
+def shipped_config(name: str) -> Path | None:
+    """The shipped config a bare name means (``quick``, ``paper.yaml``), or None."""
+    shipped = CONFIG_DIR / (name if name.endswith((".yaml", ".yml")) else f"{name}.yaml")
+    return shipped if Path(name).name == name and shipped.is_file() else None
 
-    A path to a file means that file (``relative_to`` the folder of the config that names
-    it, for a ``base:``); a bare name that is no file (``quick``, ``paper.yaml``) means
-    the shipped config of that name, wherever the command runs.
+
+def config_file(name_or_path: str | Path) -> Path:
+    """The config a command line names: a path, else a shipped config by its name.
+
+    A path that exists means that file (or what is wrong with it, a folder or a symlink
+    loop, for its reader to name); a bare name that is no file (``quick``, ``paper.yaml``)
+    means the shipped config of that name, wherever the command runs.
 
     Raises
     ------
     ConfigError
         Neither a file nor a shipped config, naming the shipped ones.
     """
-    text = str(name_or_path)
-    path = Path(text) if relative_to is None else relative_to / text
-    if path.is_file():
+    path = Path(name_or_path)
+    if os.path.lexists(path):
         return path
-    bare = Path(text).name == text
-    shipped = CONFIG_DIR / (text if text.endswith((".yaml", ".yml")) else f"{text}.yaml")
-    if bare and shipped.is_file():
+    if (shipped := shipped_config(str(name_or_path))) is not None:
         return shipped
     raise ConfigError(
         f"{display_path(path)}: config file not found; expected a path to a YAML config or the name of a shipped one "
@@ -373,12 +377,11 @@ def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
             raise ConfigError(
                 f"{display_path(path)}: base: got {shown(base)}, expected a path to a YAML config"
             )
-        try:  # a shipped config may be named from anywhere (a saved config does)
-            base_path = config_file(base, relative_to=path.parent)
-        except ConfigError:
-            raise ConfigError(
-                f"{display_path(path)}: base: file not found: {display_path(path.parent / base)}"
-            ) from None
+        base_path = path.parent / base
+        if not base_path.is_file():  # a shipped config may be named from anywhere (a saved config does)
+            base_path = shipped_config(base)
+        if base_path is None:
+            raise ConfigError(f"{display_path(path)}: base: file not found: {display_path(path.parent / base)}")
         _load_chain(base_path, raw, seen + (path,))
     raw.merge(data, str(path))
 
@@ -443,7 +446,8 @@ def show_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> str:
         As :func:`load_config`.
     """
     raw = _read_chain(path, overrides)
-    if any(key in raw.data for key in _EXPERIMENT_KEYS):
+    sections = {f.name for f in dataclasses.fields(ExperimentConfig) if f.name not in _EXPERIMENT_KEYS}
+    if not raw.data.keys() <= sections:  # an experiment, or a key of neither: refused as an experiment's
         return to_yaml(_check_experiment(_build(ExperimentConfig, raw.data, (), raw), raw))
     hints = typing.get_type_hints(ExperimentConfig)
     sections = {

@@ -36,8 +36,15 @@ class Outcome:
 
 
 def run_cli(args: list[str], *, cwd: Path, env: dict | None = None, timeout: float = 300, stdin: str | None = None) -> Outcome:
-    """Run ``curiosity ARGS`` in a subprocess from ``cwd``; the environment gets ``env`` on top."""
-    full_env = {**os.environ, "PYTHONWARNINGS": "default", **(env or {})}
+    """Run ``curiosity ARGS`` in a subprocess from ``cwd``; the environment gets ``env`` on top.
+
+    The user cache is ``cwd/results/cache``, so a case's word stores are its own and travel
+    with a copied experiment; the compiled kernels stay in the real user cache (compiled once).
+    """
+    from curiosity_cli._numba import cache_dir
+
+    isolated = {"CURIOSITY_CACHE": str(Path(cwd) / "results" / "cache"), "NUMBA_CACHE_DIR": str(cache_dir())}
+    full_env = {**os.environ, "PYTHONWARNINGS": "default", **isolated, **(env or {})}
     done = subprocess.run(
         [sys.executable, "-m", "curiosity_cli", *map(str, args)], cwd=cwd, env=full_env, capture_output=True,
         text=True, timeout=timeout, input=stdin,

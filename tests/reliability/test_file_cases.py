@@ -314,7 +314,7 @@ def test_a_run_left_out_is_an_error_unless_partial(work: Path, case: RedoCase):
 
 @pytest.mark.parametrize("args", [["extract", "DATASET"], EXPLORE], ids=["extract", "explore"])
 def test_a_truncated_word_store_is_extracted_again(work: Path, args: list[str]):
-    (store,) = (work / "results" / "cache").glob("own-*.npz")
+    (store,) = (work / "results" / "cache" / "stores").glob("own-*.npz")
     _truncate(store)
     outcome = run_cli([_own_yaml(work) if arg == "DATASET" else arg for arg in args], cwd=work)
     assert outcome.code == 0, outcome.output
