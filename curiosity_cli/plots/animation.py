@@ -95,7 +95,8 @@ def animate_run(
     left.imshow(image)
     right.imshow(np.full_like(image, 255))
     for ax in (left, right):
-        ax.set_xticks([]), ax.set_yticks([])
+        ax.set_xticks([])
+        ax.set_yticks([])
     labels_image = right.images[0]
     trail = left.scatter([], [], s=10, c=[], cmap="coolwarm", vmin=0, vmax=len(run.path) - 1)
     left.set_title(f"{dataset}: {weight_function}, restart {restart}", fontsize=10)
