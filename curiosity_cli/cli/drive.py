@@ -62,6 +62,7 @@ def drive(
     Protocol: curiosity_cli/drive/PROTOCOL.md. Ctrl-C sends STOP, then exits with 130.
     """
     from curiosity_cli.config import load_config
+    from curiosity_cli.drive.bags import is_bag
     from curiosity_cli.drive.session import drive_session
     from curiosity_cli.files import display_path
 
@@ -92,10 +93,11 @@ def drive(
             start_at = _parse_start(start, map_data.image.shape[:2])
 
     bar = StagedProgress()
+    replay = is_bag(camera)
 
     def progress(number, decision):
         bar.advance()
-        if number % 25 == 0 and not replay:
+        if number % 25 == 0 and not replay:  # a bag's frames get a bar; a live camera's a line every 25 frames
             c = decision.command
             typer.echo(
                 f"frame {number}: target (row {decision.target[0]}, col {decision.target[1]}), "
@@ -103,18 +105,12 @@ def drive(
                 err=True,
             )
 
-    replay = []  # a bag's frames get a bar; a live camera's a line every 25 frames
-
-    def replaying(description: str, frames: int) -> None:
-        replay.append(frames)
-        bar.stage(description, frames)
-
     with bar:
         outcome, folder = drive_session(
             resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic,
             port=None if dry_run else port, baud=baud, sim_map=map_data, start=start_at, heading_deg=heading_deg or 0.0,
             out=out, video_out=video_out, png_every=png_every, max_frames=max_frames,
-            on_status=lambda line: typer.echo(line, err=True), on_frame=progress, on_replay=replaying,
+            on_status=lambda line: typer.echo(line, err=True), on_frame=progress, on_replay=bar.stage,
         )
     stopped = {True: "; STOP acknowledged", False: "; STOP sent, not acknowledged", None: ""}[outcome.stop_acked]
     typer.echo(f"drove {outcome.frames} frames: {outcome.detail}{stopped}; log in {display_path(folder / 'log.jsonl')}")

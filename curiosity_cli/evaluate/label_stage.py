@@ -525,7 +525,7 @@ def label_experiment(
     # the runs of the grid the config holds, as they sit: a run folder outside it (a config narrowed since) is not labelled
     folders = [layout.run(r.dataset, r.weight_function, r.restart) for r in experiment.planned()]
     runs = [p for p in folders if (p / "run.json").is_file()]
-    left_out = [_unexplored(p, layout) for p in folders if p not in runs]
+    left_out = [unexplored(p, layout) for p in folders if p not in runs]
     if not runs:
         raise LabelError(
             f"{display_path(layout.runs)}: none of the runs of the grid of {display_path(layout.config)} is explored "
@@ -606,7 +606,7 @@ def label_experiment(
     }
 
 
-def _unexplored(run: Path, layout: ExperimentFolder) -> str:
+def unexplored(run: Path, layout: ExperimentFolder) -> str:
     """Why a run of the grid has no ``run.json``, in words: never explored, or its folder is not whole."""
     if run.is_dir():
         return f"{display_path(run)}: no run.json; explore redoes the run"

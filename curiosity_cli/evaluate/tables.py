@@ -333,7 +333,9 @@ def _in_grid(layout: ExperimentFolder, files: list[Path], planned: list[Path]) -
 
 def _unlabelled_runs(layout: ExperimentFolder, files: list[Path], planned: list[Path]) -> list[str]:
     """A line for each run of the grid (``planned``) that has no label file, naming the file it lacks, or the run
-    folder when the run was never explored."""
+    folder when the run is not explored (as ``label`` names it)."""
+    from curiosity_cli.evaluate.label_stage import unexplored
+
     lines = []
     for path in planned:
         if path not in files:
@@ -341,7 +343,7 @@ def _unlabelled_runs(layout: ExperimentFolder, files: list[Path], planned: list[
             if (run / "run.json").is_file():
                 lines.append(f"{display_path(path)}: not found; label the experiment to make it")
             else:
-                lines.append(f"{display_path(run)}: not explored, though the grid of {display_path(layout.config)} holds it")
+                lines.append(unexplored(run, layout))
     return lines
 
 
@@ -711,14 +713,16 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
     # records each one's digest: a failure (a full disk) leaves the old set or a mix that
     # plot refuses, never a mix taken as one set
     with contextlib.ExitStack() as stack:
-        written = {}
+        written = {}  # each file's name in the folder, and the temporary file that will replace it
+
+        def temporary(path: Path) -> Path:
+            tmp = written[str(path.relative_to(layout.root))] = stack.enter_context(atomic_path(path))
+            return tmp
+
         for name, table in tables.items():
-            written[layout.table(name)] = stack.enter_context(atomic_path(layout.table(name)))
-            table.to_csv(written[layout.table(name)], index=False)
-        written[layout.table("mi", ".parquet")] = stack.enter_context(atomic_path(layout.table("mi", ".parquet")))
-        mi.to_parquet(written[layout.table("mi", ".parquet")], index=False)
-        written[layout.skipped] = stack.enter_context(atomic_path(layout.skipped))
-        written[layout.skipped].write_text(json.dumps(skipped, indent=2) + "\n")
-        record = experiment.record_tables({str(path.relative_to(layout.root)): tmp for path, tmp in written.items()}, inputs)
-        stack.enter_context(atomic_path(layout.tables_record)).write_text(record)
+            table.to_csv(temporary(layout.table(name)), index=False)
+        mi.to_parquet(temporary(layout.table("mi", ".parquet")), index=False)
+        temporary(layout.skipped).write_text(json.dumps(skipped, indent=2) + "\n")
+        record = experiment.record_tables(written, inputs)
+        temporary(layout.tables_record).write_text(record)
     return Evaluation(mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits)

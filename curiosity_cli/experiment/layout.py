@@ -25,6 +25,17 @@ from pathlib import Path
 #: A run folder's name: ``restart-NNN`` (a killed writer's ``.restart-NNN.tmp-*`` is not one).
 _RUN_NAME = re.compile(r"restart-\d+")
 
+
+def _restart(restart: int) -> str:
+    """How a run's folder and files spell its restart: ``restart-NNN``."""
+    return f"restart-{restart:03d}"
+
+
+def _run_named(path: Path) -> tuple[str, str, int]:
+    """``(dataset, weight function, restart)`` of ``<dataset>/<weight function>/restart-NNN[.npz]``."""
+    path = Path(path)
+    return path.parent.parent.name, path.parent.name, int(path.stem.removeprefix("restart-"))
+
 @dataclass(frozen=True)
 class ExperimentFolder:
     """An experiment folder, given its root: every path in it.
@@ -87,13 +98,12 @@ class ExperimentFolder:
 
     def run(self, dataset: str, weight_function: str, restart: int) -> Path:
         """A run's folder."""
-        return self.runs / dataset / weight_function / f"restart-{restart:03d}"
+        return self.runs / dataset / weight_function / _restart(restart)
 
     @staticmethod
     def run_of(folder: Path) -> tuple[str, str, int]:
         """``(dataset, weight function, restart)`` of the run folder :meth:`run` names ``folder``."""
-        folder = Path(folder)
-        return folder.parent.parent.name, folder.parent.name, int(folder.name.removeprefix("restart-"))
+        return _run_named(folder)
 
     def run_folders(self) -> list[Path]:
         """Every run folder under its real name (finished or not), sorted."""
@@ -109,7 +119,7 @@ class ExperimentFolder:
 
     def label_file(self, dataset: str, weight_function: str, restart: int) -> Path:
         """A run's label file (Z_p's contingency tables)."""
-        return self.labels / dataset / weight_function / f"restart-{restart:03d}.npz"
+        return self.labels / dataset / weight_function / f"{_restart(restart)}.npz"
 
     @classmethod
     def holding_label_file(cls, path: Path) -> ExperimentFolder:
@@ -119,8 +129,7 @@ class ExperimentFolder:
     @staticmethod
     def run_of_label_file(path: Path) -> tuple[str, str, int]:
         """``(dataset, weight function, restart)`` of the run whose label file :meth:`label_file` names ``path``."""
-        path = Path(path)
-        return path.parent.parent.name, path.parent.name, int(path.stem.removeprefix("restart-"))
+        return _run_named(path)
 
     def label_files(self) -> list[Path]:
         """Every run's label file there is, sorted."""
@@ -128,7 +137,7 @@ class ExperimentFolder:
 
     def example(self, dataset: str, weight_function: str, restart: int, length: int) -> Path:
         """A run's Z_p pixel map at one path length, kept for the figures."""
-        return self.labels / dataset / "examples" / f"{weight_function}-restart-{restart:03d}-{length}.npz"
+        return self.labels / dataset / "examples" / f"{weight_function}-{_restart(restart)}-{length}.npz"
 
     def examples(self, dataset: str) -> Path:
         """The folder of a map's example Z_p maps."""
