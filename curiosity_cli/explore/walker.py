@@ -14,9 +14,10 @@ Each step ``t`` (0-based) of a run of ``path_length`` steps, with the walker in 
    (:mod:`curiosity_cli.explore.weights`), under the run's reading of eq. 8. A step
    whose neighbours are all visited is counted as boxed in; under the literal reading,
    which leaves them all weight 0, they are scored again by that module's boxed-in rule.
-4. **Move** to a neighbour drawn with probability proportional to its weight. Weights
-   that are NaN or infinite count as 0; if no weight is left positive the draw is
-   uniform, and the step is counted as a fallback.
+4. **Move** to a neighbour drawn with probability proportional to its weight
+   (:func:`move_probabilities`: NaN counts as 0, infinite weights take every chance
+   among themselves); if no weight is left positive the draw is uniform, and the step
+   is counted as a fallback.
 
 A planned walker (:class:`~curiosity_cli.explore.weights.Plan`: the lawnmower and the
 ceilings) skips steps 3 and 4: its cells are drawn when it starts, from the same move
@@ -126,17 +127,41 @@ class Exploration:
     checkpoints: dict[int, SparseCounts]
 
 
-def draw_move(weights: np.ndarray, rng: np.random.Generator) -> tuple[int, bool]:
-    """Index drawn with probability proportional to ``weights``; ``(index, fell back to uniform)``.
+def move_probabilities(weights: np.ndarray) -> tuple[np.ndarray, bool]:
+    """The walker's chance of stepping to each candidate; ``(probabilities, fell back to uniform)``.
 
-    NaN and infinite weights count as 0; when nothing positive is left, the draw is
-    uniform. Negative weights are a bug in the weight function: the caller checks.
+    Proportional to ``weights``, with two limits: NaN and ``-inf`` count as 0, and when
+    some weights are ``+inf`` (a candidate infinitely surprising, e.g. a topic the path
+    has never seen under counts-only P(k | path)) the walker steps to one of those,
+    uniformly, which is the limit of proportional weights as theirs grow without bound.
+    When no weight is left positive the step is uniform and counted as a fallback.
+    Negative weights are a bug in the weight function: the caller checks.
+
+    Parameters
+    ----------
+    weights : (n,) float ndarray, n >= 1
+
+    Returns
+    -------
+    (n,) float64 ndarray, bool
     """
+    weights = np.asarray(weights, np.float64)
+    infinite = weights == np.inf
+    if infinite.any():
+        return infinite / np.count_nonzero(infinite), False
     usable = np.where(np.isfinite(weights), weights, 0.0)
     total = usable.sum()
     if not total > 0:
+        return np.full(weights.shape[0], 1.0 / weights.shape[0]), True
+    return usable / total, False
+
+
+def draw_move(weights: np.ndarray, rng: np.random.Generator) -> tuple[int, bool]:
+    """Index drawn from :func:`move_probabilities` of ``weights``; ``(index, fell back to uniform)``."""
+    probabilities, fell_back = move_probabilities(weights)
+    if fell_back:
         return int(rng.integers(weights.shape[0])), True
-    return int(rng.choice(weights.shape[0], p=usable / total)), False
+    return int(rng.choice(weights.shape[0], p=probabilities)), False
 
 
 def explore(

@@ -9,7 +9,7 @@ import pytest
 
 from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.explore.walker import draw_move
+from curiosity_cli.explore.walker import draw_move, move_probabilities
 from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, coverage_potential
 
 
@@ -127,9 +127,19 @@ def test_draw_follows_the_weights_and_falls_back_to_uniform_only_without_positiv
     counts = np.bincount([i for i, _ in draws], minlength=4)
     assert counts[1] == counts[3] == 0
     assert counts[2] / counts[0] == pytest.approx(3.0, rel=0.15)
-    for dead in ([0.0, 0.0], [np.nan, np.inf], [0.0, -np.inf]):
+    for dead in ([0.0, 0.0], [np.nan, np.nan], [0.0, -np.inf]):
         index, fell = draw_move(np.array(dead), rng)
         assert fell and index in (0, 1)
+
+
+def test_infinite_weights_take_every_chance_among_themselves():
+    # the limit of proportional weights as some grow without bound: uniform over those
+    probabilities, fell = move_probabilities(np.array([5.0, np.inf, np.nan, np.inf]))
+    assert not fell
+    np.testing.assert_array_equal(probabilities, [0.0, 0.5, 0.0, 0.5])
+    rng = np.random.default_rng(3)
+    draws = [draw_move(np.array([1e300, np.inf, 2.0]), rng) for _ in range(200)]
+    assert {i for i, _ in draws} == {1} and not any(fell for _, fell in draws)
 
 
 def test_random_walk_draws_are_uniform_over_in_bounds_neighbours():
