@@ -74,6 +74,37 @@ WALKER_NAMES = (
 #: :func:`curiosity_cli.explore.weights.coverage_potential` gives each its meaning.
 COVERAGE_READINGS = ("literal", "clamp", "others")
 
+#: The other open choices of the paper's exploration, each a key of ``explore`` with the
+#: values a config may name, today's reading first (``configs/paper.yaml`` gives each the
+#: paper's sentence and what the authors' ROST code does):
+#:
+#: - ``candidates``: the cells ``G(c)`` a walker scores, 4 (up, down, left, right) or 8;
+#: - ``candidate_context``: the counts eq. 12's temporary labels of a candidate are drawn
+#:   against, ``neighbourhood`` (the model's ``n_Gk`` of the candidate) or ``own`` (its
+#:   own temporary labels only), and ``candidate_sweeps`` the Gibbs passes over them;
+#: - ``path_topics``: P(k | path), ``smoothed`` ``(n_k + α) / (N + Kα)`` or ``counts`` ``n_k / N``;
+#: - ``revisits``: a revisited cell's words enter the model ``once`` or ``again`` each visit;
+#: - ``refine_picks``: which observations realtime refinement picks, ``uniform`` (eq. 6) or
+#:   ``recent`` (the authors' refinery).
+EXPLORE_READINGS = {
+    "candidates": (4, 8),
+    "candidate_context": ("neighbourhood", "own"),
+    "path_topics": ("smoothed", "counts"),
+    "revisits": ("once", "again"),
+    "refine_picks": ("uniform", "recent"),
+}
+#: What a run recipe leaves out: each reading at what every run did before its key existed,
+#: so that the runs of older experiments stay current (a run's recipe names a reading only
+#: when it is another).
+UNRECORDED_READINGS = {
+    "candidates": 4,
+    "candidate_context": "neighbourhood",
+    "candidate_sweeps": 1,
+    "path_topics": "smoothed",
+    "revisits": "once",
+    "refine_picks": "uniform",
+}
+
 
 def _spec(
     *,
@@ -155,6 +186,9 @@ def _check_words(words: WordsConfig, raw: _Raw) -> None:
         )
 
 
+_NONE = object()
+
+
 @dataclass(frozen=True)
 class ExploreConfig:
     """Exploration runs on the simulated 2-D grid (paper sections 4 and 5.1)."""
@@ -169,10 +203,23 @@ class ExploreConfig:
     coverage: str = _spec(choices=COVERAGE_READINGS)
     # read by the clamp reading only (run_settings)
     min_d2: float | None = _spec(min=0, min_exclusive=True)
+    candidates: int = _spec(choices=EXPLORE_READINGS["candidates"])
+    candidate_context: str = _spec(choices=EXPLORE_READINGS["candidate_context"])
+    candidate_sweeps: int = _spec(min=1)
+    path_topics: str = _spec(choices=EXPLORE_READINGS["path_topics"])
+    revisits: str = _spec(choices=EXPLORE_READINGS["revisits"])
+    refine_picks: str = _spec(choices=EXPLORE_READINGS["refine_picks"])
 
     def run_settings(self) -> dict:
-        """The keys a run's numbers depend on: every key but ``min_d2`` unless the reading is clamp."""
-        return {key: value for key, value in to_dict(self).items() if key != "min_d2" or self.coverage == "clamp"}
+        """The keys a run's numbers depend on.
+
+        Every key but ``min_d2`` unless the reading is clamp, and but a reading of
+        :data:`UNRECORDED_READINGS` at the value every run had before its key existed.
+        """
+        return {
+            key: value for key, value in to_dict(self).items()
+            if (key != "min_d2" or self.coverage == "clamp") and UNRECORDED_READINGS.get(key, _NONE) != value
+        }
 
 
 @dataclass(frozen=True)
