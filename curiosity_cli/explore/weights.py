@@ -98,12 +98,19 @@ def stochastic_coverage(candidates: Candidates) -> np.ndarray:
 
 def word_perplexity(candidates: Candidates) -> np.ndarray:
     """Drawn to cells whose words the model finds surprising, repelled by visited ones (eq. 9)."""
-    return candidates.word_perplexity / candidates.coverage
+    return _repelled(candidates.word_perplexity, candidates.coverage)
 
 
 def topic_perplexity(candidates: Candidates) -> np.ndarray:
     """Drawn to cells whose topics are rare on the path so far, repelled by visited ones (eq. 10)."""
-    return candidates.topic_perplexity / candidates.coverage
+    return _repelled(candidates.topic_perplexity, candidates.coverage)
+
+
+def _repelled(surprise: np.ndarray, coverage: np.ndarray) -> np.ndarray:
+    """``surprise / U``, and 0 where ``U`` is infinite (a visited candidate under the literal
+    reading), however surprising the candidate: even an infinite perplexity (counts-only
+    P(k | path)) does not undo the literal reading's ban on stepping back."""
+    return np.divide(surprise, coverage, out=np.zeros(coverage.shape), where=np.isfinite(coverage))
 
 
 @dataclass(frozen=True)
