@@ -101,7 +101,7 @@ def _circle_half_widths(radius: int) -> np.ndarray:
     return half_widths
 
 
-def patch_angles(image_gray: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+def _patch_angles(image_gray: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
     """ORB's orientation of the 31 px patch around each point: the angle of its intensity centroid.
 
     Parameters
@@ -170,12 +170,12 @@ def grid_orb(image_gray, *, step: int) -> OrbFeatures:
 
     Every ``step`` px along rows and columns from ``step // 2``
     (:func:`grid_points`), each point is oriented by its patch's intensity centroid
-    (:func:`patch_angles`) and described by OpenCV's ORB at full resolution (pyramid
+    (:func:`_patch_angles`) and described by OpenCV's ORB at full resolution (pyramid
     level 0, 31 px patch), as the authors' ``Dense`` detector does (see the module
     docstring). The map is padded by 32 px of reflection (OpenCV
-    ``BORDER_REFLECT_101``) first, so every grid point gets a descriptor; the patches
-    of points within 15 px of the border, and the descriptor's sampling pairs of
-    points within about 22 px, partly see mirrored pixels. Large maps are described
+    ``BORDER_REFLECT_101``) first, so every grid point gets a descriptor; the
+    descriptors of points within 21 px of the border (their orientations: within
+    15 px) partly see mirrored pixels. Large maps are described
     in bands of rows; a descriptor sees only its own neighbourhood, so the result is
     the same as one call's.
 
@@ -216,7 +216,7 @@ def grid_orb(image_gray, *, step: int) -> OrbFeatures:
         rows = np.repeat(band, grid_cols.size)
         cols = np.tile(grid_cols, band.size)
         window_rows, window_cols = rows - band[0] + _PAD, cols + _PAD
-        angles = patch_angles(window, window_rows, window_cols)
+        angles = _patch_angles(window, window_rows, window_cols)
         parts.append((rows, cols, _describe(window, window_rows, window_cols, angles)))
     return OrbFeatures(
         rows=np.concatenate([p[0] for p in parts]).astype(np.int32),

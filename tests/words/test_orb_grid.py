@@ -8,7 +8,7 @@ import pytest
 
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.words import orb_grid
-from curiosity_cli.words.orb_grid import grid_orb, grid_points, patch_angles
+from curiosity_cli.words.orb_grid import _patch_angles, grid_orb, grid_points
 
 
 def _texture(rows: int, cols: int, seed: int = 0) -> np.ndarray:
@@ -65,7 +65,7 @@ def test_angles_and_descriptors_are_orbs_own():
     xy = cv2.KeyPoint_convert(keypoints)
     assert np.array_equal(xy, np.rint(xy))  # level 0: whole pixels
     rows, cols = xy[:, 1].astype(np.int64), xy[:, 0].astype(np.int64)
-    angles = patch_angles(image, rows, cols)
+    angles = _patch_angles(image, rows, cols)
     expected = np.array([kp.angle for kp in keypoints], np.float32)
     assert np.allclose(angles, expected, rtol=0, atol=1e-3)
     mine = orb_grid._describe(image, rows, cols, angles)
@@ -79,13 +79,13 @@ def test_the_border_is_mirrored_and_the_interior_is_untouched():
     # a border point is described on the reflected map
     padded = cv2.copyMakeBorder(image, 40, 40, 40, 40, cv2.BORDER_REFLECT_101)
     for r, c in [(2, 2), (2, 94), (94, 50)]:
-        angle = patch_angles(padded, np.array([r + 40]), np.array([c + 40]))
+        angle = _patch_angles(padded, np.array([r + 40]), np.array([c + 40]))
         expected = orb_grid._describe(padded, np.array([r + 40]), np.array([c + 40]), angle)
         assert np.array_equal(features.descriptors[index[r, c]], expected[0])
     # a point whose patch and sampling pairs lie inside the map sees no padding: the same
     # descriptor as OpenCV's on the map itself
     r, c = 46, 50
-    angle = patch_angles(image, np.array([r]), np.array([c]))
+    angle = _patch_angles(image, np.array([r]), np.array([c]))
     assert np.array_equal(features.descriptors[index[r, c]], orb_grid._describe(image, np.array([r]), np.array([c]), angle)[0])
 
 
