@@ -105,6 +105,11 @@ UNRECORDED_READINGS = {
     "refine_picks": "uniform",
 }
 
+#: Where a config's ORB words are (``words.orb_detector``): at ORB's keypoints, or at every
+#: point of a regular grid (:mod:`curiosity_cli.words.orb_grid`), as near the density of the
+#: paper's Table 1 as one scale gets.
+ORB_DETECTORS = ("keypoints", "grid")
+
 
 def _spec(
     *,
@@ -160,16 +165,66 @@ class WordsConfig:
     vocabulary_dir: Path = _spec(must_exist=True, named=SHIPPED_VOCABULARIES)
     orb_vocabulary: int = _spec(min=2, max=MAX_VOCABULARY)
     texton_vocabulary: int = _spec(min=2, max=MAX_VOCABULARY)
+    orb_detector: str = _spec(choices=ORB_DETECTORS)
+    # read by the grid detector only (store_settings)
+    orb_grid_step: int = _spec(min=1)
+    # read by the keypoints detector only (store_settings)
     orb_tile: int = _spec(min=1)
     orb_per_tile: int | None = _spec(min=1)
     orb_max_features: int | None = _spec(min=1)
     orb_fast_threshold: int = _spec(min=1, max=255)
     orb_fill_threshold: int | None = _spec(min=1, max=255)
+    # hue words, whichever the ORB detector
     colour_words: bool = _spec()
+
+    def store_settings(self) -> dict:
+        """The keys a map's words depend on besides its vocabularies: what names its word store.
+
+        Every key (so that a key added here changes the store's name unless it is left
+        out below), but:
+
+        - the vocabularies' keys (:data:`_VOCABULARY_KEYS`): the store's name covers each
+          vocabulary by its name, size and content hash instead, so a vocabulary folder
+          moved elsewhere keeps its stores;
+        - a key that the chosen ``orb_detector`` does not read (:data:`_READ_BY`);
+        - a key at the value that was the behaviour before the key existed
+          (:data:`_NAMED_UNLESS`), so stores made before it keep their names.
+        """
+        return {
+            key: value
+            for key, value in to_dict(self).items()
+            if key not in _VOCABULARY_KEYS
+            and _READ_BY.get(key, self.orb_detector) == self.orb_detector
+            and _NAMED_UNLESS.get(key, _NO_DEFAULT) != value
+        }
+
+
+#: Words keys that the word store records by their vocabularies' content hashes instead.
+_VOCABULARY_KEYS = ("vocabulary_dir", "orb_vocabulary", "texton_vocabulary")
+#: Words keys read by one ORB detector only: under the other they change no word.
+_READ_BY = {
+    "orb_grid_step": "grid",
+    **dict.fromkeys(("orb_tile", "orb_per_tile", "orb_max_features", "orb_fast_threshold", "orb_fill_threshold"),
+                    "keypoints"),
+}
+#: Words keys added after word stores existed, and the value that was the behaviour before:
+#: at it they leave the store's name as it was.
+_NAMED_UNLESS = {"orb_detector": "keypoints"}
+_NO_DEFAULT = object()
 
 
 def _check_words(words: WordsConfig, raw: _Raw) -> None:
-    """ORB keys that tie together: a top-up fills capped tiles, below the FAST threshold."""
+    """ORB keys that tie together: the grid takes no keypoint cap; a top-up fills capped
+    tiles, below the FAST threshold."""
+    if words.orb_detector == "grid":
+        for key in ("orb_per_tile", "orb_max_features"):
+            value = getattr(words, key)
+            if value is not None:
+                raise _invalid(
+                    raw, ("words", key),
+                    f"got {value}, expected null when words.orb_detector is grid (a word at every grid point; "
+                    "the cap is the keypoints detector's)",
+                )
     fill = words.orb_fill_threshold
     if fill is None:
         return
@@ -184,9 +239,6 @@ def _check_words(words: WordsConfig, raw: _Raw) -> None:
             raw, ("words", "orb_fill_threshold"),
             f"got {fill}, expected an integer between 1 and words.orb_fast_threshold ({words.orb_fast_threshold})",
         )
-
-
-_NONE = object()
 
 
 @dataclass(frozen=True)
@@ -218,7 +270,7 @@ class ExploreConfig:
         """
         return {
             key: value for key, value in to_dict(self).items()
-            if (key != "min_d2" or self.coverage == "clamp") and UNRECORDED_READINGS.get(key, _NONE) != value
+            if (key != "min_d2" or self.coverage == "clamp") and UNRECORDED_READINGS.get(key, _NO_DEFAULT) != value
         }
 
 

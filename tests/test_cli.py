@@ -15,7 +15,7 @@ from small_maps import edit_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.config import CONFIG_DIR
+from curiosity_cli.config import CONFIG_DIR, shipped_configs
 
 runner = CliRunner()
 
@@ -221,7 +221,9 @@ def test_config_init_writes_a_commented_copy_named_for_the_experiment(tmp_path, 
     again = run("config", "init", "my-exp")
     assert again.exit_code == 1 and again.stderr.strip() == "Error: my-exp.yaml: already exists; choose another name or edit that file"
     wrong = run("config", "init", "x", "--from", "paper")
-    assert wrong.exit_code == 1 and "--from: got 'paper', expected a shipped experiment config: paper-grid, quick, readings" in wrong.stderr
+    experiments = ", ".join(name for name in shipped_configs() if name != "paper")
+    assert wrong.exit_code == 1 and f"--from: got 'paper', expected a shipped experiment config: {experiments}" in wrong.stderr
+    assert experiments.startswith("paper-grid, quick, readings")
     assert run("config", "init", "../x").exit_code == 1 and not (tmp_path.parent / "x.yaml").exists()
 
 

@@ -167,3 +167,14 @@ def test_a_run_under_the_authors_readings_is_the_same_for_the_same_seed():
     a, b = run(**settings), run(**settings)
     for field in _FIELDS:
         np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+
+
+def test_rost_yaml_sets_every_reading_as_the_authors_code():
+    # each value is the one configs/rost.yaml cites from the authors' ROST code
+    rost = load_config(CONFIG_DIR / "rost.yaml")
+    assert {key: getattr(rost.explore, key) for key in UNRECORDED_READINGS} == {
+        "candidates": 4, "candidate_context": "own", "candidate_sweeps": 10, "path_topics": "counts",
+        "revisits": "again", "refine_picks": "recent",
+    }
+    assert (rost.model.topics, rost.model.alpha, rost.model.beta, rost.model.eta) == (64, 0.1, 0.1, 0.5)
+    assert rost.words.colour_words and rost.words.orb_detector == "keypoints"
