@@ -1,8 +1,8 @@
 """Screening the readings of issue 32 before the specification-curve study: which of the
 paper's open choices move topic perplexity's steering at all.
 
-For each map and each reading changed alone from the default (and all of the authors'
-readings together), explore ``--restarts`` topic-perplexity paths of ``--length`` steps
+For each map and each reading changed alone from the default (and ``rost``, all of the
+authors' readings together: configs/rost.yaml), explore ``--restarts`` topic-perplexity paths of ``--length`` steps
 (no labelling: steering needs only the walker's own records) and report, per reading:
 
 - steering: the total-variation distance between topic perplexity's step distribution and
@@ -35,6 +35,9 @@ READINGS = {
     "coverage-others": ["explore.coverage=others"],
     "beta-1": ["model.beta=1.0"],
     "topics-16": ["model.topics=16"],
+    "orb-grid": ["words.orb_detector=grid"],
+    "colour-words": ["words.colour_words=true"],
+    "rost": "rost",
 }
 
 
@@ -66,7 +69,8 @@ def main() -> None:
 
     print(f"{'reading':24s} {'map':16s} steering  spread  infinite  s/run")
     for name in args.readings:
-        config = load("quick", READINGS[name] + [f"explore.path_length={args.length}", f"explore.checkpoints=[{args.length}]"])
+        base, overrides = ("rost", []) if READINGS[name] == "rost" else ("quick", READINGS[name])
+        config = load(base, overrides + [f"explore.path_length={args.length}", f"explore.checkpoints=[{args.length}]"])
         for dataset in args.maps:
             store = word_store(dataset, config)
             starts = np.random.default_rng(0).choice(store.n_cells, args.restarts, replace=False)
