@@ -54,7 +54,9 @@ GEONRW_CLASSES = {
     2: MapClass("water", "#2166ac", "water: a river along the top edge and ponds (GeoNRW class 2)"),
     3: MapClass("agricultural", "#dfc27d", "fields and pasture (GeoNRW class 3, agricultural)"),
     4: MapClass(
-        "residential", "#969696", "settlement land around the buildings (GeoNRW class 4, residential, commercial, industrial)"
+        "residential",
+        "#969696",
+        "settlement land around the buildings (GeoNRW class 4, residential, commercial, industrial)",
     ),
     5: MapClass("grassland", "#a6dba0", "grassland, swamp and shrubbery (GeoNRW class 5)"),
     9: MapClass(

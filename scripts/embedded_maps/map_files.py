@@ -37,7 +37,12 @@ def write_map(name: str, out_dir: Path, cache: Path) -> dict[str, float]:
 
 
 def write_map_files(
-    name: str, out_dir: Path, image: np.ndarray, labels: np.ndarray, legend: list[dict], script: str = "scripts/make_maps.py"
+    name: str,
+    out_dir: Path,
+    image: np.ndarray,
+    labels: np.ndarray,
+    legend: list[dict],
+    script: str = "scripts/make_maps.py",
 ) -> dict[str, float]:
     """Check a built map against the data format and write its three files into ``out_dir / name``, each atomically.
 
