@@ -68,7 +68,7 @@ def test_every_dataset_config_loads(name):
 
 
 def test_the_embedded_and_fetched_datasets_are_registered():
-    assert dataset_names() == ["aerial-mosaic", "reef-mosaic", "sentinel-coast", "zurich-zh17"]
+    assert dataset_names() == ["aerial-mosaic", "geonrw-essen", "reef-mosaic", "sentinel-coast", "zurich-zh17"]
     fetched = [n for n in dataset_names() if load_dataset_config(CONFIG_DIR / "datasets" / f"{n}.yaml").fetch]
     assert fetched == ["zurich-zh17"]
 
