@@ -43,6 +43,9 @@ OVERRIDES = "overrides"
 #: The top-level key of an experiment config that declares a sweep over its other keys
 #: (:func:`curiosity_cli.sweep.declared_sweeps`); an experiment never sees it.
 SWEEP_KEY = "sweep"
+#: The top-level key of a study config that declares named specifications, each a set of
+#: overrides run on every map and replicate seed; an experiment never sees it either.
+SPECIFICATIONS_KEY = "specifications"
 
 #: The longest experiment or dataset name; a sweep names its experiments in up to this many.
 MAX_NAME = 120
@@ -467,9 +470,10 @@ def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
     if path in seen:
         raise ConfigError(f"{display_path(path)}: base: the chain of base configs loops back here")
     data = read_yaml(path, "config file")
-    if SWEEP_KEY in data and seen:
-        raise ConfigError(f"{display_path(path)}: {SWEEP_KEY}: only the experiment config itself may declare a sweep")
-    data.pop(SWEEP_KEY, None)  # the sweep's, not an experiment's (curiosity_cli.sweep.declared_sweeps)
+    for key in (SWEEP_KEY, SPECIFICATIONS_KEY):
+        if key in data and seen:
+            raise ConfigError(f"{display_path(path)}: {key}: only the experiment config itself may declare a sweep")
+        data.pop(key, None)  # the sweep's, not an experiment's (curiosity_cli.sweep.declared_sweeps)
     base = data.pop("base", None)
     if base is not None:
         if not isinstance(base, str):

@@ -228,7 +228,7 @@ def test_a_broken_config_file_is_refused_in_one_line(tmp_path, monkeypatch, text
 def test_a_missing_config_file_is_refused(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     shipped = ", ".join(shipped_configs())
-    assert shipped.startswith("paper, paper-grid, quick, readings")
+    assert {"paper", "paper-grid", "quick", "readings"} <= set(shipped_configs())
     message = f"nope.yaml: config file not found; expected a path to a YAML config or the name of a shipped one ({shipped})"
     with pytest.raises(ConfigError, match="^" + re.escape(message) + "$"):
         load_config("nope.yaml")
