@@ -35,10 +35,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import cuda
-from numba.cuda import config as cuda_config
 
+from curiosity_cli._numba import import_cuda
 from curiosity_cli.topics._rng import _GOLDEN, _MIX1, _MIX2, _S27, _S30, _S31, _S40, _TWO_M24
+
+cuda = import_cuda()
+from numba.cuda import config as cuda_config  # noqa: E402  (once numba-cuda imports)
 
 #: Whether these kernels run on numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``).
 SIMULATED = bool(cuda_config.ENABLE_CUDASIM)
