@@ -40,10 +40,13 @@ from curiosity_cli._numba import import_cuda
 from curiosity_cli.topics._rng import _GOLDEN, _MIX1, _MIX2, _S27, _S30, _S31, _S40, _TWO_M24
 
 cuda = import_cuda()
-from numba.cuda import config as cuda_config  # noqa: E402  (once numba-cuda imports)
+try:
+    from numba.cuda import config as cuda_config  # noqa: E402  (numba-cuda's own settings)
+except ImportError:  # older numba-cuda read numba's
+    from numba.core import config as cuda_config
 
 #: Whether these kernels run on numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``).
-SIMULATED = bool(cuda_config.ENABLE_CUDASIM)
+SIMULATED = bool(getattr(cuda_config, "ENABLE_CUDASIM", 0))
 #: Threads per CUDA block of the sweep and ML kernels.
 THREADS_PER_BLOCK = 128
 #: The most topics a thread's local copy of its neighbourhood sums holds (K <= 127).
