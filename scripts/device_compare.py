@@ -144,13 +144,17 @@ def _explain(store, config, cpu, phis, sweep, topics_before, before_cpu, before_
           f"(cell {cell}, colour {colour}, chain {r}): CPU topic {u[i, r]}, GPU {v[i, r]}")
     same_ng = before_cpu[1][cell, :, r].tobytes() == before_gpu[1][cell, :, r].tobytes()
     print(f"  its cell's neighbourhood sums before the sweep: {'the same' if same_ng else 'DIFFERENT'} on both devices")
-    # redo the cell on the CPU's state, in numpy, up to word i
+    # redo the cell on the CPU's state, in numpy, up to word i: its sums as the colours before it left them
     k_topics = config.model.topics
     alpha32 = np.float32(config.model.alpha)
     counts = np.asarray(phis[r], np.int64)
     inv = (1.0 / (counts.sum(axis=0) + store.vocabulary_size * config.model.beta)).astype(np.float32)
     phiw = (counts.astype(np.float32) + np.float32(config.model.beta)) * inv
-    sums = before_cpu[1][cell, :, r].astype(np.int64).copy()
+    sums = np.zeros(k_topics, np.int64)
+    for d in [cell, *(int(d) for d in cpu._table[cell] if d >= 0)]:
+        swept = np.searchsorted(starts, rank[d], side="right") - 1 < colour
+        words_of_d = slice(int(first[d]), int(first[d] + count[d]))
+        sums += np.bincount((u if swept else topics_before)[words_of_d, r].astype(np.int64), minlength=k_topics)
     state = stream_start(mix(np.uint64(r)), np.uint64(first.size + sweep), cell)
     for j in range(int(first[cell]), i + 1):
         w = store.words[j]
@@ -162,8 +166,8 @@ def _explain(store, config, cpu, phis, sweep, topics_before, before_cpu, before_
         for k in range(k_topics):
             total = np.float32(total + weights[k])
             running[k] = total
-        state, bits = next_state(state)
-        target = np.float32(unit32(bits) * total)
+        state, bits = next_state(np.uint64(state))
+        target = np.float32(unit32(np.uint64(bits)) * total)
         new = int(np.count_nonzero(running <= target))
         if j < i:
             sums[int(u[j, r])] += 1
