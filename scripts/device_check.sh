@@ -34,6 +34,12 @@ summary=()
 exec > >(tee -a "$OUT/device_check.log") 2>&1
 
 part "0. the machine"
+# the shipped configs and data are package resources mapped by pyproject.toml: an (editable,
+# offline) install makes them importable; the machine has setuptools and every dependency used here
+if ! "$PY" -c "import curiosity_cli.paths" 2>/dev/null; then
+    "$PY" -m pip install -q --no-deps --no-build-isolation --no-index -e . 2>&1 | tail -3
+fi
+"$PY" -c "import curiosity_cli.paths as p; print('curiosity: configs at', p.SHIPPED_CONFIGS)" 2>&1 | tail -1
 nvidia-smi -L 2>&1 || echo "no nvidia-smi"
 "$PY" -c "import sys, numpy, numba; print('python', sys.version.split()[0], '| numpy', numpy.__version__, '| numba', numba.__version__)"
 "$PY" -c "import importlib.metadata as m; print('numba-cuda', m.version('numba-cuda'))" 2>&1 | tail -1
