@@ -34,10 +34,13 @@ summary=()
 exec > >(tee -a "$OUT/device_check.log") 2>&1
 
 part "0. the machine"
-# the shipped configs and data are package resources mapped by pyproject.toml: an (editable,
-# offline) install makes them importable; the machine has setuptools and every dependency used here
+# the shipped configs and data are package resources that pyproject.toml maps from configs/ and
+# data/; on a bare machine (no install: its setuptools may be too old for pyproject.toml, and
+# nothing can be fetched) this copy of the checkout links them into place instead
 if ! "$PY" -c "import curiosity_cli.paths" 2>/dev/null; then
-    "$PY" -m pip install -q --no-deps --no-build-isolation --no-index -e . 2>&1 | tail -3
+    echo "curiosity is not installed here: linking configs/ and data/ in as curiosity_cli.shipped's packages"
+    ln -sfn ../../configs curiosity_cli/shipped/configs && ln -sfn ../../data curiosity_cli/shipped/data
+    touch configs/__init__.py data/__init__.py
 fi
 "$PY" -c "import curiosity_cli.paths as p; print('curiosity: configs at', p.SHIPPED_CONFIGS)" 2>&1 | tail -1
 nvidia-smi -L 2>&1 || echo "no nvidia-smi"
