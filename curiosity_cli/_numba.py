@@ -42,6 +42,9 @@ if "NUMBA_CACHE_DIR" not in os.environ:
 # (_chain_kernels.py) step over many chains at once and only become vector code with it.
 # It left the single-chain sampler's speed unchanged (../shared/PERFORMANCE.md).
 os.environ.setdefault("NUMBA_SLP_VECTORIZE", "1")
+# numba-cuda warns of a launch too small to fill the GPU: a colour of a small map is one,
+# by design, and labelling shows library warnings to the user
+os.environ.setdefault("NUMBA_CUDA_LOW_OCCUPANCY_WARNINGS", "0")
 
 import numba  # noqa: E402  (after the cache folder is chosen)
 import numba.core.config  # noqa: E402
