@@ -42,6 +42,9 @@ if "NUMBA_CACHE_DIR" not in os.environ:
 # (_chain_kernels.py) step over many chains at once and only become vector code with it.
 # It left the single-chain sampler's speed unchanged (../shared/PERFORMANCE.md).
 os.environ.setdefault("NUMBA_SLP_VECTORIZE", "1")
+# numba-cuda warns of a launch too small to fill the GPU: a colour of a small map is one,
+# by design, and labelling shows library warnings to the user
+os.environ.setdefault("NUMBA_CUDA_LOW_OCCUPANCY_WARNINGS", "0")
 
 import numba  # noqa: E402  (after the cache folder is chosen)
 import numba.core.config  # noqa: E402
@@ -59,3 +62,31 @@ def njit(*args, **overrides):
     if args and callable(args[0]):
         return numba.njit(**_FLAGS)(args[0])
     return numba.njit(*args, **{**_FLAGS, **overrides})
+
+
+def import_cuda():
+    """``numba.cuda`` (numba-cuda, the optional extra ``curiosity[cuda]``), importable with numpy 2.5.
+
+    numba-cuda up to at least 0.30 registers an implementation of ``np.row_stack``, which
+    numpy 2.5 removed, and so fails to import there (``../shared/PERFORMANCE.md``);
+    ``np.row_stack`` is ``np.vstack`` under its old name, given back for the import.
+
+    Raises
+    ------
+    ImportError
+        numba-cuda is not installed (numba's own deprecated CUDA target, which numba
+        still ships, is not used: it is not what the kernels were checked with).
+    """
+    import importlib.util
+
+    import numpy as np
+
+    if importlib.util.find_spec("numba_cuda") is None:
+        raise ImportError("numba-cuda is not installed")
+    if not hasattr(np, "row_stack"):
+        np.row_stack = np.vstack
+    from numba import cuda
+
+    if getattr(cuda, "implementation", None) != "NVIDIA":
+        raise ImportError(f"numba.cuda is numba's {getattr(cuda, 'implementation', 'built-in')} target, not numba-cuda")
+    return cuda

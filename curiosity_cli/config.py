@@ -76,6 +76,9 @@ WALKER_NAMES = (
 #: candidate's own term (``d = 0``) means, which the paper leaves undefined.
 #: :func:`curiosity_cli.explore.weights.coverage_potential` gives each its meaning.
 COVERAGE_READINGS = ("literal", "clamp", "others")
+#: Where labelling runs (``label.device``): the CPU, a CUDA GPU (the extra ``curiosity[cuda]``),
+#: or a GPU when one is there; the same bytes on each (``topics/chains.py``).
+LABEL_DEVICES = ("cpu", "cuda", "auto")
 
 #: The other open choices of the paper's exploration, each a key of ``explore`` with the
 #: values a config may name, today's reading first (``configs/paper.yaml`` gives each the
@@ -285,6 +288,8 @@ class LabelConfig:
     warm_sweeps: int | None = _spec(min=1)
     check_restarts: int = _spec(min=0)
     batch_sweeps: int = _spec(min=1)
+    # the one experiment key with a default: configs saved before it existed label on the CPU, as they did
+    device: str = _spec(choices=LABEL_DEVICES, default="cpu")
 
 
 @dataclass(frozen=True)

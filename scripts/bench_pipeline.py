@@ -16,11 +16,13 @@ paper's four weight functions), and ``config``, the whole of --config as it stan
 time, and the seconds per stage from its REPORT.md, beside the figures of commit 1903b17
 (the paper's grid labelled one single chain at a time, 64 sweeps then 16 warm per
 checkpoint, with the two-start check, on a 2-core machine: explore 4.9, label 28.9, all
-34.2 minutes). --grid-only skips part 1.
+34.2 minutes). --grid-only skips part 1. --device cuda labels on a CUDA GPU (part 1's
+run, and the grids: ``--set label.device=cuda``); the label files are the same bytes.
 
     python scripts/bench_pipeline.py                                   # part 1, a few minutes
     python scripts/bench_pipeline.py --full-grid                       # and both grids
     python scripts/bench_pipeline.py --full-grid --grid-only --grids paper
+    python scripts/bench_pipeline.py --full-grid --grid-only --grids paper --jobs 16 --device cuda
 
 Prints and never asserts: timings depend on the machine.
 """
@@ -38,6 +40,7 @@ from pathlib import Path
 from curiosity_cli.config import CONFIG_DIR, dataset_path, load_config, load_dataset_config
 from curiosity_cli.data import load_map
 from curiosity_cli.evaluate.information import contingency
+from curiosity_cli.topics.devices import resolve_device
 from curiosity_cli.evaluate.label_sampling import batch_labels, label_paths, pixel_labels, whole_map_model
 from curiosity_cli.explore.walker import explore
 from curiosity_cli.words.extract import extract_words
@@ -61,6 +64,7 @@ def main() -> None:
     parser.add_argument("--grid-only", action="store_true", help="with --full-grid: skip part 1")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--results-dir", type=Path, default=None)
+    parser.add_argument("--device", choices=["cpu", "cuda", "auto"], default="cpu", help="label.device: where Z_p's chains run")
     args = parser.parse_args()
 
     config = load_config(args.config)
@@ -76,6 +80,9 @@ def main() -> None:
             ]),
             "config": (f"{args.config.name} as it stands", args.config, []),
         }
+        if args.device != "cpu":  # before the name, which stays last
+            grids = {key: (title, path, [*sets[:-2], "--set", f"label.device={args.device}", *sets[-2:]] if sets else
+                           ["--set", f"label.device={args.device}"]) for key, (title, path, sets) in grids.items()}
         grids = [grids[name] for name in args.grids]
         print(f"\nbefore (commit 1903b17, paper's grid, 2 cores): explore {BEFORE['explore']} min, "
               f"label {BEFORE['label']} min, all {BEFORE['all']} min")
@@ -87,7 +94,7 @@ def main() -> None:
                 began = time.perf_counter()
                 subprocess.run(command, check=True)
                 minutes = (time.perf_counter() - began) / 60
-                name = sets[-1].split("=", 1)[1] if sets else config.name
+                name = sets[-1].split("=", 1)[1] if sets and sets[-1].startswith("name=") else config.name
                 report = (results / name / "REPORT.md").read_text()
             print(f"\n{title}, `curiosity reproduce {path.name} {' '.join(sets)} --jobs {args.jobs}`: "
                   f"{minutes:.1f} min end to end")
@@ -103,7 +110,7 @@ def part_one(config, args) -> None:
     # a path's checkpoints to label: 320 steps of topic-perplexity exploration
     run = explore(store, "topic-perplexity", 0, model=config.model, settings=config.explore, seed=0)
     phis = [run.checkpoints[n].dense() for n in config.explore.checkpoints]
-    for _ in label_paths(store, config.model, [phis[:1]], [0], sweeps=1, warm_sweeps=None):
+    for _ in label_paths(store, config.model, [phis[:1]], [0], sweeps=1, warm_sweeps=None, device=resolve_device(args.device)):
         pass  # compiled
     n_classes = int(map_data.labels.max()) + 1
 
@@ -115,7 +122,7 @@ def part_one(config, args) -> None:
     for repeat in range(args.repeats):
         began = time.perf_counter()
         for _, _, labels in label_paths(store, config.model, [phis], [repeat], sweeps=label.sweeps,
-                                        warm_sweeps=label.warm_sweeps):
+                                        warm_sweeps=label.warm_sweeps, device=resolve_device(args.device)):
             tables(labels[:, 0])
         ours.append(time.perf_counter() - began)
         began = time.perf_counter()

@@ -569,10 +569,21 @@ def start_chain_naive(state: NaiveModel, seed: int, placed: bool) -> None:
             state.topics[c][i] = running_sum_draw(eq5_weights(state, None, None, neighbourhood(state, ncz, c), w), stream.bits())
 
 
+def neighbour_colouring_naive(table: np.ndarray) -> np.ndarray:
+    """Twin of ``neighbour_colouring``: greedy, in cell order, the smallest colour no neighbour has yet."""
+    colour = np.full(table.shape[0], -1, np.int32)
+    for c in range(table.shape[0]):
+        taken = {int(colour[d]) for d in table[c] if d >= 0 and colour[d] >= 0}
+        colour[c] = min(set(range(len(taken) + 1)) - taken)
+    return colour
+
+
 def sweep_chain_naive(state: NaiveModel, counter: int) -> None:
-    """Twin of ``sweep_chains_kernel`` for one chain: cells in order, cell c from stream
-    (counter, c), each word drawn from eq. 5 with every count recounted without it."""
-    for c in sorted(state.topics):
+    """Twin of a ``FrozenChains`` sweep for one chain: cells colour by colour, each colour's
+    in index order (``neighbour_colouring_naive``), cell c from stream (counter, c), each
+    word drawn from eq. 5 with every count recounted without it."""
+    colour = neighbour_colouring_naive(state.table)
+    for c in sorted(state.topics, key=lambda c: (colour[c], c)):
         stream = Stream(state.key, counter, c)
         zs = state.topics[c]
         for i, w in enumerate(state.words[c]):

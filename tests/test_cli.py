@@ -247,3 +247,43 @@ def test_the_paths_table_follows_the_environment(tmp_path):
     env = {k: v for k, v in os.environ.items() if not k.startswith("CURIOSITY_")} | {"XDG_CACHE_HOME": str(tmp_path / "x")}
     printed = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout.split()
     assert printed == ["results", str(tmp_path / "x" / "curiosity" / "stores"), str(tmp_path / "x" / "curiosity")]
+
+
+def saved_experiment(folder: Path) -> Path:
+    """An experiment folder holding only its saved config (the quick job's): what `label` reads first."""
+    import yaml
+
+    from curiosity_cli.config import load_config, to_dict
+
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "config.yaml").write_text(yaml.safe_dump(to_dict(load_config("quick"))))
+    return folder
+
+
+def test_label_on_cuda_without_numba_cuda_is_one_error_line_naming_the_extra(tmp_path, monkeypatch):
+    import curiosity_cli._numba
+
+    def missing():
+        raise ImportError("numba-cuda is not installed")
+
+    monkeypatch.setattr(curiosity_cli._numba, "import_cuda", missing)
+    result = run("label", str(saved_experiment(tmp_path / "exp")), "--set", "label.device=cuda")
+    assert result.exit_code == 1
+    assert result.stderr.strip().startswith("Error: label.device: cuda, but it needs numba-cuda, the extra curiosity[cuda]")
+    assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.output
+    assert not (tmp_path / "exp" / "labels").exists()
+
+
+def test_label_on_cuda_without_a_gpu_is_one_error_line_and_auto_falls_back_to_the_cpu_once(tmp_path, monkeypatch, capsys):
+    pytest.importorskip("numba_cuda")
+    from curiosity_cli.topics import _chain_kernels_cuda
+
+    monkeypatch.setattr(_chain_kernels_cuda, "gpu_available", lambda: (False, "no driver here"))
+    result = run("label", str(saved_experiment(tmp_path / "exp")), "--set", "label.device=cuda")
+    assert result.exit_code == 1
+    assert result.stderr.strip() == "Error: label.device: cuda, but no CUDA GPU was found (no driver here)"
+    from curiosity_cli.topics.devices import resolve_device
+
+    capsys.readouterr()
+    assert resolve_device("auto") == "cpu"
+    assert capsys.readouterr().err == "label.device is auto: labelling on the CPU, as no CUDA GPU was found (no driver here)\n"

@@ -63,24 +63,25 @@ def whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_coun
     return topic_model
 
 
-def map_chains(store: WordStore, model: ModelConfig):
+def map_chains(store: WordStore, model: ModelConfig, device: str = "cpu"):
     """Frozen-Φ Gibbs chains over every word of a map (:class:`~curiosity_cli.topics.chains.FrozenChains`), none started.
 
     What Z_p is sampled on: the map's cells and neighbour table, each cell's words in
-    the store's order, as :func:`whole_map_model` holds them.
+    the store's order, as :func:`whole_map_model` holds them; on ``device`` (``"cpu"`` or
+    ``"cuda"``, the same bytes).
     """
     from curiosity_cli.topics.chains import FrozenChains
 
     return FrozenChains(
         store.words, np.repeat(np.arange(store.n_cells), store.words_per_cell()),
         store.grid.neighbour_table(model.spatial_neighbours), n_topics=model.topics,
-        vocabulary_size=store.vocabulary_size, alpha=model.alpha, beta=model.beta,
+        vocabulary_size=store.vocabulary_size, alpha=model.alpha, beta=model.beta, device=device,
     )
 
 
 def label_paths(
     store: WordStore, model: ModelConfig, paths: Sequence[Sequence[np.ndarray]], seeds: Sequence[int], *,
-    sweeps: int, warm_sweeps: int | None, placed: Sequence[bool] | None = None,
+    sweeps: int, warm_sweeps: int | None, placed: Sequence[bool] | None = None, device: str = "cpu",
 ) -> Iterator[tuple[int, list[int], np.ndarray]]:
     """Z_p of every word for each checkpoint of several paths, their chains in lock-step.
 
@@ -110,6 +111,8 @@ def label_paths(
         Per path, start from placed topics instead of uniformly random ones
         (:meth:`~curiosity_cli.topics.chains.FrozenChains.start`): the second chain of a
         convergence check.
+    device : {"cpu", "cuda"}
+        Where the chains run; the labels are the same bytes on either.
 
     Yields
     ------
@@ -121,7 +124,7 @@ def label_paths(
         Their labels, each word of the store in the store's order.
     """
     placed = [False] * len(paths) if placed is None else list(placed)
-    chains = map_chains(store, model)
+    chains = map_chains(store, model, device)
     active = list(range(len(paths)))
     for j in range(max(len(path) for path in paths)):
         still = [c for c in active if len(paths[c]) > j]

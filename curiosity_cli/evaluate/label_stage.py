@@ -30,8 +30,10 @@ Written under ``results/<experiment>/``:
 Every file is written atomically; a killed ``label`` resumes with the runs not yet done.
 
 Batch references and blocks of runs are tasks of :class:`~curiosity_cli.experiment.workers.Workers`.
-A map's runs to label are cut into blocks (:func:`blocks`) of up to
-:data:`CHAINS_PER_BLOCK` chains (a run's, and a checked run's second chain), whose chains
+A map's runs to label are cut into blocks
+(:func:`~curiosity_cli.experiment.workers.plan_blocks`: sizes that keep every worker busy
+to the end, around :data:`CHAINS_PER_BLOCK` chains on the CPU, every chain of the map
+on a GPU), a run's chains (and a checked run's second chain) in one block, whose chains
 advance in lock-step in one task; a run's labels depend only on the run, never on its
 block, so a killed ``label`` relabels what it lost to the same bytes. With loky, batch
 references are computed in this process, one map after the other on ``jobs`` threads,
@@ -277,8 +279,12 @@ def _map_arrays(entry: str, store_path: str, batch_file: str) -> MapArrays:
     return MapArrays(load_store(Path(store_path)), *_map_references(entry, batch_file))
 
 
-def label_block(runs: list[RunInputs], inputs: MapInputs, arrays: MapArrays, config: ExperimentConfig) -> list[tuple]:
+def label_block(
+    runs: list[RunInputs], inputs: MapInputs, arrays: MapArrays, config: ExperimentConfig, *, device: str = "cpu",
+) -> list[tuple]:
     """Z_p of every checkpoint of some runs of one map, as contingency tables; ``(tables, examples, meta)`` per run.
+
+    The chains run on ``device`` (``"cpu"`` or ``"cuda"``: the same bytes).
 
     ``inputs`` names the map's files, ``arrays`` holds their contents; the runs were made
     from the map's current word store (:func:`label_experiment` checks). Their chains,
@@ -304,6 +310,7 @@ def label_block(runs: list[RunInputs], inputs: MapInputs, arrays: MapArrays, con
         store, config.model, [phis[index] for index, _ in chains],
         [path_seed(runs[index].meta["seed"], second=bool(prefix)) for index, prefix in chains],
         placed=[bool(prefix) for _, prefix in chains], sweeps=config.label.sweeps, warm_sweeps=config.label.warm_sweeps,
+        device=device,
     )
     for j, active, labels in labelled:
         for column, c in enumerate(active):
@@ -331,25 +338,6 @@ def label_block(runs: list[RunInputs], inputs: MapInputs, arrays: MapArrays, con
             arrays_out["class_first_step"] = class_first_steps(run.path, cell_classes, store, inputs.store_path)
             meta["class_share_percent"] = CLASS_SHARE_PERCENT
         out.append((arrays_out, examples[index], meta))
-    return out
-
-
-def blocks(chain_counts: list[int], most: int) -> list[list[int]]:
-    """Cut a map's runs into blocks labelled in lock-step: the indices of each block's runs, in order.
-
-    ``chain_counts[i]`` is run ``i``'s chains (2 for a checked restart). Each block is
-    filled up to ``most`` chains (a run's chains stay together; a run alone may have
-    more), so every block but the map's last is full: the kernels hold chains in
-    multiples of 8 (:data:`~curiosity_cli.topics.chains.LANES`), and a block short of one
-    pays for the chains it lacks. Which block a run is in never changes its labels.
-    """
-    out, size = [], most
-    for index, count in enumerate(chain_counts):
-        if size + count > most:
-            out.append([])
-            size = 0
-        out[-1].append(index)
-        size += count
     return out
 
 
@@ -484,8 +472,9 @@ def label_experiment(
         Where to compute instead of new workers from ``backend``, ``scheduler`` and
         ``jobs``: open ones another stage shares (``curiosity reproduce``).
     chains_per_block : int
-        At most this many labelling chains advance in lock-step in one task
-        (:func:`blocks`); the labels do not depend on it.
+        On the CPU, the block size past which lock-step chains gain no more speed
+        (:func:`~curiosity_cli.experiment.workers.plan_blocks` cuts blocks around it);
+        the labels do not depend on it.
 
     Returns
     -------
@@ -508,11 +497,14 @@ def label_experiment(
         reached or has unusable workers.
     """
     from curiosity_cli.experiment.maps import prepare_stores
-    from curiosity_cli.experiment.workers import Workers
+    from curiosity_cli.experiment.workers import Workers, plan_blocks
+    from curiosity_cli.topics.chains import LANES, block_chains
+    from curiosity_cli.topics.devices import resolve_device
     from curiosity_cli.explore.runs import RunError
     from curiosity_cli.words.store import load_store
 
     started = time.perf_counter()
+    device = resolve_device(config.label.device)  # before any work: a missing GPU is the only message
     computing = Workers.shared(workers, backend, scheduler, jobs)
     folder = Path(folder)
     layout = ExperimentFolder(folder)
@@ -563,20 +555,22 @@ def label_experiment(
         if relabelled:
             note(f"labelling {len(relabelled)} runs again whose label files were made otherwise, e.g. {relabelled[0]}")
         todo = len(runs) - skipped
-        tasks = []  # (runs, map inputs): blocks labelled in lock-step
-        for name, map_runs in to_label.items():
-            counts = [1 + is_checked(config, run.meta["restart"]) for run in map_runs]
-            for block in blocks(counts, chains_per_block):
-                tasks.append(([map_runs[i] for i in block], inputs[name]))
+        tasks = []  # (runs, map inputs, device): blocks labelled in lock-step
+        counts = {name: [1 + is_checked(config, run.meta["restart"]) for run in map_runs] for name, map_runs in to_label.items()}
+        most = chains_per_block if device == "cpu" else block_chains(device)
+        plan = plan_blocks(list(counts.values()), workers.jobs if device == "cpu" else 1, lanes=LANES, most=most)
+        for (name, map_runs), map_blocks in zip(to_label.items(), plan):
+            for block in map_blocks:
+                tasks.append(([map_runs[i] for i in block], inputs[name], device))
         shipped = {}  # loky workers read the maps' files themselves
         if workers.ships:  # before the stage starts: an unusable cluster is the only message
-            for name, map_inputs in {m.name: m for _, m in tasks}.items():
+            for name, map_inputs in {m.name: m for _, m, _ in tasks}.items():
                 store = workers.ship_file(map_inputs.store_path, load_store)
                 shipped[name] = workers.ship(
                     MapArrays, store, *_map_references(map_inputs.entry, map_inputs.batch_path), key=f"map-{name}"
                 )
         if on_stage is not None:
-            on_stage("labelling runs", sum(len(block) for block, _ in tasks))
+            on_stage("labelling runs" + (" on the GPU" if device == "cuda" else ""), sum(len(block) for block, *_ in tasks))
         labelled = 0
         computed = workers.compute(
             _label_task, tasks, args=lambda task: (config, shipped.get(task[1].name)), threads=1,
@@ -584,7 +578,7 @@ def label_experiment(
             + f"+{len(task[0]) - 1}",
         )
         with computed as results:
-            for (block, _), outcome in results:
+            for (block, *_), outcome in results:
                 for index, run in enumerate(block):
                     if isinstance(outcome, str):
                         problems.append("{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome)
@@ -705,12 +699,12 @@ def _batch_references(
 
 
 def _label_task(
-    task: tuple[list[RunInputs], MapInputs], config: ExperimentConfig, arrays: MapArrays | None = None, *,
+    task: tuple[list[RunInputs], MapInputs, str], config: ExperimentConfig, arrays: MapArrays | None = None, *,
     threads: int = 1,
 ) -> list[tuple]:
-    """Label a block of runs in a worker: ``(arrays, examples, meta)`` per run; ``arrays`` are its map's when shipped
-    (Dask), else read once. One thread (``threads`` is 1): the blocks keep every worker busy."""
-    runs, inputs = task
+    """Label a block of runs in a worker on its device: ``(arrays, examples, meta)`` per run; ``arrays`` are its map's
+    when shipped (Dask), else read once. One thread (``threads`` is 1): the blocks keep every worker busy."""
+    runs, inputs, device = task
     if arrays is None:
         arrays = _map_arrays(inputs.entry, inputs.store_path, inputs.batch_path)
-    return label_block(runs, inputs, arrays, config)
+    return label_block(runs, inputs, arrays, config, device=device)

@@ -36,8 +36,11 @@ from curiosity_cli.config import ExperimentConfig, to_dict
 RECIPE_KEY = "recipe"
 #: The config keys that choose which runs a grid holds, not what a run computes.
 SELECTION_KEYS = {("explore", "weight_functions"), ("explore", "restarts")}
-#: Label files: 2 since the chains of a map's runs advance in lock-step (their draws changed).
-LABEL_FORMAT = 2
+#: Label files: 2 since the chains of a map's runs advance in lock-step (their draws changed);
+#: 3 since a sweep visits the cells colour by colour (``topics.chains.sweep_order``), the
+#: order in which a GPU gives the CPU's bytes. The device is not in the recipe: a label
+#: file is the same bytes whichever device made it.
+LABEL_FORMAT = 3
 #: Batch references, whose draws did not change with the label files'.
 BATCH_FORMAT = 1
 #: A human class counts as found in a visited cell when it covers at least this share
@@ -161,7 +164,8 @@ def label_recipe(run: str, batch: str, config: ExperimentConfig, human: str | No
     ``label.check_restarts`` enters only as whether this ``restart`` is checked (a
     second chain), so changing it relabels only the runs it adds or drops.
     """
-    label = {key: value for key, value in to_dict(config.label).items() if key != "check_restarts"}
+    # the device is left out: cpu and cuda give the same bytes (topics/chains.py)
+    label = {key: value for key, value in to_dict(config.label).items() if key not in ("check_restarts", "device")}
     inputs = {
         "format": LABEL_FORMAT, "run": run, "batch": batch, "label": label,
         "class_share_percent": CLASS_SHARE_PERCENT, "human": human,

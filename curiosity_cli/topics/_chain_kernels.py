@@ -27,6 +27,12 @@ in float32; an inverse-CDF search over the float32 running sum ``s[k] = s[k-1] +
 ``k`` with ``s[k] > target`` (rounding can leave none; then the last topic with
 ``p[k] > 0``). Every
 operation is per chain, so a chain's draws do not depend on which chains share its block.
+
+A sweep visits the cells colour by colour (:func:`neighbour_colouring`: all cells of
+colour 0 in index order, then colour 1, ...). Cells of one colour are never neighbours, so
+none of them reads a count another one changes: the GPU kernels
+(``_chain_kernels_cuda.py``) resample all cells of a colour at once and give these
+kernels' bytes.
 """
 
 from __future__ import annotations
@@ -36,6 +42,31 @@ import numpy as np
 from curiosity_cli._numba import njit
 from curiosity_cli.topics._intrinsics import stack_array
 from curiosity_cli.topics._rng import below, next_state, stream_start, unit32
+
+
+@njit
+def neighbour_colouring(table):
+    """Greedy proper colouring of the neighbour graph: neighbours get different colours.
+
+    Cells are coloured in index order, each with the smallest colour that none of its
+    already-coloured neighbours has (a 4-neighbour grid gets the checkerboard
+    ``(row + col) % 2``). Returns (n_cells,) int32 colours. A cell's neighbourhood sum
+    holds its own counts and its neighbours', so while the cells of one colour are
+    resampled each one's sum changes only by its own words.
+    """
+    n_cells, width = table.shape
+    colour = np.full(n_cells, -1, np.int32)
+    taken = np.full(width + 1, -1, np.int64)  # a cell has at most width neighbours
+    for c in range(n_cells):
+        for j in range(width):
+            d = table[c, j]
+            if d >= 0 and colour[d] >= 0:
+                taken[colour[d]] = c
+        pick = 0
+        while taken[pick] == c:
+            pick += 1
+        colour[c] = pick
+    return colour
 
 
 @njit(inline="always")
@@ -97,6 +128,9 @@ def start_chain_kernel(r, placed, cells, cell_first, cell_count, words, topics, 
 @njit
 def sweep_chains_kernel(cells, cell_first, cell_count, words, topics, phiw, ncz, ng, table, alpha, keys, counter):
     """One Gibbs sweep of every chain over ``cells`` in order, each chain's cell ``c`` from stream ``(counter, c)``.
+
+    :class:`~curiosity_cli.topics.chains.FrozenChains` passes the cells colour by colour
+    (module docstring).
 
     ``keys`` is a tuple, so the number of chains is known when compiling: the loops over
     chains become vector code, and the per-chain sums live in registers (stack arrays).

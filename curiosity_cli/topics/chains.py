@@ -14,7 +14,35 @@ the object, nor on their number.
 Random streams, per chain, from ``key = mix(seed)``: a uniform start draws cell ``c``
 from stream ``(c, c)`` (as :meth:`~curiosity_cli.topics.model.TopicModel.restart` of a
 model holding every cell), a placed start from ``(0, c)``; sweep ``s`` after a start
-(0, 1, ...) draws cell ``c`` from stream ``(n_cells + s, c)``.
+(0, 1, ...) draws cell ``c`` from stream ``(n_cells + s, c)``. A sweep visits the cells
+colour by colour (:func:`sweep_order`): every cell of colour 0 in index order, then
+colour 1, ... (label format 3; before it, cells in index order). Every order is the
+exact sampler; this one lets a GPU resample a colour's cells at once.
+
+**Devices.** The chains run on the CPU (``device="cpu"``, the numba kernels of
+``_chain_kernels.py``) or on a CUDA GPU (``device="cuda"``, ``_chain_kernels_cuda.py``,
+the optional extra ``curiosity[cuda]``), behind one interface, with the same bytes on
+both: the same streams, the same float32 operations in the same order, never fused.
+What a device does for each step of the interface:
+
+==============  ==============================================================================
+step            CPU / CUDA
+==============  ==============================================================================
+``start``       both: the CPU start kernel, per chain (a placed start is sequential over
+                the cells); CUDA then copies topics, counts and sums to the GPU
+``switch``      both: eq. 5's fixed factors ``phiw`` computed here (numpy float32); CUDA
+                copies them to the GPU
+``keep``        CPU: indexing; CUDA: to the host, indexing, back
+``sweep``       CPU: one kernel call over the cells in colour order, every chain in
+                lock-step; CUDA: one launch per colour, a thread per (cell, chain)
+``topics``      CPU: a copy; CUDA: a copy from the GPU
+``ml_topics``   CPU: the ML kernel; CUDA: its twin on the GPU, one thread per (cell, chain)
+==============  ==============================================================================
+
+Chains per block (:func:`block_chains`): the CPU holds chains in multiples of
+:data:`LANES` and gains nothing past 16 in one block, so a map's chains are cut into
+blocks that keep every core busy; a GPU wants every chain of a map in one block (its
+time per chain falls until a few hundred chains, ``../shared/PERFORMANCE.md``).
 """
 
 from __future__ import annotations
@@ -27,11 +55,45 @@ from curiosity_cli.checks import check_float, check_int
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics.neighbours import check_neighbours
 
+#: Where chains can run (:class:`FrozenChains`' ``device``).
+DEVICES = ("cpu", "cuda")
+#: The chains a device wants in one block (a task): None for all of a map's chains.
+_BLOCK_CHAINS = {"cpu": 16, "cuda": None}
+
 #: Chains are held in multiples of this many (float32 lanes of a 256-bit vector): the
 #: kernels compile for the number of chains held, and a remainder past a multiple of 8
 #: runs as scalar code, at twice the time per chain. The padding chains repeat the last
 #: real one and are never reported.
 LANES = 8
+
+
+def block_chains(device: str) -> int | None:
+    """The most chains ``device`` wants advanced in one block (a task); None: every chain of a map."""
+    return _BLOCK_CHAINS[device]
+
+
+def sweep_order(table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cells in sweep order and where each colour starts in it.
+
+    Parameters
+    ----------
+    table : (n_cells, width) int32 ndarray
+        A checked neighbour table.
+
+    Returns
+    -------
+    order : (n_cells,) int64 ndarray
+        Cells of colour 0 in index order, then colour 1, ...
+        (``_chain_kernels.neighbour_colouring``: neighbours never share a colour).
+    starts : (n_colours + 1,) int64 ndarray
+        Colour ``c``'s cells are ``order[starts[c]:starts[c + 1]]``.
+    """
+    from curiosity_cli.topics._chain_kernels import neighbour_colouring
+
+    colour = neighbour_colouring(table)
+    order = np.argsort(colour, kind="stable").astype(np.int64)
+    starts = np.concatenate([[0], np.cumsum(np.bincount(colour))]).astype(np.int64)
+    return order, starts
 
 
 class FrozenChains:
@@ -51,6 +113,10 @@ class FrozenChains:
         V >= 1.
     alpha, beta : float
         Dirichlet hyper-parameters, > 0.
+    device : {"cpu", "cuda"}
+        Where the chains run (module docstring); the same bytes on either. ``"cuda"``
+        needs numba-cuda and a GPU (:func:`curiosity_cli.topics.devices.resolve_device`
+        says which is missing).
 
     Raises
     ------
@@ -58,11 +124,16 @@ class FrozenChains:
         Naming the first invalid parameter.
     """
 
-    def __init__(self, words, cells, neighbours, *, n_topics: int, vocabulary_size: int, alpha: float, beta: float):
+    def __init__(
+        self, words, cells, neighbours, *, n_topics: int, vocabulary_size: int, alpha: float, beta: float,
+        device: str = "cpu",
+    ):
         self._k = check_int("n_topics", n_topics, 1, 127)
         self._v = check_int("vocabulary_size", vocabulary_size, 1)
         self._alpha = check_float("alpha", alpha, 0, low_open=True)
         self._beta = check_float("beta", beta, 0, low_open=True)
+        if device not in DEVICES:
+            raise ParameterError(f"device: got {device!r}, expected one of {', '.join(DEVICES)}")
         self._table = check_neighbours(neighbours)
         n_cells = self._table.shape[0]
         self._words = _check_ids("words", words, self._v)
@@ -74,12 +145,15 @@ class FrozenChains:
         self._cell_count = np.bincount(word_cells, minlength=n_cells).astype(np.int64)
         self._cell_first = np.concatenate([[0], np.cumsum(self._cell_count)[:-1]]).astype(np.int64)
         self._cells = np.arange(n_cells, dtype=np.int64)
+        self._order, self._colour_starts = sweep_order(self._table)
+        self.device = device
+        engine = _CudaEngine if device == "cuda" else _CpuEngine
+        self._engine = engine(self._order, self._colour_starts, self._cell_first, self._cell_count, self._words,
+                              self._table, self._alpha)
         self._counts = None  # (V, K, R) int32 frozen word-topic counts
-        self._phiw = None
         self._keys = None  # (R padded,) uint64
         self._n = 0  # real chains
         self._sweeps = 0
-        self._topics = self._ncz = self._ng = None
 
     @property
     def n_chains(self) -> int:
@@ -101,7 +175,8 @@ class FrozenChains:
             0 .. 2**64 - 1.
         placed : sequence of R bools, optional
             Per chain, start from placed topics (each word drawn from eq. 5 given the
-            words drawn before it) instead of uniformly random ones (the default).
+            words drawn before it, cells in index order) instead of uniformly random
+            ones (the default).
         """
         from curiosity_cli.topics._chain_kernels import start_chain_kernel
         from curiosity_cli.topics._rng import mix
@@ -115,20 +190,21 @@ class FrozenChains:
         if len(placed) != n:
             raise ParameterError(f"placed: got {len(placed)}, expected one per chain ({n})")
         keys = [mix(np.uint64(check_int("seeds", s, 0, 2**64 - 1))) for s in seeds]
-        self._set_phis(phis)
+        phiw = self._set_phis(phis)
         self._n = n
-        held = self._phiw.shape[2]
+        held = phiw.shape[2]
         self._keys = np.array(_padded(keys, held), np.uint64)
         placed = _padded(placed, held)
         n_cells = self._table.shape[0]
-        self._topics = np.zeros((self._words.size, held), np.int8)
-        self._ncz = np.zeros((n_cells, self._k, held), np.int32)
-        self._ng = np.zeros((n_cells, self._k, held), np.int32)
+        topics = np.zeros((self._words.size, held), np.int8)
+        ncz = np.zeros((n_cells, self._k, held), np.int32)
+        ng = np.zeros((n_cells, self._k, held), np.int32)
         for r in range(held):
             start_chain_kernel(
-                r, placed[r], self._cells, self._cell_first, self._cell_count, self._words, self._topics, self._phiw,
-                self._ncz, self._ng, self._table, np.float32(self._alpha), self._keys[r],
+                r, placed[r], self._cells, self._cell_first, self._cell_count, self._words, topics, phiw,
+                ncz, ng, self._table, np.float32(self._alpha), self._keys[r],
             )
+        self._engine.put(topics, ncz, ng, phiw, self._keys)
         self._sweeps = 0
 
     def switch(self, phis: Sequence[np.ndarray]) -> None:
@@ -136,7 +212,7 @@ class FrozenChains:
         self._started("switch")
         if len(phis) != self.n_chains:
             raise ParameterError(f"phis: got {len(phis)}, expected one per chain ({self.n_chains})")
-        self._set_phis(phis)
+        self._engine.set_phiw(self._set_phis(phis))
 
     def keep(self, chains: Sequence[int]) -> None:
         """Keep only the listed chains, in that order (the others have no more checkpoints)."""
@@ -146,31 +222,33 @@ class FrozenChains:
             raise ParameterError(f"chains: expected a non-empty list of chains in 0..{self.n_chains - 1}")
         self._n = index.size
         index = np.array(_padded(list(index), _held(index.size)), np.int64)
+        topics, ncz, ng, phiw = self._engine.get()
         self._counts = np.ascontiguousarray(self._counts[:, :, index])
-        self._phiw = np.ascontiguousarray(self._phiw[:, :, index])
         self._keys = self._keys[index]
-        self._topics = np.ascontiguousarray(self._topics[:, index])
-        self._ncz = np.ascontiguousarray(self._ncz[:, :, index])
-        self._ng = np.ascontiguousarray(self._ng[:, :, index])
+        self._engine.put(
+            np.ascontiguousarray(topics[:, index]), np.ascontiguousarray(ncz[:, :, index]),
+            np.ascontiguousarray(ng[:, :, index]), np.ascontiguousarray(phiw[:, :, index]), self._keys,
+        )
 
     def sweep(self, sweeps: int) -> None:
-        """``sweeps`` Gibbs sweeps of every chain over every word, cells in order."""
-        from curiosity_cli.topics._chain_kernels import sweep_chains_kernel
-
+        """``sweeps`` Gibbs sweeps of every chain over every word, cells in colour order (:func:`sweep_order`)."""
         self._started("sweep")
         sweeps = check_int("sweeps", sweeps, 0)
         n_cells = self._table.shape[0]
         for _ in range(sweeps):
-            sweep_chains_kernel(
-                self._cells, self._cell_first, self._cell_count, self._words, self._topics, self._phiw, self._ncz,
-                self._ng, self._table, np.float32(self._alpha), tuple(self._keys), np.uint64(n_cells + self._sweeps),
-            )
+            self._engine.sweep(np.uint64(n_cells + self._sweeps))
             self._sweeps += 1
 
     def topics(self) -> np.ndarray:
         """(N, R) int8: each word's current topic in each chain."""
         self._started("topics")
-        return self._topics[:, : self._n].copy()
+        return self._engine.get()[0][:, : self._n].copy()
+
+    def counts(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(ncz, ng)``, each (n_cells, K, R) int32: each chain's cell topic counts and neighbourhood sums."""
+        self._started("counts")
+        _, ncz, ng, _ = self._engine.get()
+        return ncz[:, :, : self._n].copy(), ng[:, :, : self._n].copy()
 
     def ml_topics(self) -> np.ndarray:
         """(N, R) int16: each word's maximum-likelihood topic in each chain, the word included.
@@ -178,19 +256,13 @@ class FrozenChains:
         ``argmax_k (n_kw + β) / (n_k + Vβ) · (n_Gk + α)`` in float64, ties to the lowest
         topic: :meth:`~curiosity_cli.topics.model.TopicModel.ml_topics` of each chain.
         """
-        from curiosity_cli.topics._chain_kernels import ml_chains_kernel
-
         self._started("ml_topics")
         norm = 1.0 / (self._counts.sum(axis=0, dtype=np.int64) + self._v * self._beta)  # (K, R)
         phid = (self._counts + self._beta) * norm
-        out = np.empty((self._words.size, self._keys.size), np.int16)
-        ml_chains_kernel(
-            self._cells, self._cell_first, self._cell_count, self._words, phid, self._ng, self._alpha, tuple(self._keys), out
-        )
-        return out[:, : self._n]
+        return self._engine.ml_topics(phid)[:, : self._n]
 
-    def _set_phis(self, phis: Sequence[np.ndarray]) -> None:
-        """Each chain's frozen counts and eq. 5's fixed factors, padded (:data:`LANES`)."""
+    def _set_phis(self, phis: Sequence[np.ndarray]) -> np.ndarray:
+        """Each chain's frozen counts, kept, and eq. 5's fixed factors ``phiw`` (V, K, R held) float32, padded (:data:`LANES`)."""
         phis = _padded(list(phis), _held(len(phis)))
         counts = np.empty((self._v, self._k, len(phis)), np.int32)
         for r, phi in enumerate(phis):
@@ -204,11 +276,102 @@ class FrozenChains:
             counts[:, :, r] = phi
         inv = (1.0 / (counts.sum(axis=0, dtype=np.int64) + self._v * self._beta)).astype(np.float32)  # (K, R)
         self._counts = counts
-        self._phiw = (counts.astype(np.float32) + np.float32(self._beta)) * inv
+        return (counts.astype(np.float32) + np.float32(self._beta)) * inv
 
     def _started(self, name: str) -> None:
         if self._keys is None:
             raise ParameterError(f"{name}: no chains yet; start() them first")
+
+
+class _CpuEngine:
+    """The chains' state in numpy arrays, advanced by ``_chain_kernels.py`` (the interface: module docstring)."""
+
+    def __init__(self, order, colour_starts, cell_first, cell_count, words, table, alpha):
+        self._fixed = (order, cell_first, cell_count, words)
+        self._table = table
+        self._alpha = alpha  # float64 in the ML weights, float32 in the sweeps'
+        self._state = None
+
+    def put(self, topics, ncz, ng, phiw, keys) -> None:
+        self._state = [topics, ncz, ng, phiw]
+        self._keys = tuple(keys)
+
+    def get(self) -> tuple:
+        return tuple(self._state)
+
+    def set_phiw(self, phiw) -> None:
+        self._state[3] = phiw
+
+    def sweep(self, counter) -> None:
+        from curiosity_cli.topics._chain_kernels import sweep_chains_kernel
+
+        topics, ncz, ng, phiw = self._state
+        order, cell_first, cell_count, words = self._fixed
+        sweep_chains_kernel(
+            order, cell_first, cell_count, words, topics, phiw, ncz, ng, self._table, np.float32(self._alpha), self._keys, counter
+        )
+
+    def ml_topics(self, phid) -> np.ndarray:
+        from curiosity_cli.topics._chain_kernels import ml_chains_kernel
+
+        _, cell_first, cell_count, words = self._fixed
+        out = np.empty((words.size, len(self._keys)), np.int16)
+        cells = np.arange(cell_first.size, dtype=np.int64)
+        ml_chains_kernel(cells, cell_first, cell_count, words, phid, self._state[2], self._alpha, self._keys, out)
+        return out
+
+
+class _CudaEngine:
+    """The chains' state on a CUDA GPU, advanced by ``_chain_kernels_cuda.py`` (the interface: module docstring)."""
+
+    def __init__(self, order, colour_starts, cell_first, cell_count, words, table, alpha):
+        from numba import cuda
+
+        self._cuda = cuda
+        self._colours = [
+            cuda.to_device(np.ascontiguousarray(order[a:b])) for a, b in zip(colour_starts[:-1], colour_starts[1:])
+        ]
+        self._cell_first = cuda.to_device(cell_first)
+        self._cell_count = cuda.to_device(cell_count)
+        self._words = cuda.to_device(words)
+        self._table = cuda.to_device(table)
+        self._n_words = words.size
+        self._alpha = alpha
+        self._state = None
+
+    def put(self, topics, ncz, ng, phiw, keys) -> None:
+        to = self._cuda.to_device
+        self._state = [to(topics), to(ncz), to(ng), to(phiw)]
+        self._keys = to(np.ascontiguousarray(keys, np.uint64))
+
+    def get(self) -> tuple:
+        return tuple(a.copy_to_host() for a in self._state)
+
+    def set_phiw(self, phiw) -> None:
+        self._state[3] = self._cuda.to_device(phiw)
+
+    def sweep(self, counter) -> None:
+        from curiosity_cli.topics._chain_kernels_cuda import launch, sweep_colour_kernel
+
+        topics, ncz, ng, phiw = self._state
+        n_chains = self._keys.shape[0]
+        for cells in self._colours:
+            launch(
+                sweep_colour_kernel, cells.shape[0] * n_chains, cells, n_chains, self._cell_first, self._cell_count,
+                self._words, topics, phiw, ncz, ng, self._table, np.float32(self._alpha), self._keys, counter,
+            )
+        self._cuda.synchronize()
+
+    def ml_topics(self, phid) -> np.ndarray:
+        from curiosity_cli.topics._chain_kernels_cuda import launch, ml_kernel
+
+        n_chains = self._keys.shape[0]
+        out = self._cuda.device_array((self._n_words, n_chains), np.int16)
+        launch(
+            ml_kernel, self._cell_first.shape[0] * n_chains, n_chains, self._cell_first, self._cell_count, self._words,
+            self._cuda.to_device(np.ascontiguousarray(phid)), self._state[2], float(self._alpha), out,
+        )
+        return out.copy_to_host()
 
 
 def _held(n: int) -> int:

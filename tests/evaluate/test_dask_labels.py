@@ -131,17 +131,3 @@ def test_a_runs_labels_do_not_depend_on_the_block_it_was_labelled_in(own_map, tm
         contents.append(label_contents(copy / config.name))
     assert len([key for key in contents[0] if "/examples/" not in key and key.startswith("labels/")]) == 8
     assert contents[1] == contents[0] and contents[2] == contents[0]
-
-
-@pytest.mark.parametrize(("counts", "most", "sizes"), [
-    ([2] + [1] * 69, 16, [16, 16, 16, 16, 7]),  # the quick grid: 70 runs, restart 0's second chain
-    ([2, 1, 1], 1, [2, 1, 1]),  # a checked run keeps its two chains together, past the limit
-    ([1, 2, 1, 2], 3, [3, 3]),
-    ([1] * 5, 16, [5]),
-])
-def test_blocks_are_filled_in_order_with_every_run_once(counts, most, sizes):
-    from curiosity_cli.evaluate.label_stage import blocks
-
-    got = blocks(counts, most)
-    assert [i for block in got for i in block] == list(range(len(counts)))
-    assert [sum(counts[i] for i in block) for block in got] == sizes

@@ -5,13 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from naive import (
-    NaiveModel, count_topics, ml_topics_naive, start_chain_naive, sweep_chain_naive,
+    NaiveModel, count_topics, ml_topics_naive, neighbour_colouring_naive, start_chain_naive, sweep_chain_naive,
 )
 
 from curiosity_cli.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.topics.chains import FrozenChains
+from curiosity_cli.topics._chain_kernels import neighbour_colouring
+from curiosity_cli.topics.chains import FrozenChains, sweep_order
 from curiosity_cli.topics.model import TopicModel
+from curiosity_cli.topics.neighbours import stream_neighbours
 
 K, V = 5, 30
 
@@ -67,6 +69,34 @@ def test_every_chain_of_a_block_is_its_naive_twin_draw_for_draw():
         np.testing.assert_array_equal(chains.ml_topics()[:, r], ml_topics_naive(twin, sorted(twin.topics)))
 
 
+@pytest.mark.parametrize(
+    "table",
+    [
+        SquareGrid(7, 9).neighbour_table(), SquareGrid(1, 6).neighbour_table(), SquareGrid(4, 4).neighbour_table(0),
+        stream_neighbours(SquareGrid(3, 4), 5), np.array([[1, 2], [0, 2], [0, 1]], np.int32), np.array([[-1]], np.int32),
+    ],
+    ids=["grid", "row", "lda", "stream", "triangle", "one cell"],
+)
+def test_the_colouring_matches_its_twin_and_no_neighbours_share_a_colour(table):
+    colour = neighbour_colouring(table)
+    np.testing.assert_array_equal(colour, neighbour_colouring_naive(table))
+    for c in range(table.shape[0]):
+        assert all(colour[d] != colour[c] for d in table[c] if d >= 0)
+    order, starts = sweep_order(table)
+    np.testing.assert_array_equal(np.sort(order), np.arange(table.shape[0]))
+    for c in range(starts.size - 1):
+        part = order[starts[c] : starts[c + 1]]
+        assert (colour[part] == c).all() and (np.diff(part) > 0).all()
+
+
+def test_a_grid_is_swept_as_a_checkerboard_and_a_triangle_in_three_colours():
+    rows, cols = 5, 6
+    colour = neighbour_colouring(SquareGrid(rows, cols).neighbour_table())
+    np.testing.assert_array_equal(colour, (np.arange(rows)[:, None] + np.arange(cols)).ravel() % 2)
+    _, starts = sweep_order(np.array([[1, 2], [0, 2], [0, 1]], np.int32))
+    np.testing.assert_array_equal(starts, [0, 1, 2, 3])
+
+
 def test_the_counts_follow_the_topics():
     words, cells, table = small_map(seed=3)
     chains = chains_of(words, cells, table)
@@ -80,7 +110,7 @@ def test_the_counts_follow_the_topics():
             twin.topics[c] = chains.topics()[at : at + n, r].astype(np.int64)
             at += n
         _, _, ncz = count_topics(twin)
-        np.testing.assert_array_equal(chains._ncz[:, :, r], ncz)
+        np.testing.assert_array_equal(chains.counts()[0][:, :, r], ncz)
 
 
 def test_the_uniform_start_is_the_models_restart():
