@@ -187,6 +187,15 @@ def specification_error(exc: ConfigError, config_path: Path, specification: Spec
     return None
 
 
+def study_size(sweep: Sweep) -> str:
+    """A study's size in words: ``4 specifications x 3 seeds`` (or ``x 6 sweep combinations``)."""
+    from curiosity_cli.sweep import count
+
+    per = len(sweep.combinations) // max(len(sweep.specifications), 1)
+    noun = "seed" if [axis.key for axis in sweep.axes] == ["seed"] else "sweep combination"
+    return f"{count(len(sweep.specifications), 'specification')} x {count(per, noun)}"
+
+
 # --------------------------------------------------------------------------- the report
 
 
@@ -218,16 +227,16 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
     table = curve_table([(t.values, t.pooled) for t in pooled])
     with atomic_path(folder / TABLE) as tmp:
         table.to_csv(tmp, index=False)
-    names = [key for key in pooled[0].values] if pooled else [SPECIFICATION]
-    label = table[names].astype(str).agg(", ".join, axis=1) if len(table) else table.get(SPECIFICATION)
-    table = table.assign(label=label)
+    names = list(pooled[0].values) if pooled else [SPECIFICATION]  # specification, then any other swept key
+    # a point's specification as the figure names it: its values, e.g. "clamp" or "clamp, 16"
+    table = table.assign(label=[", ".join(map(str, v)) for v in table[names].itertuples(index=False)] if pooled else [])
     choices = {", ".join(t.values.values()): _choices(sweep, t) for t in pooled}
     seeds = sorted({s for t in pooled for s in t.pooled.seeds})
     lines = [
         "## Specification curve",
         "",
         f"Every specification `{display_path(sweep.config_path)}` declares ({len(sweep.specifications)}), on every "
-        f"map, seeds {', '.join(map(str, seeds)) or 'none'} pooled as replicates (a restart is paired with the same "
+        f"map, seeds {', '.join(map(str, seeds)) or '(none finished)'} pooled as replicates (a restart is paired with the same "
         "restart of the same seed). A point per specification and map: topic perplexity's mean MI against human "
         f"labels at {HEADLINE_LENGTH} steps over the next best of the paper's other walkers (random walk, "
         "stochastic coverage, word perplexity), with its 95 % bootstrap interval over the pairs, sorted by ratio; "

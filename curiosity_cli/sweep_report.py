@@ -86,14 +86,14 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
     import pandas as pd
 
     from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT
-    from curiosity_cli.specifications import specification_lead
+    from curiosity_cli.specifications import specification_lead, study_size
 
     folder = Path(folder)
     keys = sweep.keys
     treatments = pool_treatments(sweep, folder, outcomes, PAPER_WALKERS if sweep.specifications else None)
     sensitivity, pooled_rows = _sensitivity(sweep, treatments)
-    if sweep.specifications:  # the curve's table has the sensitivity table's rows and numbers, and more
-        sensitivity = specification_lead(sweep, folder, treatments)
+    # a study's curve has the sensitivity table's rows and numbers, and more: it takes its place
+    lead = specification_lead(sweep, folder, treatments) if sweep.specifications else sensitivity
     rows, sections = [], []
     overview = [
         "| # | " + " | ".join(keys) + " | dataset | ratio | next best | paired Wilcoxon p (pairs) | paper's ratio |",
@@ -133,8 +133,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
         sections += ["", *_distinct_table(_read_revisits(folder / c.name))]
     sets = ", ".join(f"`--set {s}`" for s in sweep.sets) or "none"
     lines = [
-        f"# Specification curve of `{sweep.name}`: {count(len(sweep.specifications), 'specification')} x "
-        f"{len(outcomes) // len(sweep.specifications)} ({count(len(outcomes), 'combination')})"
+        f"# Specification curve of `{sweep.name}`: {study_size(sweep)} ({count(len(outcomes), 'combination')})"
         if sweep.specifications else f"# Parameter sweep of `{sweep.name}`: {count(len(outcomes), 'combination')}",
         "",
         f"Config `{display_path(sweep.config_path)}`; --set: {sets}. Each combination is an experiment folder "
@@ -147,7 +146,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
         f"$ {sweep.command(folder.parent)}",
         "```",
         "",
-        *sensitivity,
+        *lead,
         "## Headlines",
         "",
         *overview,

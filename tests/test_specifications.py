@@ -73,13 +73,14 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
     results = tmp_path / "results"
     result = sweep(config, results)
     assert result.exit_code == 0, result.output
-    assert "4 combinations (2 specifications x 2), in" in result.stderr
+    assert "4 combinations (2 specifications x 2 seeds), in" in result.stderr
     folder = results / "tiny-sweep"
     assert sorted(p.name for p in folder.iterdir() if p.is_dir()) == sorted(FOLDERS)
     plan = yaml.safe_load((folder / "sweep.yaml").read_text())
     assert plan["specifications"] == {"default": [], "clamp": ["explore.coverage=clamp", "explore.min_d2=0.5"]}
 
     report = (folder / "SWEEP.md").read_text()
+    assert report.startswith("# Specification curve of `tiny`: 2 specifications x 2 seeds (4 combinations)\n")
     assert report.index("## Specification curve") < report.index("![specification curve](specification-curve.png)")
     assert report.index("![specification curve]") < report.index("## Headlines")
     assert "## Sensitivity" not in report, "the curve's table has its rows and numbers"

@@ -71,6 +71,7 @@ def reproduce(
 def _reproduce_sweep(config: Path, overrides: list[str], sweeps: list[str], specifications, **options) -> None:
     """``reproduce --sweep``, or of a study's specifications: check every option and combination, then run them all."""
     from curiosity_cli.files import display_path
+    from curiosity_cli.specifications import study_size
     from curiosity_cli.sweep import SweepSyntaxError, count, parse_sweeps, plan_sweep, run_sweep
 
     try:
@@ -78,7 +79,7 @@ def _reproduce_sweep(config: Path, overrides: list[str], sweeps: list[str], spec
     except SweepSyntaxError as exc:
         raise typer.BadParameter(str(exc), param_hint="--sweep") from None
     sweep = plan_sweep(config, axes, overrides, specifications)
-    of = f" ({count(len(specifications), 'specification')} x {len(sweep.combinations) // len(specifications)})" if specifications else ""
+    of = f" ({study_size(sweep)})" if specifications else ""
     typer.echo(f"{count(len(sweep.combinations), 'combination')}{of}, in {display_path(sweep.folder(options['results_dir']))}", err=True)
     with StagedProgress() as progress:
         report = run_sweep(sweep, on_stage=progress.stage, on_done=progress.advance, **options)
