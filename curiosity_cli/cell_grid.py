@@ -39,6 +39,10 @@ from curiosity_cli.checks import check_choice, check_int
 from curiosity_cli.errors import ParameterError
 
 
+# neighbour offsets (row, col) in neighbour_table's column order: the cross, then the diagonals
+_STEPS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
+
+
 @dataclass(frozen=True)
 class SquareGrid:
     """``rows x cols`` square cells of ``cell_width`` pixels, numbered row-major.
@@ -195,22 +199,25 @@ class SquareGrid:
 
         Parameters
         ----------
-        spatial : {4, 0}
-            4 for up, down, left and right; 0 for none (the model is then plain LDA).
+        spatial : {4, 8, 0}
+            4 for up, down, left and right; 8 for those and the four diagonal cells
+            (a walker's candidates, ``explore.candidates``); 0 for none (the model is
+            then plain LDA).
 
         Returns
         -------
         (n_cells, spatial) int32 ndarray
             Row ``c`` lists the neighbours of cell ``c`` in the columns up
             ``(row - 1, col)``, down ``(row + 1, col)``, left ``(row, col - 1)``, right
-            ``(row, col + 1)``; ``-1`` where that cell is off the grid.
+            ``(row, col + 1)``, then with 8 up-left, up-right, down-left, down-right;
+            ``-1`` where that cell is off the grid.
 
         Raises
         ------
         ParameterError
-            ``spatial`` not 4 or 0.
+            ``spatial`` not 4, 8 or 0.
         """
-        steps = ((-1, 0), (1, 0), (0, -1), (0, 1)) if check_choice("spatial", spatial, (4, 0)) else ()
+        steps = _STEPS[: check_choice("spatial", spatial, (4, 8, 0))]
         rows, cols = self.row_col(np.arange(self.n_cells))
         table = np.full((self.n_cells, len(steps)), -1, np.int32)
         for j, (d_row, d_col) in enumerate(steps):

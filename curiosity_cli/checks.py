@@ -20,8 +20,16 @@ def check_int(name: str, value, minimum: int, maximum: int | None = None) -> int
     return int(value)
 
 
-def check_choice(name: str, value, choices: tuple[int, ...]) -> int:
-    """``value`` as an int, if it is one of ``choices``, else :class:`ParameterError` naming ``name``."""
+def check_choice(name: str, value, choices: tuple):
+    """``value``, if it is one of ``choices``, else :class:`ParameterError` naming ``name``.
+
+    ``choices`` are all ints (``value`` is returned as an int; a bool is not one) or all
+    strings.
+    """
+    if all(isinstance(c, str) for c in choices):
+        if not isinstance(value, str) or value not in choices:
+            raise ParameterError(f"{name}: got {value!r}, expected one of {', '.join(choices)}")
+        return value
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) not in choices:
         expected = " or ".join(str(c) for c in choices)
         raise ParameterError(f"{name}: got {value!r}, expected {expected}")

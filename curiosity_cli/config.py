@@ -43,8 +43,9 @@ OVERRIDES = "overrides"
 #: The top-level key of an experiment config that declares a sweep over its other keys
 #: (:func:`curiosity_cli.sweep.declared_sweeps`); an experiment never sees it.
 SWEEP_KEY = "sweep"
-#: The top-level key of a study config that declares its specifications, each a set of
-#: overrides (:mod:`curiosity_cli.specifications`); an experiment never sees it.
+#: The top-level key of a study config that declares named specifications, each a set of
+#: overrides run on every map and replicate seed (:mod:`curiosity_cli.specifications`); an
+#: experiment never sees it either.
 SPECIFICATIONS_KEY = "specifications"
 
 #: The longest experiment or dataset name; a sweep names its experiments in up to this many.
@@ -79,6 +80,42 @@ PAPER_WALKERS = WALKER_NAMES[:4]
 #: candidate's own term (``d = 0``) means, which the paper leaves undefined.
 #: :func:`curiosity_cli.explore.weights.coverage_potential` gives each its meaning.
 COVERAGE_READINGS = ("literal", "clamp", "others")
+
+#: The other open choices of the paper's exploration, each a key of ``explore`` with the
+#: values a config may name, today's reading first (``configs/paper.yaml`` gives each the
+#: paper's sentence and what the authors' ROST code does):
+#:
+#: - ``candidates``: the cells ``G(c)`` a walker scores, 4 (up, down, left, right) or 8;
+#: - ``candidate_context``: the counts eq. 12's temporary labels of a candidate are drawn
+#:   against, ``neighbourhood`` (the model's ``n_Gk`` of the candidate) or ``own`` (its
+#:   own temporary labels only), and ``candidate_sweeps`` the Gibbs passes over them;
+#: - ``path_topics``: P(k | path), ``smoothed`` ``(n_k + α) / (N + Kα)`` or ``counts`` ``n_k / N``;
+#: - ``revisits``: a revisited cell's words enter the model ``once`` or ``again`` each visit;
+#: - ``refine_picks``: which observations realtime refinement picks, ``uniform`` (eq. 6) or
+#:   ``recent`` (the authors' refinery).
+EXPLORE_READINGS = {
+    "candidates": (4, 8),
+    "candidate_context": ("neighbourhood", "own"),
+    "path_topics": ("smoothed", "counts"),
+    "revisits": ("once", "again"),
+    "refine_picks": ("uniform", "recent"),
+}
+#: What a run recipe leaves out: each reading at what every run did before its key existed,
+#: so that the runs of older experiments stay current (a run's recipe names a reading only
+#: when it is another).
+UNRECORDED_READINGS = {
+    "candidates": 4,
+    "candidate_context": "neighbourhood",
+    "candidate_sweeps": 1,
+    "path_topics": "smoothed",
+    "revisits": "once",
+    "refine_picks": "uniform",
+}
+
+#: Where a config's ORB words are (``words.orb_detector``): at ORB's keypoints, or at every
+#: point of a regular grid (:mod:`curiosity_cli.words.orb_grid`), as near the density of the
+#: paper's Table 1 as one scale gets.
+ORB_DETECTORS = ("keypoints", "grid")
 
 
 def _spec(
@@ -135,16 +172,66 @@ class WordsConfig:
     vocabulary_dir: Path = _spec(must_exist=True, named=SHIPPED_VOCABULARIES)
     orb_vocabulary: int = _spec(min=2, max=MAX_VOCABULARY)
     texton_vocabulary: int = _spec(min=2, max=MAX_VOCABULARY)
+    orb_detector: str = _spec(choices=ORB_DETECTORS)
+    # read by the grid detector only (store_settings)
+    orb_grid_step: int = _spec(min=1)
+    # read by the keypoints detector only (store_settings)
     orb_tile: int = _spec(min=1)
     orb_per_tile: int | None = _spec(min=1)
     orb_max_features: int | None = _spec(min=1)
     orb_fast_threshold: int = _spec(min=1, max=255)
     orb_fill_threshold: int | None = _spec(min=1, max=255)
+    # hue words, whichever the ORB detector
     colour_words: bool = _spec()
+
+    def store_settings(self) -> dict:
+        """The keys a map's words depend on besides its vocabularies: what names its word store.
+
+        Every key (so that a key added here changes the store's name unless it is left
+        out below), but:
+
+        - the vocabularies' keys (:data:`_VOCABULARY_KEYS`): the store's name covers each
+          vocabulary by its name, size and content hash instead, so a vocabulary folder
+          moved elsewhere keeps its stores;
+        - a key that the chosen ``orb_detector`` does not read (:data:`_READ_BY`);
+        - a key at the value that was the behaviour before the key existed
+          (:data:`_NAMED_UNLESS`), so stores made before it keep their names.
+        """
+        return {
+            key: value
+            for key, value in to_dict(self).items()
+            if key not in _VOCABULARY_KEYS
+            and _READ_BY.get(key, self.orb_detector) == self.orb_detector
+            and _NAMED_UNLESS.get(key, _NO_DEFAULT) != value
+        }
+
+
+#: Words keys that the word store records by their vocabularies' content hashes instead.
+_VOCABULARY_KEYS = ("vocabulary_dir", "orb_vocabulary", "texton_vocabulary")
+#: Words keys read by one ORB detector only: under the other they change no word.
+_READ_BY = {
+    "orb_grid_step": "grid",
+    **dict.fromkeys(("orb_tile", "orb_per_tile", "orb_max_features", "orb_fast_threshold", "orb_fill_threshold"),
+                    "keypoints"),
+}
+#: Words keys added after word stores existed, and the value that was the behaviour before:
+#: at it they leave the store's name as it was.
+_NAMED_UNLESS = {"orb_detector": "keypoints"}
+_NO_DEFAULT = object()
 
 
 def _check_words(words: WordsConfig, raw: _Raw) -> None:
-    """ORB keys that tie together: a top-up fills capped tiles, below the FAST threshold."""
+    """ORB keys that tie together: the grid takes no keypoint cap; a top-up fills capped
+    tiles, below the FAST threshold."""
+    if words.orb_detector == "grid":
+        for key in ("orb_per_tile", "orb_max_features"):
+            value = getattr(words, key)
+            if value is not None:
+                raise _invalid(
+                    raw, ("words", key),
+                    f"got {value}, expected null when words.orb_detector is grid (a word at every grid point; "
+                    "the cap is the keypoints detector's)",
+                )
     fill = words.orb_fill_threshold
     if fill is None:
         return
@@ -175,10 +262,23 @@ class ExploreConfig:
     coverage: str = _spec(choices=COVERAGE_READINGS)
     # read by the clamp reading only (run_settings)
     min_d2: float | None = _spec(min=0, min_exclusive=True)
+    candidates: int = _spec(choices=EXPLORE_READINGS["candidates"])
+    candidate_context: str = _spec(choices=EXPLORE_READINGS["candidate_context"])
+    candidate_sweeps: int = _spec(min=1)
+    path_topics: str = _spec(choices=EXPLORE_READINGS["path_topics"])
+    revisits: str = _spec(choices=EXPLORE_READINGS["revisits"])
+    refine_picks: str = _spec(choices=EXPLORE_READINGS["refine_picks"])
 
     def run_settings(self) -> dict:
-        """The keys a run's numbers depend on: every key but ``min_d2`` unless the reading is clamp."""
-        return {key: value for key, value in to_dict(self).items() if key != "min_d2" or self.coverage == "clamp"}
+        """The keys a run's numbers depend on.
+
+        Every key but ``min_d2`` unless the reading is clamp, and but a reading of
+        :data:`UNRECORDED_READINGS` at the value every run had before its key existed.
+        """
+        return {
+            key: value for key, value in to_dict(self).items()
+            if (key != "min_d2" or self.coverage == "clamp") and UNRECORDED_READINGS.get(key, _NO_DEFAULT) != value
+        }
 
 
 @dataclass(frozen=True)

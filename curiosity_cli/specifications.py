@@ -15,7 +15,7 @@ config beside the sweep of its seeds::
         explore.coverage: clamp
         model.beta: 1.0
 
-Names are 1 to 40 letters, digits, ``_``, ``.`` or ``-``, starting with a letter or
+Names are 1 to 80 letters, digits, ``_``, ``.`` or ``-``, starting with a letter or
 digit. Keys are dotted config keys and values YAML values, as ``--set KEY=VALUE`` reads
 them; ``{}`` (or nothing) leaves the config as it is. A key may not be given both by a
 specification and by ``--set`` or a sweep (``sweep:`` or ``--sweep``), nor twice in one
@@ -74,7 +74,8 @@ if TYPE_CHECKING:
 SPECIFICATION = "specification"
 #: The table and the figure of a study's curve, in its sweep folder.
 TABLE, FIGURE = "specifications.csv", "specification-curve"
-_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,39}$")
+#: A name leaves room in its folders' names (at most MAX_NAME) for ``specification-`` and the swept values.
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,79}$")
 
 
 @dataclass(frozen=True)
@@ -130,7 +131,7 @@ def declared_specifications(config_path: str | Path) -> tuple[Specification, ...
     for name, overrides in declared.items():
         if not isinstance(name, str) or not _NAME.match(name):
             raise ConfigError(
-                f"{where}: {name!r}: expected a name of 1 to 40 letters, digits, '_', '.' or '-', starting with a "
+                f"{where}: {name!r}: expected a name of 1 to 80 letters, digits, '_', '.' or '-', starting with a "
                 "letter or digit"
             )
         overrides = {} if overrides is None else overrides

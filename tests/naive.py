@@ -308,6 +308,20 @@ def add_cell_naive(state: NaiveModel, cell: int, words, time: int | None = None)
     state.counter += 1
 
 
+def add_words_naive(state: NaiveModel, cell: int, words, time: int | None = None) -> None:
+    """Twin of ``TopicModel.add_words``: more words for an observed cell, uniform topics from
+    stream (counter, cell); the cell moves to the newest observation."""
+    stream = Stream(state.key, state.counter, cell)
+    new_topics = [below(stream.bits(), state.n_topics) for _ in words]
+    state.words[cell] = np.concatenate([state.words[cell], np.asarray(words, np.int64)])
+    state.topics[cell] = np.concatenate([state.topics[cell], np.array(new_topics, np.int64)])
+    at = state.order.index(cell)
+    del state.order[at], state.times[at]
+    state.order.append(cell)
+    state.times.append((max(state.times) + 1 if state.times else 0) if time is None else time)
+    state.counter += 1
+
+
 def restart_naive(state: NaiveModel, seed: int) -> None:
     """Twin of ``TopicModel.restart``: a new key, and every observed cell's topics drawn
     again as if added in cell order (the j-th from stream (j, cell))."""
@@ -384,15 +398,26 @@ def refine_batch_naive(state: NaiveModel, sweeps: int) -> None:
     state.counter += sweeps
 
 
-def refine_realtime_naive(state: NaiveModel, budget: int, eta: float) -> tuple[int, int]:
+def refine_realtime_naive(
+    state: NaiveModel, budget: int, eta: float, picks: str = "uniform", window: int = 64, tau: float = 2.0,
+) -> tuple[int, int]:
     """Twin of ``refine_realtime_kernel``: (words sampled, picks)."""
     times = sorted(set(state.times))
     groups = [[c for c, t in zip(state.order, state.times) if t == time] for time in times]
     picker = Stream(state.key, state.counter, state.n_cells)
+    recent = picks == "recent"
     done = picks = idle = 0
     while done + idle < budget:  # a pick without words spends one unit
         bits = picker.bits()
-        if len(groups) == 1 or unit64(bits) < eta:
+        if recent:
+            newest = unit64(bits) < eta
+            bits = picker.bits()
+            if newest:
+                last = min(window, len(groups))
+                group = groups[len(groups) - last + below(bits, last)]
+            else:
+                group = groups[min(math.floor(unit64(bits) ** (1.0 / tau) * len(groups)), len(groups) - 1)]
+        elif len(groups) == 1 or unit64(bits) < eta:
             group = groups[-1]
         else:
             group = groups[below(picker.bits(), len(groups) - 1)]
@@ -466,19 +491,28 @@ def word_perplexity_naive(state: NaiveModel, words) -> float:
     return math.exp(-np.mean([math.log(float(phi[w] @ path)) for w in words]))
 
 
-def topic_perplexity_naive(state: NaiveModel, words, cell: int) -> tuple[float, np.ndarray]:
+def topic_perplexity_naive(
+    state: NaiveModel, words, cell: int, context: str = "neighbourhood", sweeps: int = 1, path_topics: str = "smoothed",
+) -> tuple[float, np.ndarray]:
     """Twin of ``topic_perplexity_kernel``: (eq. 12, the temporary topics)."""
     nwk, nk, ncz = count_topics(state)
-    around = neighbourhood(state, ncz, cell)
+    around = neighbourhood(state, ncz, cell) if context == "neighbourhood" else np.zeros(state.n_topics, np.int64)
     stream = Stream(state.key, state.counter, state.n_cells + 1 + cell)
-    topics = []
-    for w in words:
-        z = lane_draw(eq5_weights(state, nwk, nk, around, w), stream.bits())
-        topics.append(z)
-        around[z] += 1
+    topics = [-1] * len(words)
+    for sweep in range(sweeps):
+        for i, w in enumerate(words):
+            if sweep:
+                around[topics[i]] -= 1
+            topics[i] = lane_draw(eq5_weights(state, nwk, nk, around, w), stream.bits())
+            around[topics[i]] += 1
     if state.frozen is not None:
         nk = state.frozen.sum(axis=0)
-    path = (nk + state.alpha) / (nk.sum() + state.n_topics * state.alpha)
+    if path_topics == "smoothed":
+        path = (nk + state.alpha) / (nk.sum() + state.n_topics * state.alpha)
+    elif any(nk[z] == 0 for z in topics):
+        return math.inf, np.array(topics)
+    else:
+        path = nk / nk.sum()
     return math.exp(-np.mean([math.log(path[z]) for z in topics])), np.array(topics)
 
 

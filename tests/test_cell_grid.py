@@ -133,7 +133,7 @@ def test_a_frame_is_cut_into_cells_of_near_equal_size():
         (lambda: SquareGrid(3, 2.0), "cols"),
         (lambda: SquareGrid(3, 3, 0), "cell_width"),
         (lambda: SquareGrid.covering((40, 50), 0), "cell_width"),
-        (lambda: SquareGrid(3, 3).neighbour_table(spatial=8), "spatial"),
+        (lambda: SquareGrid(3, 3).neighbour_table(spatial=6), "spatial"),
     ],
 )
 def test_bad_sizes_are_refused_by_name(make, name):

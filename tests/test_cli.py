@@ -15,7 +15,7 @@ from small_maps import edit_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.config import CONFIG_DIR
+from curiosity_cli.config import CONFIG_DIR, shipped_configs
 
 runner = CliRunner()
 
@@ -56,10 +56,11 @@ def test_datasets_list_shows_the_maps():
     lines = result.stdout.splitlines()
     assert lines[0].split()[:3] == ["name", "size", "(px)"]
     rows = {line.split()[0]: line for line in lines[2:]}
-    assert sorted(rows) == ["aerial-mosaic", "reef-mosaic", "sentinel-coast", "zurich-zh17"]
+    assert sorted(rows) == ["aerial-mosaic", "geonrw-essen", "reef-mosaic", "sentinel-coast", "zurich-zh17"]
     assert "embedded" in rows["reef-mosaic"]
     assert "1024 x 1024" in rows["aerial-mosaic"] and "4096 (64 x 64)" in rows["aerial-mosaic"]
     assert "2500 x 2500" in rows["reef-mosaic"] and "6241 (79 x 79)" in rows["reef-mosaic"]
+    assert "992 x 992" in rows["geonrw-essen"] and "3844 (62 x 62)" in rows["geonrw-essen"]
 
 
 def test_datasets_show_prints_legend_and_writes_a_preview(tmp_path):
@@ -221,7 +222,9 @@ def test_config_init_writes_a_commented_copy_named_for_the_experiment(tmp_path, 
     again = run("config", "init", "my-exp")
     assert again.exit_code == 1 and again.stderr.strip() == "Error: my-exp.yaml: already exists; choose another name or edit that file"
     wrong = run("config", "init", "x", "--from", "paper")
-    assert wrong.exit_code == 1 and "--from: got 'paper', expected a shipped experiment config: paper-grid, quick, readings" in wrong.stderr
+    experiments = ", ".join(name for name in shipped_configs() if name != "paper")
+    assert wrong.exit_code == 1 and f"--from: got 'paper', expected a shipped experiment config: {experiments}" in wrong.stderr
+    assert {"paper-grid", "quick", "readings"} <= set(experiments.split(", "))
     assert run("config", "init", "../x").exit_code == 1 and not (tmp_path.parent / "x.yaml").exists()
 
 

@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from pathlib import Path
 
 import pytest
@@ -14,6 +15,7 @@ from curiosity_cli.config import (
     load_config,
     load_dataset_config,
     saved_yaml,
+    shipped_configs,
     to_yaml,
 )
 from curiosity_cli.errors import ConfigError
@@ -66,7 +68,7 @@ def test_every_dataset_config_loads(name):
 
 
 def test_the_embedded_and_fetched_datasets_are_registered():
-    assert dataset_names() == ["aerial-mosaic", "reef-mosaic", "sentinel-coast", "zurich-zh17"]
+    assert dataset_names() == ["aerial-mosaic", "geonrw-essen", "reef-mosaic", "sentinel-coast", "zurich-zh17"]
     fetched = [n for n in dataset_names() if load_dataset_config(CONFIG_DIR / "datasets" / f"{n}.yaml").fetch]
     assert fetched == ["zurich-zh17"]
 
@@ -225,7 +227,10 @@ def test_a_broken_config_file_is_refused_in_one_line(tmp_path, monkeypatch, text
 
 def test_a_missing_config_file_is_refused(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    with pytest.raises(ConfigError, match=r"^nope.yaml: config file not found; expected a path to a YAML config or the name of a shipped one \(paper, paper-grid, quick, readings\)$"):
+    shipped = ", ".join(shipped_configs())
+    assert {"paper", "paper-grid", "quick", "readings"} <= set(shipped_configs())
+    message = f"nope.yaml: config file not found; expected a path to a YAML config or the name of a shipped one ({shipped})"
+    with pytest.raises(ConfigError, match="^" + re.escape(message) + "$"):
         load_config("nope.yaml")
 
 
@@ -308,6 +313,52 @@ def test_bad_orb_keys_are_refused_naming_the_key(tmp_path, text, message):
         with pytest.raises(ConfigError) as info:
             load(path)
         assert message in str(info.value) and "\n" not in str(info.value)
+
+
+def test_orb_words_default_to_keypoints_and_the_grid_is_a_named_value():
+    from curiosity_cli.config import load_words_config
+
+    words = load_words_config(CONFIG_DIR / "paper.yaml")
+    assert (words.orb_detector, words.orb_grid_step) == ("keypoints", 1)
+    grid = load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_detector=grid", "words.orb_grid_step=4"])
+    assert (grid.orb_detector, grid.orb_grid_step) == ("grid", 4)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("words:\n  orb_detector: dense\n", "exp.yaml: words.orb_detector: got 'dense' (str), expected one of keypoints, grid"),
+        ("words:\n  orb_grid_step: 0\n", "exp.yaml: words.orb_grid_step: got 0 (int), expected an integer >= 1"),
+        ("words:\n  orb_grid_step: null\n", "exp.yaml: words.orb_grid_step: got None (NoneType), expected an integer"),
+        (
+            "words:\n  orb_detector: grid\n  orb_per_tile: 2\n",
+            "exp.yaml: words.orb_per_tile: got 2, expected null when words.orb_detector is grid",
+        ),
+        (
+            "words:\n  orb_detector: grid\n  orb_max_features: 50\n",
+            "exp.yaml: words.orb_max_features: got 50, expected null when words.orb_detector is grid",
+        ),
+        (
+            "words:\n  orb_detector: grid\n  orb_fill_threshold: 1\n",
+            "exp.yaml: words.orb_fill_threshold: got 1, expected null when words.orb_per_tile is null",
+        ),
+    ],
+)
+def test_bad_grid_orb_keys_are_refused_naming_the_key(tmp_path, text, message):
+    from curiosity_cli.config import load_words_config
+
+    path = _experiment(tmp_path, text)
+    for load in (load_config, load_words_config):
+        with pytest.raises(ConfigError) as info:
+            load(path)
+        assert message in str(info.value) and "\n" not in str(info.value)
+
+
+def test_a_grid_with_a_tile_cap_is_refused_on_the_command_line():
+    from curiosity_cli.config import load_words_config
+
+    with pytest.raises(ConfigError, match=r"^overrides: words\.orb_per_tile: got 2, expected null when words\.orb_detector is grid"):
+        load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_detector=grid", "words.orb_per_tile=2"])
 
 
 def test_a_top_up_without_a_tile_cap_is_refused_on_the_command_line():

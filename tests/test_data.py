@@ -15,6 +15,8 @@ EMBEDDED = {
     "aerial-mosaic": ((1024, 1024), 16, 1, 4096),
     "sentinel-coast": ((1024, 1024), 16, 1, 4096),
     "reef-mosaic": ((2500, 2500), 32, 2, 6241),
+    # a real 1 m photo: the centred 992 x 992 (a multiple of 16) of a 1000 x 1000 GeoNRW tile
+    "geonrw-essen": ((992, 992), 16, 1, 3844),
 }
 
 
@@ -122,7 +124,7 @@ def test_declared_size_must_match(own_map):
 
 
 def test_unknown_dataset_name():
-    with pytest.raises(ConfigError, match="no dataset 'nowhere': expected one of aerial-mosaic, reef-mosaic, sentinel-coast, zurich-zh17"):
+    with pytest.raises(ConfigError, match="no dataset 'nowhere': expected one of aerial-mosaic, geonrw-essen, reef-mosaic, sentinel-coast, zurich-zh17"):
         load_map("nowhere")
 
 
@@ -148,6 +150,16 @@ def test_duplicate_legend_ids(tmp_path):
     path.write_text(yaml.safe_dump({"classes": entries}))
     with pytest.raises(DatasetError, match="classes: id 0 appears more than once"):
         load_legend(path)
+
+
+def test_geonrw_essen_is_forest_crossed_by_roads_with_geonrw_classes():
+    m = load_map("geonrw-essen")
+    names = [c.name for c in m.legend]
+    assert names == ["forest", "water", "agricultural", "residential", "grassland", "roads", "buildings"]
+    shares = np.bincount(m.labels.ravel(), minlength=len(names)) / m.labels.size
+    # mostly forest, roads a rare linear class, and every class present (shares as in data/README.md)
+    assert round(shares[0], 3) == 0.590 and round(shares[5], 3) == 0.056 and shares.min() > 0.005
+    assert m.config.stands_in_for == "Montreal1"
 
 
 def test_registry_lists_the_embedded_maps_and_the_fetched_one():

@@ -79,7 +79,10 @@ def test_the_installed_wheel_runs_from_any_folder_and_writes_only_there_and_in_t
     ).stdout
     assert Path(where.strip()).is_relative_to(site), f"not the wheel's package: {where}"
     listed = run("datasets", "list")
-    assert all(name in listed for name in ("aerial-mosaic", "reef-mosaic", "sentinel-coast", "zurich-zh17"))
+    assert all(name in listed for name in ("aerial-mosaic", "geonrw-essen", "reef-mosaic", "sentinel-coast", "zurich-zh17"))
+    for name in ("aerial-mosaic", "geonrw-essen", "reef-mosaic", "sentinel-coast"):  # every embedded map's three files
+        shipped = site / "curiosity_cli" / "shipped" / "data" / "maps" / name
+        assert sorted(p.name for p in shipped.iterdir()) == ["image.png", "labels.png", "legend.yaml"], name
     assert "name: quick" in run("config", "show", "quick")
     assert "words" in run("extract", "aerial-mosaic")
     run("explore", "quick", *TINY)

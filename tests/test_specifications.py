@@ -142,7 +142,7 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
         ({"x": {"explore": {"coverage": "clamp"}, "explore.coverage": "others"}}, (),
          "tiny.yaml: specifications.x.explore.coverage: explore is set too; give each key once"),
         ({"x": {"name": "y"}}, (), "tiny.yaml: specifications.x.name: a specification cannot rename"),
-        ({"a b": {}}, (), "tiny.yaml: specifications: 'a b': expected a name of 1 to 40 letters"),
+        ({"a b": {}}, (), "tiny.yaml: specifications: 'a b': expected a name of 1 to 80 letters"),
         ({"x": [1]}, (), "tiny.yaml: specifications.x: expected a mapping of dotted keys to values"),
         ([1, 2], (), "tiny.yaml: specifications: expected a mapping of names to overrides"),
     ],

@@ -6,7 +6,9 @@ the same kinds of words, vocabularies and id space), on a frame first resized to
 than a frame. The ORB pyramid depth, the cap per tile and the top-up threshold are the
 driver's own settings (``drive.orb_levels``, ``drive.orb_per_tile``,
 ``drive.orb_fill_threshold``) for the same reason: a frame of 192 px is too small for
-every keypoint to describe its cells, while a map keeps them all.
+every keypoint to describe its cells, while a map keeps them all. With
+``words.orb_detector: grid`` a frame gets the map's grid (``words.orb_grid_step``),
+which reads none of them.
 """
 
 from __future__ import annotations

@@ -3,15 +3,18 @@
 Each step ``t`` (0-based) of a run of ``path_length`` steps, with the walker in cell ``p_t``:
 
 1. **Observe**: on the first visit, the words of ``p_t`` enter the topic model with
-   observation time ``t``.
-2. **Refine**: realtime refinement (Algorithm 2, bias η) for a fixed budget of word
-   samples, or for a wall-clock budget when ``explore.step_seconds`` is set. The fixed
-   budget stands in for the paper's 200 ms per step, so results do not depend on how
-   fast the machine is.
-3. **Score** the in-bounds neighbours (the cell's row of the grid's neighbour table,
+   observation time ``t``; on a later visit they enter again when ``explore.revisits``
+   is ``again`` (the authors' ROST), and the cell becomes the newest observation.
+2. **Refine**: realtime refinement (Algorithm 2, bias η; the picks of
+   ``explore.refine_picks``) for a fixed budget of word samples, or for a wall-clock
+   budget when ``explore.step_seconds`` is set. The fixed budget stands in for the
+   paper's 200 ms per step, so results do not depend on how fast the machine is.
+3. **Score** the in-bounds candidates (the cell's row of the grid's neighbour table,
    :meth:`~curiosity_cli.cell_grid.SquareGrid.neighbour_table`: up, down, left, right,
-   those that exist) with the run's weight function
-   (:mod:`curiosity_cli.explore.weights`), under the run's reading of eq. 8. A step
+   and with ``explore.candidates`` 8 the diagonals, those that exist) with the run's
+   weight function (:mod:`curiosity_cli.explore.weights`), under the run's reading of
+   eq. 8; topic perplexity (eq. 12) under the readings ``explore.candidate_context``,
+   ``candidate_sweeps`` and ``path_topics`` (:func:`~curiosity_cli.topics.perplexity.topic_perplexity`). A step
    whose neighbours are all visited is counted as boxed in; under the literal reading,
    which leaves them all weight 0, they are scored again by that module's boxed-in rule.
 4. **Move** to a neighbour drawn with probability proportional to its weight
@@ -217,7 +220,7 @@ def explore(
     model_seed, move_seed = np.random.SeedSequence(seed).spawn(2)
     rng = np.random.default_rng(move_seed)
     topic_model = map_topic_model(store, model, int(model_seed.generate_state(1, np.uint64)[0]))
-    neighbours = store.grid.neighbour_table()
+    neighbours = store.grid.neighbour_table(settings.candidates)
 
     length = settings.path_length
     path = np.empty(length, np.int64)
@@ -238,6 +241,8 @@ def explore(
         if visits[cell] == 0:
             first_visit[step] = True
             topic_model.add_cell(cell, store.cell_words(cell), time=step)
+        elif settings.revisits == "again":
+            topic_model.add_words(cell, store.cell_words(cell), time=step)
         visits[cell] += 1
         words_sampled[step] = _refine(topic_model, model.eta, settings)
         log_likelihood[step] = topic_model.log_likelihood()
@@ -258,7 +263,13 @@ def explore(
                 cells, visited, visits[visited], store.grid, settings.coverage, settings.min_d2
             ),
             word_perplexity=np.array([word_perplexity(topic_model, store.cell_words(g)) for g in cells]),
-            topic_perplexity=np.array([topic_perplexity(topic_model, store.cell_words(g), g) for g in cells]),
+            topic_perplexity=np.array([
+                topic_perplexity(
+                    topic_model, store.cell_words(g), g, context=settings.candidate_context,
+                    sweeps=settings.candidate_sweeps, path_topics=settings.path_topics,
+                )
+                for g in cells
+            ]),
         )
         boxed_in[step] = bool(np.all(visits[cells] > 0))
         if boxed_in[step] and settings.coverage == "literal":
@@ -282,11 +293,11 @@ def _weights(weight_function, name: str, candidates: Candidates) -> np.ndarray:
 
 def _refine(topic_model, eta: float, settings: ExploreConfig) -> int:
     if settings.step_seconds is None:
-        return topic_model.refine_realtime(settings.samples_per_step, eta=eta)
+        return topic_model.refine_realtime(settings.samples_per_step, eta=eta, picks=settings.refine_picks)
     deadline = time.perf_counter() + settings.step_seconds
     done = 0
     while time.perf_counter() < deadline:
-        done += topic_model.refine_realtime(_CLOCK_CHUNK, eta=eta)
+        done += topic_model.refine_realtime(_CLOCK_CHUNK, eta=eta, picks=settings.refine_picks)
     return done
 
 

@@ -1,7 +1,8 @@
 """Walkers: how a run chooses its next cell (paper section 4, and our baselines).
 
 Most walkers are **weight functions**: a pure function of a :class:`Candidates` record,
-the facts about the in-bounds 4-neighbours ``g_i`` of the walker's cell, returning one
+the facts about the in-bounds candidate cells ``g_i`` around the walker's cell (its 4
+neighbours, or 8 with ``explore.candidates: 8``), returning one
 weight per candidate; the walker steps to ``g_i`` with probability ``weight_i / Σ weight``.
 The facts are computed once per step for every weight function alike (so every run logs
 them), which keeps each function a one-liner that is easy to check against the paper:
@@ -66,7 +67,7 @@ class Candidates:
     cells : (n,) int64 ndarray
         Row-major indices of the in-bounds neighbours: the walker's cell's row of
         :meth:`~curiosity_cli.cell_grid.SquareGrid.neighbour_table` without its ``-1``
-        (up, down, left, right: those that exist).
+        (up, down, left, right, and with 8 candidates the diagonals: those that exist).
     coverage : (n,) float64 ndarray
         The coverage potential ``U(g_i)`` (module docstring), > 0: infinite for a visited
         candidate under the literal reading, and its visit count when the walker is boxed
@@ -97,12 +98,19 @@ def stochastic_coverage(candidates: Candidates) -> np.ndarray:
 
 def word_perplexity(candidates: Candidates) -> np.ndarray:
     """Drawn to cells whose words the model finds surprising, repelled by visited ones (eq. 9)."""
-    return candidates.word_perplexity / candidates.coverage
+    return _repelled(candidates.word_perplexity, candidates.coverage)
 
 
 def topic_perplexity(candidates: Candidates) -> np.ndarray:
     """Drawn to cells whose topics are rare on the path so far, repelled by visited ones (eq. 10)."""
-    return candidates.topic_perplexity / candidates.coverage
+    return _repelled(candidates.topic_perplexity, candidates.coverage)
+
+
+def _repelled(surprise: np.ndarray, coverage: np.ndarray) -> np.ndarray:
+    """``surprise / U``, and 0 where ``U`` is infinite (a visited candidate under the literal
+    reading), however surprising the candidate: even an infinite perplexity (counts-only
+    P(k | path)) does not undo the literal reading's ban on stepping back."""
+    return np.divide(surprise, coverage, out=np.zeros(coverage.shape), where=np.isfinite(coverage))
 
 
 @dataclass(frozen=True)

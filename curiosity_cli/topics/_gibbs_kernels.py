@@ -195,7 +195,7 @@ def merge_phase(cells, cell_first, cell_count, words, before, topics, nwk, nk, i
 def refine_realtime_kernel(
     budget, eta, order, group_start,
     cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, alpha, beta, vbeta, key, counter,
-    update_phi,
+    update_phi, recent, window, tau,
 ):
     """Algorithm 2 of the paper: refine picked observation times until ``budget`` is spent.
 
@@ -211,8 +211,11 @@ def refine_realtime_kernel(
     (int, int)
         Words sampled and number of picks. Picks draw from stream
         ``(counter, n_cells)``: with probability ``eta`` (or always, with one time) the
-        newest time, else a uniform earlier one (eq. 6); pick ``j`` refines each cell of
-        its time with stream ``(counter + 1 + j, cell)``. Each word sampled spends one
+        newest time, else a uniform earlier one (eq. 6); or, when ``recent``, with
+        probability ``eta`` a uniform one of the newest ``window`` times, else time
+        ``floor(T u^(1 / tau))`` for a uniform ``u`` (a Beta(tau, 1) draw by age: recent
+        times more often). Pick ``j`` refines each cell of its time with stream
+        ``(counter + 1 + j, cell)``. Each word sampled spends one
         unit of the budget, and so does a pick that finds no words, so the loop ends
         after at most ``budget`` picks even if every reachable cell is empty.
     """
@@ -225,7 +228,15 @@ def refine_realtime_kernel(
     picks = 0
     while done + idle < budget:
         picker, bits = next_state(picker)
-        if n_times == 1 or unit64(bits) < eta:
+        if recent:
+            newest = unit64(bits) < eta
+            picker, bits = next_state(picker)
+            if newest:
+                last = min(window, n_times)
+                t = n_times - last + below(bits, last)
+            else:
+                t = min(np.int64(np.floor(unit64(bits) ** (1.0 / tau) * n_times)), n_times - 1)
+        elif n_times == 1 or unit64(bits) < eta:
             t = n_times - 1
         else:
             picker, bits = next_state(picker)

@@ -33,33 +33,48 @@ def word_perplexity_kernel(words, nwk, nk, n_topics, alpha, beta, vbeta):
 
 
 @njit
-def topic_perplexity_kernel(words, cell, nwk, nk, inv, ng, n_topics, alpha, alpha32, beta32, key, counter):
+def topic_perplexity_kernel(
+    words, cell, nwk, nk, inv, ng, n_topics, alpha, alpha32, beta32, key, counter, own, sweeps, smoothed
+):
     """Draw temporary topics for ``words`` at ``cell``; ``exp(-mean_i log P(z_i | path))``.
 
     Word ``i`` (in order) gets a topic drawn as the sampler does (eq. 5, float32, lane
-    order; see ``_sampler``) with neighbourhood counts ``ng[cell]`` plus the
-    temporary topics of words ``0 .. i - 1``, from stream ``(counter, n_cells + 1 +
-    cell)``. Nothing of the model changes. ``P(k | path) = (nk[k] + alpha) / (N + K
-    alpha)`` in float64. Returns ``(perplexity, topics)``.
+    order; see ``_sampler``) with neighbourhood counts ``ng[cell]`` (none when ``own``)
+    plus the temporary topics of words ``0 .. i - 1``; each of ``sweeps - 1`` further
+    passes draws every word again, in order, against the others' temporary topics. All
+    draws come from one stream, ``(counter, n_cells + 1 + cell)``. Nothing of the model
+    changes. ``P(k | path)`` in float64 is ``(nk[k] + alpha) / (N + K alpha)`` when
+    ``smoothed``, else ``nk[k] / N`` (``N = sum_k nk[k]``), and a topic the path has
+    not seen makes the perplexity infinite. Returns ``(perplexity, topics)``.
     """
     kp = nk.shape[0]
     n_cells = ng.shape[0]
-    # one row of neighbourhood counts: the model's, plus the temporary topics so far
-    local = ng[cell : cell + 1].copy()
+    # one row of neighbourhood counts: the model's (or none), plus the temporary topics
+    local = np.zeros((1, kp), ng.dtype) if own else ng[cell : cell + 1].copy()
     p = np.zeros(kp, np.float32)
     topics = np.empty(words.shape[0], np.int32)
+    state = stream_start(key, counter, n_cells + 1 + cell)
+    for sweep in range(sweeps):
+        for i in range(words.shape[0]):
+            if sweep:
+                local[0, topics[i]] -= 1
+            w = words[i]
+            for k in range(kp):
+                p[k] = weight(nwk, inv, local, w, 0, k, alpha32, beta32)
+            state, bits = next_state(state)
+            z = lane_draw(p, bits)
+            topics[i] = z
+            local[0, z] += 1
     total = 0.0
     for k in range(n_topics):
         total += nk[k]
-    state = stream_start(key, counter, n_cells + 1 + cell)
     log_sum = 0.0
     for i in range(words.shape[0]):
-        w = words[i]
-        for k in range(kp):
-            p[k] = weight(nwk, inv, local, w, 0, k, alpha32, beta32)
-        state, bits = next_state(state)
-        z = lane_draw(p, bits)
-        topics[i] = z
-        local[0, z] += 1
-        log_sum += np.log((nk[z] + alpha) / (total + n_topics * alpha))
+        z = topics[i]
+        if smoothed:
+            log_sum += np.log((nk[z] + alpha) / (total + n_topics * alpha))
+        elif nk[z] == 0:
+            return np.inf, topics
+        else:
+            log_sum += np.log(nk[z] / total)
     return np.exp(-log_sum / words.shape[0]), topics

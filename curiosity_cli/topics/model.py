@@ -28,12 +28,19 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from curiosity_cli.checks import check_float, check_int
+from curiosity_cli.checks import check_choice, check_float, check_int
+from curiosity_cli.config import EXPLORE_READINGS
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics.batch_sweeps import aligned_zeros, batch_phases, sweep_phases
 from curiosity_cli.topics.neighbours import check_neighbours
 
 _MIN_CAPACITY = 1024
+#: The authors' ROST refinery (rost_topics/include/rost/refinery.hpp, ``parallel_refine_online2``,
+#: with rost_txy_image_node.cpp's defaults): refine one of the newest ``observation_size`` = 64
+#: cells with probability ``p_refine_last_observation`` (0.5, the paper's η), else a cell drawn by
+#: age from Beta(``tau`` = 2, 1). :meth:`TopicModel.refine_realtime` with ``picks="recent"``.
+RECENT_OBSERVATIONS = 64
+RECENT_TAU = 2.0
 
 
 class TopicModel:
@@ -306,6 +313,63 @@ class TopicModel:
         )
         self._counter += 1
 
+    def add_words(self, cell: int, words, *, time: int | None = None) -> None:
+        """Add more words to an observed cell, each with a uniformly random topic.
+
+        A cell observed again (a walker back on it) holds its old words and topics and
+        these too, as the authors' ROST ``add_observation`` appends a pose's words to its
+        cell. The cell becomes the newest observation, at ``time``, so that realtime
+        refinement treats what was just seen as new (in the authors' code a cell keeps
+        its place in the refinement order).
+
+        Parameters
+        ----------
+        cell : int
+            A cell already in the model.
+        words : (n,) int array_like
+            Word ids in ``0 .. V - 1``; may be empty.
+        time : int, optional
+            As for :meth:`add_cell`.
+
+        Raises
+        ------
+        ParameterError
+            Naming ``cell`` (not in the model), ``words`` or ``time``.
+        """
+        from curiosity_cli.topics._gibbs_kernels import add_cell_kernel
+
+        cell = check_int("cell", cell, 0, self.n_cells - 1)
+        if self._cell_first[cell] < 0:
+            raise ParameterError(f"cell: cell {cell} is not in the model yet; add_cell adds it")
+        words = self._check_words(words)
+        latest = int(self._times[self._n_observed - 1])
+        time = latest + 1 if time is None else check_int("time", time, latest)
+
+        # the new words go right after the cell's, so that its words stay one run
+        end = int(self._cell_first[cell] + self._cell_count[cell])
+        n_new = words.size
+        self._reserve(self._n_words + n_new)
+        for array in (self._words, self._topics):
+            array[end + n_new : self._n_words + n_new] = array[end : self._n_words].copy()
+        self._words[end : end + n_new] = words
+        later = self._cell_first >= end
+        later[cell] = False
+        self._cell_first[later] += n_new
+        self._cell_count[cell] += n_new
+        self._n_words += n_new
+        n = self._n_observed
+        at = int(np.flatnonzero(self._order[:n] == cell)[0])
+        self._order[at : n - 1] = self._order[at + 1 : n].copy()
+        self._times[at : n - 1] = self._times[at + 1 : n].copy()
+        self._order[n - 1] = cell
+        self._times[n - 1] = time
+        add_cell_kernel(
+            cell, end, n_new, self._words, self._topics, self._nwk, self._nk, self._inv,
+            self._ncz, self._ng, self._table, self._k, self._v * self._beta,
+            self._key(), np.uint64(self._counter), not self._frozen,
+        )
+        self._counter += 1
+
     def restart(self, seed: int) -> None:
         """Every word back to a uniformly random topic, with a new seed.
 
@@ -420,12 +484,21 @@ class TopicModel:
         self._counter += sweeps
         return sweeps * self._n_words
 
-    def refine_realtime(self, word_budget: int, *, eta: float) -> int:
+    def refine_realtime(self, word_budget: int, *, eta: float, picks: str = "uniform") -> int:
         """Algorithm 2: refine picked observations until ``word_budget`` words are sampled.
 
-        Each pick is the newest observation time with probability ``eta``, else a
-        uniformly random earlier one (eq. 6; with a single time, always that one), and
-        refines every cell observed at that time (:meth:`refine_cells`). Deterministic.
+        Each pick refines every cell observed at one observation time
+        (:meth:`refine_cells`), chosen by ``picks``:
+
+        - ``uniform``: the newest time with probability ``eta``, else a uniformly random
+          earlier one (eq. 6; with a single time, always that one);
+        - ``recent``: as the authors' ROST refinery (``parallel_refine_online2``), with
+          probability ``eta`` a uniform one of the newest :data:`RECENT_OBSERVATIONS`
+          times, else one drawn by age from Beta(:data:`RECENT_TAU`, 1) over all ``T``
+          times (time ``floor(T u^(1/τ))``, ``u`` uniform), so recent observations are
+          refined more often and old ones still now and then.
+
+        Deterministic.
 
         Parameters
         ----------
@@ -434,6 +507,7 @@ class TopicModel:
             no words (so the call ends even if every cell it can pick is empty).
         eta : float
             Refinement bias, 0 <= eta <= 1.
+        picks : {'uniform', 'recent'}
 
         Returns
         -------
@@ -445,15 +519,17 @@ class TopicModel:
 
         word_budget = check_int("word_budget", word_budget, 0)
         eta = check_float("eta", eta, 0, 1)
+        recent = check_choice("picks", picks, EXPLORE_READINGS["refine_picks"]) == "recent"
         if word_budget == 0 or self._n_observed == 0:
             return 0
         order = self._order[: self._n_observed]
         times = self._times[: self._n_observed]
         group_start = np.concatenate([[0], np.flatnonzero(np.diff(times)) + 1, [times.size]]).astype(np.int64)
-        done, picks = refine_realtime_kernel(
-            word_budget, eta, order, group_start, *self._sampler_arrays(), np.uint64(self._counter), not self._frozen
+        done, n_picks = refine_realtime_kernel(
+            word_budget, eta, order, group_start, *self._sampler_arrays(), np.uint64(self._counter), not self._frozen,
+            recent, RECENT_OBSERVATIONS, RECENT_TAU,
         )
-        self._counter += 1 + int(picks)
+        self._counter += 1 + int(n_picks)
         return int(done)
 
     # ------------------------------------------------------------------ the whole state (topics/persistence.py)

@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from curiosity_cli.checks import check_int
+from curiosity_cli.checks import check_choice, check_int
+from curiosity_cli.config import EXPLORE_READINGS
 from curiosity_cli.topics.model import TopicModel
 
 
@@ -45,19 +46,34 @@ def word_perplexity(model: TopicModel, words) -> float:
     return float(word_perplexity_kernel(words, nwk, nk, model.n_topics, model.alpha, model.beta, vbeta))
 
 
-def topic_perplexity(model: TopicModel, words, cell: int, *, return_topics: bool = False):
+def topic_perplexity(
+    model: TopicModel, words, cell: int, *, context: str = "neighbourhood", sweeps: int = 1,
+    path_topics: str = "smoothed", return_topics: bool = False,
+):
     """Topic perplexity of ``words`` seen at ``cell`` (eq. 12).
 
     Each word first gets a temporary topic ``z_i`` drawn from eq. 5 without being added
-    to the model: Φ from the model, and as neighbourhood counts the model's ``n_Gk`` of
-    ``cell`` (the topic counts of the observed cells among ``cell`` and its neighbours)
-    plus the temporary topics already drawn for the earlier words of ``words`` (as if
-    the candidate cell were being added one word at a time; Φ is left as is). Then::
+    to the model: Φ from the model, and as neighbourhood counts, by ``context``:
+
+    - ``neighbourhood``: the model's ``n_Gk`` of ``cell`` (the topic counts of the
+      observed cells among ``cell`` and its neighbours) plus the temporary topics already
+      drawn for the earlier words of ``words``, as if the candidate cell were being added
+      one word at a time (Φ is left as is). If ``cell`` is already in the model, its own
+      counts are part of the neighbourhood, as for any word of that cell.
+    - ``own``: the temporary topics of the other words of ``words`` only, as the authors'
+      ROST code labels words outside the model (``refine_ext`` with its default empty
+      neighbourhood): the labels follow the words alone.
+
+    The first pass draws the words in order; each of ``sweeps - 1`` further Gibbs passes
+    draws every word again, in order, given the others' temporary topics. Then::
 
         TopicPerplexity = exp(-(1/W) Σ_i log P(z_i | path))
 
-    If ``cell`` is already in the model, its own counts are part of the neighbourhood,
-    as for any word of that cell.
+    with ``P(k | path)`` as in the module docstring when ``path_topics`` is
+    ``smoothed``; with ``counts`` it is ``n_k / N``, as the authors' curiosity node
+    computes it, and a temporary topic the path has never seen (``n_k = 0``) makes the
+    perplexity infinite: the candidate is infinitely surprising (``inf`` too when the
+    model holds no words).
 
     The draws come from the model's seed and its current random state with a stream of
     their own (``(counter, n_cells + 1 + cell)``), without advancing the state: the
@@ -71,24 +87,39 @@ def topic_perplexity(model: TopicModel, words, cell: int, *, return_topics: bool
         Word ids in ``0 .. V - 1``.
     cell : int
         Where the words are seen, ``0 .. n_cells - 1``.
+    context : {'neighbourhood', 'own'}
+        The counts the temporary topics are drawn against (above).
+    sweeps : int
+        Passes over the temporary topics, >= 1.
+    path_topics : {'smoothed', 'counts'}
+        ``P(k | path)``: ``(n_k + α) / (N + Kα)`` or ``n_k / N``.
     return_topics : bool
         Also return the temporary topics.
 
     Returns
     -------
     float, or (float, (W,) int32 ndarray)
-        1.0 (and no topics) when ``W == 0``.
+        1.0 (and no topics) when ``W == 0``; ``inf`` under ``counts`` when a temporary
+        topic is one the path has not seen.
+
+    Raises
+    ------
+    ParameterError
+        Naming a bad ``words``, ``cell``, ``context``, ``sweeps`` or ``path_topics``.
     """
     from curiosity_cli.topics._perplexity_kernels import topic_perplexity_kernel
 
     words = model._check_words(words)
     cell = check_int("cell", cell, 0, model.n_cells - 1)
+    own = check_choice("context", context, EXPLORE_READINGS["candidate_context"]) == "own"
+    sweeps = check_int("sweeps", sweeps, 1)
+    smoothed = check_choice("path_topics", path_topics, EXPLORE_READINGS["path_topics"]) == "smoothed"
     if not words.size:
         return (1.0, np.zeros(0, np.int32)) if return_topics else 1.0
     nwk, nk, inv, ng = _arrays(model)
     value, topics = topic_perplexity_kernel(
         words, cell, nwk, nk, inv, ng, model.n_topics, model.alpha, np.float32(model.alpha),
-        np.float32(model.beta), model._key(), np.uint64(model._counter),
+        np.float32(model.beta), model._key(), np.uint64(model._counter), own, sweeps, smoothed,
     )
     return (float(value), topics) if return_topics else float(value)
 

@@ -1,7 +1,8 @@
 """Extraction: a map image → its word store, cached by what made it.
 
 A store is keyed by a hash of the decoded image pixels, the vocabularies' content hashes
-and every parameter that changes the words, so a cached store is reused exactly when
+and every parameter that changes the words (the words settings'
+:meth:`~curiosity_cli.config.WordsConfig.store_settings`), so a cached store is reused exactly when
 re-extracting would give the same words, and never otherwise.
 """
 
@@ -49,12 +50,8 @@ def _params(map_data: MapData, words: WordsConfig, stride: int, cell_width: int)
         "image_shape": list(map_data.image.shape[:2]),
         "stride": stride,
         "cell_width": cell_width,
-        "orb_tile": words.orb_tile,
-        "orb_per_tile": words.orb_per_tile,
-        "orb_max_features": words.orb_max_features,
-        "orb_fast_threshold": words.orb_fast_threshold,
-        "orb_fill_threshold": words.orb_fill_threshold,
-        "colour_words": words.colour_words,
+        # every words key that changes the words (WordsConfig.store_settings says which do not)
+        **words.store_settings(),
     }
 
 

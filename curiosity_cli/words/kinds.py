@@ -28,7 +28,9 @@ HUE_BINS = 180
 
 @dataclass(frozen=True)
 class OrbSettings:
-    """How ORB keypoints are found: :func:`~curiosity_cli.words.orb.detect_orb`'s keywords."""
+    """Where ORB words are: ``detector`` (``words.orb_detector``), the grid's ``grid_step``
+    (:func:`~curiosity_cli.words.orb_grid.grid_orb`) or the keypoints' settings
+    (:func:`~curiosity_cli.words.orb.detect_orb`'s keywords)."""
 
     tile: int
     per_tile: int | None
@@ -36,25 +38,33 @@ class OrbSettings:
     fast_threshold: int
     fill_threshold: int | None
     n_levels: int = 8
+    detector: str = "keypoints"
+    grid_step: int = 1
 
     @classmethod
     def for_maps(cls, words: WordsConfig) -> OrbSettings:
         return cls(words.orb_tile, words.orb_per_tile, words.orb_max_features, words.orb_fast_threshold,
-                   words.orb_fill_threshold)
+                   words.orb_fill_threshold, detector=words.orb_detector, grid_step=words.orb_grid_step)
 
     @classmethod
     def for_frames(cls, words: WordsConfig, *, per_tile: int, fill_threshold: int | None, n_levels: int) -> OrbSettings:
         """The ORB settings of a camera frame, which is too small for a map's.
 
-        The map's tiling, feature cap and FAST threshold, with the driver's own cap per
-        tile, top-up threshold and pyramid depth (``drive.orb_per_tile``,
-        ``drive.orb_fill_threshold``, ``drive.orb_levels``).
+        The map's detector; for keypoints, the map's tiling, feature cap and FAST
+        threshold, with the driver's own cap per tile, top-up threshold and pyramid depth
+        (``drive.orb_per_tile``, ``drive.orb_fill_threshold``, ``drive.orb_levels``); for
+        the grid, the map's step (the grid reads no other setting).
         """
-        return cls(words.orb_tile, per_tile, words.orb_max_features, words.orb_fast_threshold, fill_threshold, n_levels)
+        return cls(words.orb_tile, per_tile, words.orb_max_features, words.orb_fast_threshold, fill_threshold, n_levels,
+                   detector=words.orb_detector, grid_step=words.orb_grid_step)
 
 
 def orb_features(grey: np.ndarray, settings: OrbSettings):
-    """The ORB keypoints and descriptors of an (H, W) uint8 grey image."""
+    """The ORB points (keypoints or grid points) and descriptors of an (H, W) uint8 grey image."""
+    if settings.detector == "grid":
+        from curiosity_cli.words.orb_grid import grid_orb
+
+        return grid_orb(grey, step=settings.grid_step)
     from curiosity_cli.words.orb import detect_orb
 
     return detect_orb(

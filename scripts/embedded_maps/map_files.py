@@ -33,12 +33,34 @@ def write_map(name: str, out_dir: Path, cache: Path) -> dict[str, float]:
     dict class name -> pixel fraction
     """
     image, labels, legend = build_map(name, cache)
+    return write_map_files(name, out_dir, image, labels, legend)
+
+
+def write_map_files(
+    name: str,
+    out_dir: Path,
+    image: np.ndarray,
+    labels: np.ndarray,
+    legend: list[dict],
+    script: str = "scripts/make_maps.py",
+) -> dict[str, float]:
+    """Check a built map against the data format and write its three files into ``out_dir / name``, each atomically.
+
+    Parameters
+    ----------
+    script : str
+        The script that makes the map, named in the header of ``legend.yaml``.
+
+    Returns
+    -------
+    dict class name -> pixel fraction
+    """
     validate_map(name, image, labels, legend)
     folder = out_dir / name
     files = {
         "image.png": encode_png(image),
         "labels.png": encode_png(labels),
-        "legend.yaml": legend_yaml(name, legend).encode("utf-8"),
+        "legend.yaml": legend_yaml(name, legend, script).encode("utf-8"),
     }
     try:
         for filename, data in files.items():

@@ -95,6 +95,14 @@ def test_frame_words_use_the_shipped_vocabularies_on_a_resized_frame():
         words(frame[:, :, 0])
 
 
+def test_frame_words_follow_the_maps_orb_grid():
+    reef = load_map("reef-mosaic")
+    grid = dataclasses.replace(CONFIG.words, orb_detector="grid", orb_grid_step=8)
+    cells = FrameWords(grid, CONFIG.drive)(reef.image[1000:1480, 800:1440])
+    # 144 x 192 px, a point every 8 px: 18 x 24, 9 in each of the 6 x 8 image cells (24 x 24 px)
+    assert [(c < 5000).sum() for c in cells] == [9] * 48
+
+
 def test_the_pipeline_is_deterministic_for_a_seed():
     reef = load_map("reef-mosaic")
     config = dataclasses.replace(CONFIG, drive=dataclasses.replace(CONFIG.drive, samples_per_frame=2000))

@@ -8,6 +8,8 @@ from naive import (
     NaiveModel,
     Stream,
     add_cell_naive,
+    add_words_naive,
+    below,
     distance2_colouring_naive,
     lane_draw,
     lda_gibbs_naive,
@@ -333,3 +335,75 @@ def test_distance2_colouring_matches_twin_and_separates_interacting_cells(table)
 def test_grid_colouring_uses_few_colours():
     # 5 is the minimum for a 4-neighbour grid ((row + 2 col) mod 5 achieves it)
     assert distance2_colouring(SquareGrid(64, 64).neighbour_table()).max() + 1 <= 8
+
+
+# --- readings of the exploration: revisits add words again, refinement picks recent observations ------
+
+
+def test_add_words_to_an_observed_cell_matches_twin():
+    rng = np.random.default_rng(21)
+    model = TopicModel(5, 12, SquareGrid(3, 4).neighbour_table(), alpha=0.3, beta=0.2, seed=21)
+    for t, cell in enumerate([5, 6, 0, 2, 11]):
+        model.add_cell(cell, rng.integers(0, 12, rng.integers(0, 6)), time=t)
+    model.add_cell(7, [], time=5)  # an empty cell after the others: its first word index must move too
+    twin = NaiveModel.of(model)
+    for t, cell in [(6, 6), (7, 5), (8, 7), (9, 6)]:  # in the middle, first, the empty one, again
+        words = rng.integers(0, 12, 4)
+        model.add_words(cell, words, time=t)
+        add_words_naive(twin, cell, words, t)
+        assert_matches(model, twin)
+        np.testing.assert_array_equal(model.cell_words(cell), twin.words[cell])
+        assert list(model.observation_times()) == twin.times
+    assert model.n_words == sum(len(w) for w in twin.words.values())
+    model.refine_realtime(200, eta=0.5)
+    refine_realtime_naive(twin, 200, 0.5)
+    assert_matches(model, twin)
+
+
+def test_add_words_needs_an_observed_cell():
+    model = small_model(3, observed=0.25)
+    unobserved = next(c for c in range(12) if not model.is_observed(c))
+    with pytest.raises(ParameterError, match=f"^cell: cell {unobserved} is not in the model yet"):
+        model.add_words(unobserved, [1, 2])
+
+
+@pytest.mark.parametrize("eta", [0.0, 0.5, 1.0])
+def test_recent_refinement_picks_match_twin(eta):
+    rng = np.random.default_rng(12)
+    model = TopicModel(5, 10, SquareGrid(10, 10).neighbour_table(), alpha=0.3, beta=0.2, seed=12)
+    for t, cell in enumerate(rng.permutation(100)[:80]):
+        model.add_cell(int(cell), rng.integers(0, 10, rng.integers(1, 4)), time=t)
+    twin = NaiveModel.of(model)
+    done = model.refine_realtime(500, eta=eta, picks="recent")
+    assert done == refine_realtime_naive(twin, 500, eta, "recent")[0]
+    assert_matches(model, twin)
+
+
+def test_recent_picks_follow_the_stated_probabilities():
+    # 100 observation times, one word each: count which time each pick refines through the
+    # twin's picker (the kernel matches the twin above). With eta = 0.5, P(time t) is
+    # 0.5 / 64 for each of the newest 64 plus 0.5 * ((t + 1)^2 - t^2) / 100^2 from Beta(2, 1).
+    n_times, n_picks, window = 100, 200_000, 64
+    picker = Stream(mix(5), 0, 100)
+    counts = np.zeros(n_times)
+    for _ in range(n_picks):
+        newest = unit64(picker.bits()) < 0.5
+        bits = picker.bits()
+        if newest:
+            t = n_times - window + below(bits, window)
+        else:
+            t = min(int(np.floor(unit64(bits) ** 0.5 * n_times)), n_times - 1)
+        counts[t] += 1
+    t = np.arange(n_times)
+    expected = 0.5 * ((t + 1) ** 2 - t**2) / n_times**2 + np.where(t >= n_times - window, 0.5 / window, 0.0)
+    assert expected.sum() == pytest.approx(1.0)
+    # chi-square goodness of fit, 99 degrees of freedom: 148.2 is the 0.1 % critical value
+    chi2 = ((counts - n_picks * expected) ** 2 / (n_picks * expected)).sum()
+    assert chi2 < 148.2, chi2
+    # and recent times are refined more often than old ones, as the authors' refinery intends
+    assert counts[-10:].sum() > 5 * counts[:10].sum()
+
+
+def test_refinement_picks_are_checked():
+    with pytest.raises(ParameterError, match="^picks: got 'newest', expected one of uniform, recent$"):
+        small_model(1).refine_realtime(10, eta=0.5, picks="newest")

@@ -117,3 +117,79 @@ def test_perplexities_name_the_bad_parameter():
         topic_perplexity(model, [[1]], 0)
     with pytest.raises(ParameterError, match="^cell:"):
         topic_perplexity(model, [1], 16)
+
+
+# --- the readings of eq. 12 (explore.candidate_context, candidate_sweeps, path_topics) ---------
+
+
+@pytest.mark.parametrize("context", ["neighbourhood", "own"])
+@pytest.mark.parametrize("sweeps", [1, 3])
+@pytest.mark.parametrize("path_topics", ["smoothed", "counts"])
+def test_topic_perplexity_readings_match_twin(context, sweeps, path_topics):
+    model = path_model(4)
+    words = np.random.default_rng(5).integers(0, 12, 30)
+    for cell in (6, 2, 15):  # on the path, beside it, away from it
+        value, topics = topic_perplexity(
+            model, words, cell, context=context, sweeps=sweeps, path_topics=path_topics, return_topics=True
+        )
+        twin_value, twin_topics = topic_perplexity_naive(NaiveModel.of(model), words, cell, context, sweeps, path_topics)
+        np.testing.assert_array_equal(topics, twin_topics)
+        assert value == pytest.approx(twin_value, rel=1e-12) or value == twin_value == math.inf
+
+
+def test_own_context_ignores_the_neighbourhood_by_hand():
+    # one topic's words fill the path: with the neighbourhood prior (alpha = 0.01) an
+    # ambiguous word beside the path takes that topic; drawn against its own labels only,
+    # each of two words of equal Φ under both topics starts as a fair coin (hand: the first
+    # word's weights are equal, so about half the candidates' first labels are topic 0)
+    model = TopicModel(2, 3, SquareGrid(1, 6).neighbour_table(), alpha=0.01, beta=0.01, seed=3)
+    for cell in range(3):
+        model.add_cell(cell, [0] * 50)
+    for cell in range(3, 6):
+        model.add_cell(cell, [1] * 50)
+    model.refine_batch(20)
+    left = model.ml_topics([0])[0]
+    # Φ(word 2) is β / (n_k + Vβ) under both topics, and both topics hold 150 words: equal weights
+    assert model.topic_totals()[0] == model.topic_totals()[1] == 150
+    firsts = []
+    for counter_cell in range(6):
+        _, topics = topic_perplexity(model, [2], counter_cell, context="own", return_topics=True)
+        firsts.append(topics[0])
+        _, near = topic_perplexity(model, [2] * 20, 1, context="neighbourhood", return_topics=True)
+        assert np.all(near == left)
+    # the own-context labels of word 2 at the six cells use six streams: not all the left topic
+    assert set(firsts) == {0, 1}
+
+
+def test_a_topic_the_path_never_saw_makes_counts_perplexity_infinite():
+    # a path of one word: exactly one topic z0 has n = 1, the other three n = 0. By hand,
+    # under counts P(z0 | path) = 1 and every other topic 0: a candidate's perplexity is
+    # exp(-mean log 1) = 1 when all its temporary labels are z0, else infinite; smoothed
+    # it is finite either way
+    model = TopicModel(4, 3, SquareGrid(1, 6).neighbour_table(), alpha=0.1, beta=0.1, seed=0)
+    model.add_cell(0, [0])
+    totals = model.topic_totals()
+    assert totals.sum() == 1
+    z0 = int(np.argmax(totals))
+    outcomes = set()
+    for cell in range(6):
+        for words in ([0], [1], [0, 0, 0], [2, 1]):
+            value, topics = topic_perplexity(model, words, cell, path_topics="counts", return_topics=True)
+            expected = 1.0 if np.all(topics == z0) else math.inf
+            assert value == expected
+            outcomes.add(expected)
+            assert math.isfinite(topic_perplexity(model, words, cell))
+    assert outcomes == {1.0, math.inf}
+    # a model without words has seen no topic: every candidate is infinitely surprising
+    empty = TopicModel(4, 3, SquareGrid(1, 6).neighbour_table(), alpha=0.1, beta=0.1, seed=0)
+    assert topic_perplexity(empty, [1], 2, path_topics="counts") == math.inf
+
+
+def test_reading_arguments_are_checked():
+    model = path_model(0)
+    with pytest.raises(ParameterError, match="^context: got 'cells', expected one of neighbourhood, own$"):
+        topic_perplexity(model, [1], 0, context="cells")
+    with pytest.raises(ParameterError, match="^sweeps:"):
+        topic_perplexity(model, [1], 0, sweeps=0)
+    with pytest.raises(ParameterError, match="^path_topics: got 'raw'"):
+        topic_perplexity(model, [1], 0, path_topics="raw")

@@ -11,7 +11,7 @@ import yaml
 from curiosity_cli.config import CONFIG_DIR, load_words_config
 from curiosity_cli.data import load_map
 from curiosity_cli.errors import CuriosityError
-from curiosity_cli.words.extract import extract_words
+from curiosity_cli.words.extract import extract_words, store_name
 from curiosity_cli.words.store import load_store
 
 GOLDEN = Path(__file__).parent.parent / "data" / "golden_words.npz"
@@ -180,3 +180,71 @@ def test_the_orb_share_counts_orb_words_among_all(own_map, tmp_path):
     assert 0 < n_orb and result.orb_share == n_orb / len(result.store.words)
     capped = load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_per_tile=1"])
     assert extract_words(load_map(own_map), capped, cache_dir=tmp_path).orb_share < result.orb_share
+
+
+# --- grid ORB (issue 32) and the store's name from the words settings (issue 34) -------
+
+
+def test_the_default_store_names_are_todays(own_map):
+    # the names before words.orb_detector existed: old caches and old runs' recipes stay valid
+    m = load_map(own_map)
+    assert store_name(m, WORDS)[0] == "own-e270caf4de777d2e.npz"
+    capped = load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_per_tile=2", "words.orb_fill_threshold=1"])
+    assert store_name(m, capped)[0] == "own-8628354b94992909.npz"
+    # the grid's step is read by the grid only
+    assert store_name(m, load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_grid_step=7"]))[0] == store_name(m, WORDS)[0]
+
+
+def test_the_grid_and_its_step_name_their_own_stores(own_map):
+    m = load_map(own_map)
+
+    def name(*overrides):
+        return store_name(m, load_words_config(CONFIG_DIR / "paper.yaml", list(overrides)))[0]
+
+    grid = name("words.orb_detector=grid")
+    assert grid not in (name(), name("words.orb_detector=grid", "words.orb_grid_step=2"))
+    # keypoint settings the grid does not read leave its store alone
+    assert grid == name("words.orb_detector=grid", "words.orb_fast_threshold=30", "words.orb_tile=32")
+
+
+def _another_value(config, field):
+    """A valid value of ``field`` other than ``config``'s."""
+    value = getattr(config, field.name)
+    choices = field.metadata.get("choices")
+    if choices:
+        return next(c for c in choices if c != value)
+    if isinstance(value, bool):
+        return not value
+    if value is None:
+        return 2
+    return value + 1
+
+
+def test_every_words_key_names_the_store_or_is_excluded(own_map):
+    import dataclasses
+
+    from curiosity_cli.config import _READ_BY, _VOCABULARY_KEYS, WordsConfig
+
+    m = load_map(own_map)
+    for field in dataclasses.fields(WordsConfig):
+        if field.name in _VOCABULARY_KEYS:  # recorded by the vocabularies' hashes
+            continue
+        base = WORDS
+        if _READ_BY.get(field.name) == "grid":
+            base = dataclasses.replace(WORDS, orb_detector="grid")
+        changed = dataclasses.replace(base, **{field.name: _another_value(base, field)})
+        assert store_name(m, changed)[0] != store_name(m, base)[0], field.name
+
+
+def test_grid_words_sit_on_the_grid(own_map, tmp_path):
+    grid = load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_detector=grid", "words.orb_grid_step=4"])
+    result = extract_words(load_map(own_map), grid, cache_dir=tmp_path)
+    store = result.store
+    orb = store.words < 5000
+    # 96 x 128 px, step 4: rows 2, 6, ..., 94 and cols 2, 6, ..., 126; 16 words in every 16 px cell
+    assert orb.sum() == 24 * 32
+    assert set(store.rows[orb] % 4) == {2} and set(store.cols[orb] % 4) == {2}
+    orb_per_cell = np.add.reduceat(orb.astype(int), store.cell_start[:-1])
+    assert store.n_cells == 6 * 8 and set(orb_per_cell.tolist()) == {16}
+    assert result.orb_share == 24 * 32 / (24 * 32 + 96 * 128)
+    assert not extract_words(load_map(own_map), WORDS, cache_dir=tmp_path).reused
