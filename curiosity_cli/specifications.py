@@ -247,7 +247,8 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
         "",
     ]
     if len(table):
-        write_specification_curve(table, choices, folder / FIGURE, label="label")
+        datasets = list(dict.fromkeys(d for t in pooled for d in t.pooled.headline["dataset"]))  # the config's order
+        write_specification_curve(table, choices, folder / FIGURE, label="label", datasets=datasets)
         lines += [f"![specification curve]({FIGURE}.png)", ""]
     lines += [
         "| # | " + " | ".join(names) + " | map | ratio [95 % CI] | paper's ratio | next best | p | pairs | detectable lead "

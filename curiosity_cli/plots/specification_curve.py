@@ -3,8 +3,8 @@
 Top: one point per specification and map, topic perplexity's ratio at 80 steps with its
 95 % interval, sorted by ratio (:func:`curiosity_cli.evaluate.specification_curve.curve_table`),
 coloured by map; a filled point where topic perplexity leads every other walker at
-p < 0.05, a hollow one elsewhere; the paper's ratio for each map as a dashed line of the
-map's colour, and 1 (no lead) in grey. Below, aligned with the points, a panel of dots: a
+p < 0.05, a hollow one elsewhere; the paper's ratio of each paper map our maps stand in
+for as a dashed line named by it, and 1 (no lead) in grey. Below, aligned with the points, a panel of dots: a
 row per map and per value of each varied key, a dot where the point's specification used it.
 """
 
@@ -19,19 +19,25 @@ from curiosity_cli.plots.figures import figure_style, save_figure
 _NAMED = 40
 
 
-def specification_curve_figure(table, choices: Mapping[str, Mapping[str, str]], label: str = "specification"):
+def specification_curve_figure(
+    table, choices: Mapping[str, Mapping[str, str]], label: str = "specification", datasets: list[str] | None = None,
+):
     """The figure (module docstring).
 
     Parameters
     ----------
     table : pandas.DataFrame
-        :func:`~curiosity_cli.evaluate.specification_curve.curve_table`, in its order, with
-        a column ``label`` naming each row's specification.
+        :func:`~curiosity_cli.evaluate.specification_curve.curve_table`, in its order (its
+        ``dataset``, ``ratio``, ``ratio_ci_low``, ``ratio_ci_high``, ``beats_all``,
+        ``paper_map`` and ``paper_ratio``), with a column ``label`` naming each row's
+        specification.
     choices : mapping of str to mapping of str to str
         Per specification (as ``label`` names it): each varied key and the value it used,
         the keys in the order the panel lists them.
     label : str
         The column of ``table`` naming the specification.
+    datasets : list of str, optional
+        The maps in the order of the panel's rows and colours; default as they first come in ``table``.
 
     Returns
     -------
@@ -42,7 +48,7 @@ def specification_curve_figure(table, choices: Mapping[str, Mapping[str, str]], 
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
-    datasets = list(dict.fromkeys(table["dataset"]))
+    datasets = [d for d in dict.fromkeys([*(datasets or []), *table["dataset"]]) if (table["dataset"] == d).any()]
     colours = {d: matplotlib.colormaps["tab10"](i % 10) for i, d in enumerate(datasets)}
     rows = [("map", d) for d in datasets]
     for values in choices.values():
@@ -56,11 +62,15 @@ def specification_curve_figure(table, choices: Mapping[str, Mapping[str, str]], 
     fig = Figure(figsize=(max(6.4, 1.8 + 0.22 * n), 3.6 + 0.2 * len(rows) + (1.2 if n <= _NAMED else 0)), layout="constrained")
     top, dots = fig.subplots(2, 1, sharex=True, height_ratios=[3.4, 0.2 * len(rows) + 0.3])
     top.axhline(1.0, color="0.6", linewidth=0.8)
+    papers = table.dropna(subset=["paper_ratio"]).drop_duplicates("paper_map")
+    for paper in papers.itertuples():
+        top.axhline(paper.paper_ratio, color="0.25", linestyle="--", linewidth=1)
+        top.annotate(
+            f"{paper.paper_map} (paper): {paper.paper_ratio:.2f}", (0, paper.paper_ratio), xycoords=("axes fraction", "data"),
+            xytext=(4, 2), textcoords="offset points", fontsize=8, color="0.25",
+        )
     for dataset in datasets:
         at = (table["dataset"] == dataset).to_numpy()
-        paper = table.loc[at, "paper_ratio"].dropna()
-        if len(paper):
-            top.axhline(float(paper.iloc[0]), color=colours[dataset], linestyle="--", linewidth=1)
         ratio = table.loc[at, "ratio"].to_numpy(float)
         low, high = table.loc[at, "ratio_ci_low"].to_numpy(float), table.loc[at, "ratio_ci_high"].to_numpy(float)
         top.errorbar(x[at], ratio, yerr=[ratio - low, high - ratio], fmt="none", ecolor=colours[dataset], elinewidth=1)
@@ -71,7 +81,7 @@ def specification_curve_figure(table, choices: Mapping[str, Mapping[str, str]], 
     top.grid(True, axis="y", color="0.92")
     handles = [Line2D([], [], color=colours[d], marker="o", linestyle="", label=d) for d in datasets]
     handles += [
-        Line2D([], [], color="0.3", linestyle="--", label="paper's ratio (map's colour)"),
+        Line2D([], [], color="0.25", linestyle="--", label="the paper's ratio of the map ours stand in for"),
         Line2D([], [], color="0.3", marker="o", linestyle="", label="leads every walker, p < 0.05"),
         Line2D([], [], markeredgecolor="0.3", markerfacecolor="white", marker="o", linestyle="", label="does not"),
     ]
@@ -96,7 +106,10 @@ def specification_curve_figure(table, choices: Mapping[str, Mapping[str, str]], 
     return fig
 
 
-def write_specification_curve(table, choices: Mapping[str, Mapping[str, str]], stem: Path, label: str = "specification") -> list[Path]:
+def write_specification_curve(
+    table, choices: Mapping[str, Mapping[str, str]], stem: Path, label: str = "specification",
+    datasets: list[str] | None = None,
+) -> list[Path]:
     """Write :func:`specification_curve_figure` as ``stem``.png and ``stem``.pdf; returns both paths."""
     with figure_style():
-        return save_figure(specification_curve_figure(table, choices, label), Path(stem))
+        return save_figure(specification_curve_figure(table, choices, label, datasets), Path(stem))
