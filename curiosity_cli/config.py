@@ -44,7 +44,8 @@ OVERRIDES = "overrides"
 #: (:func:`curiosity_cli.sweep.declared_sweeps`); an experiment never sees it.
 SWEEP_KEY = "sweep"
 #: The top-level key of a study config that declares named specifications, each a set of
-#: overrides run on every map and replicate seed; an experiment never sees it either.
+#: overrides run on every map and replicate seed (:mod:`curiosity_cli.specifications`); an
+#: experiment never sees it either.
 SPECIFICATIONS_KEY = "specifications"
 
 #: The longest experiment or dataset name; a sweep names its experiments in up to this many.
@@ -71,6 +72,9 @@ WALKER_NAMES = (
     "scattered-cells",
     "compact-block",
 )
+
+#: The paper's own walkers (its four weight functions): what a specification curve compares.
+PAPER_WALKERS = WALKER_NAMES[:4]
 
 #: The readings of eq. 8 a config may name in ``explore.coverage``: what a visited
 #: candidate's own term (``d = 0``) means, which the paper leaves undefined.
@@ -475,10 +479,11 @@ def _load_chain(path: Path, raw: _Raw, seen: tuple[Path, ...] = ()) -> None:
     if path in seen:
         raise ConfigError(f"{display_path(path)}: base: the chain of base configs loops back here")
     data = read_yaml(path, "config file")
-    for key in (SWEEP_KEY, SPECIFICATIONS_KEY):
+    for key, what in ((SWEEP_KEY, "a sweep"), (SPECIFICATIONS_KEY, "specifications")):
         if key in data and seen:
-            raise ConfigError(f"{display_path(path)}: {key}: only the experiment config itself may declare a sweep")
-        data.pop(key, None)  # the sweep's, not an experiment's (curiosity_cli.sweep.declared_sweeps)
+            raise ConfigError(f"{display_path(path)}: {key}: only the experiment config itself may declare {what}")
+        # the sweep's, not an experiment's (curiosity_cli.sweep.declared_sweeps, curiosity_cli.specifications)
+        data.pop(key, None)
     base = data.pop("base", None)
     if base is not None:
         if not isinstance(base, str):

@@ -17,7 +17,10 @@ names each combination), and a key may be given once, in ``--sweep`` or ``--set`
 Every combination is loaded and validated with :func:`curiosity_cli.config.load_config`
 (the ``--set`` machinery: ``--set`` options first, then the combination's values)
 before the first one runs, so a bad key or value stops the sweep before anything is
-written.
+written. A study config may also declare specifications, named sets of overrides under
+each of which every combination runs (:mod:`curiosity_cli.specifications`): a
+combination is then a (specification, swept values) pair, named
+``specification-NAME_KEY-VALUE...``.
 
 Layout
 ------
@@ -27,10 +30,7 @@ For an experiment config named ``quick``, everything goes under
     quick-sweep/
       sweep.yaml                               the config, --set options, and per combination
                                                its folder and overrides (written first)
-      SWEEP.md                                 every combination's overrides and headline table,
-                                               linked to its REPORT.md (written last)
-      sweep.csv                                a row per combination and dataset: override
-                                               columns, then headline.csv's columns
+      SWEEP.md, sweep.csv, sensitivity.csv     the report (written last: :mod:`curiosity_cli.sweep_report`)
       model.topics-16_explore.restarts-20/     an ordinary experiment folder (config.yaml,
       model.topics-32_explore.restarts-20/       runs/, labels/, REPORT.md, ...) per combination
 
@@ -67,23 +67,16 @@ import shlex
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 from pathlib import Path
 
 from curiosity_cli.config import OVERRIDES, ExperimentConfig, config_file, load_config
 from curiosity_cli.errors import ConfigError, CuriosityError
-from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.paths import DEFAULT_RESULTS
 
-#: The headline columns, as ``headline.csv`` has them (:func:`curiosity_cli.evaluate.tables.headline`).
-HEADLINE_COLUMNS = (
-    "dataset", "topic_perplexity", "next_best", "next_best_mi", "ratio", "p_value", "pairs", "paper_map", "paper_ratio",
-    "ratio_ci_low", "ratio_ci_high", "detectable_ratio", "pairs_for_lead",
-)
-#: The key whose values are replicates, pooled in SWEEP.md's first table, not treatments.
-REPLICATE_KEY = "seed"
-#: The walkers whose distinct cells the first table of SWEEP.md shows beside the ratio.
-DISTINCT_WALKERS = ("stochastic-coverage", "topic-perplexity")
+if TYPE_CHECKING:
+    from curiosity_cli.specifications import Specification
 
 _SAFE = re.compile(r"[^A-Za-z0-9_.-]+")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -116,11 +109,14 @@ class Combination:
     index : int
         1-based position in product order.
     overrides : tuple of str
-        ``KEY=VALUE`` for every swept key, in ``--sweep`` order (``--set`` syntax).
+        ``KEY=VALUE`` for every swept key, in ``--sweep`` order (``--set`` syntax); in a
+        study that declares specifications, ``specification=NAME`` first
+        (:data:`curiosity_cli.specifications.SPECIFICATION`).
     name : str
         Its experiment name and folder (module docstring).
     config : ExperimentConfig
-        The validated config: the file, the ``--set`` options, then ``overrides``.
+        The validated config: the file, the ``--set`` options, the specification's
+        overrides, then the swept values.
     """
 
     index: int
@@ -148,7 +144,10 @@ class Sweep:
         The ``--set`` options shared by every combination.
     axes : tuple of SweepAxis
     combinations : tuple of Combination
-        In product order.
+        In product order (each specification's, in the order declared, in turn).
+    specifications : tuple of Specification
+        The specifications the config declares (:mod:`curiosity_cli.specifications`);
+        empty for a plain sweep.
     """
 
     name: str
@@ -156,6 +155,15 @@ class Sweep:
     sets: tuple[str, ...]
     axes: tuple[SweepAxis, ...]
     combinations: tuple[Combination, ...] = field(repr=False)
+    specifications: tuple[Specification, ...] = ()
+
+    @property
+    def keys(self) -> list[str]:
+        """What tells the combinations apart, as their ``overrides`` name it: the swept keys,
+        after ``specification`` in a study that declares specifications."""
+        from curiosity_cli.specifications import SPECIFICATION
+
+        return [SPECIFICATION] * bool(self.specifications) + [axis.key for axis in self.axes]
 
     def folder(self, results_dir: Path) -> Path:
         """The sweep's folder under ``results_dir``."""
@@ -256,10 +264,10 @@ def parse_sweeps(options: Sequence[str], sets: Sequence[str] = ()) -> tuple[Swee
         if not all(values):
             raise SweepSyntaxError(f"{text!r}: an empty value; write null for null")
         for other in [a.key for a in axes]:
-            if _overlap(key, other):
+            if overlap(key, other):
                 raise SweepSyntaxError(f"{text!r}: {other} is already swept; give each key once")
         for other in set_keys:
-            if _overlap(key, other):
+            if overlap(key, other):
                 raise SweepSyntaxError(f"{text!r}: {other} is also among the overrides; give it in one of them")
         parts = {}
         for value in values:
@@ -307,14 +315,14 @@ def declared_sweeps(config_path: str | Path) -> list[str]:
     for key, values in declared.items():
         if not isinstance(key, str) or not isinstance(values, list) or not values:
             raise ConfigError(f"{where}.{key}: expected a list of one or more values, e.g. [0, 1, 2]")
-        texts = [_value_text(value) for value in values]
+        texts = [value_text(value) for value in values]
         if any(split_values(text) != [text] for text in texts):
             raise ConfigError(f"{where}.{key}: a value with a comma outside brackets; write it as a list")
         options.append(f"{key}={','.join(texts)}")
     return options
 
 
-def _value_text(value) -> str:
+def value_text(value) -> str:
     """A YAML value as a ``--sweep`` value that reads back to it: strings as typed when they can be."""
     if isinstance(value, str) and _parsed(value) == value:
         return value
@@ -336,7 +344,7 @@ def merge_sweeps(declared: Sequence[str], given: Sequence[str]) -> list[str]:
     return merged
 
 
-def _overlap(key: str, other: str) -> bool:
+def overlap(key: str, other: str) -> bool:
     """Whether two dotted keys set the same leaf (equal, or one a section of the other)."""
     return key == other or key.startswith(other + ".") or other.startswith(key + ".")
 
@@ -404,7 +412,10 @@ def _digest(text: str, digits: int) -> str:
 # --------------------------------------------------------------------------- planning
 
 
-def plan_sweep(config_path: str | Path, axes: Sequence[SweepAxis], sets: Sequence[str] = ()) -> Sweep:
+def plan_sweep(
+    config_path: str | Path, axes: Sequence[SweepAxis], sets: Sequence[str] = (),
+    specifications: Sequence[Specification] = (),
+) -> Sweep:
     """Load and validate every combination of a sweep; nothing is written.
 
     Parameters
@@ -412,9 +423,12 @@ def plan_sweep(config_path: str | Path, axes: Sequence[SweepAxis], sets: Sequenc
     config_path : str or Path
         The experiment YAML.
     axes : sequence of SweepAxis
-        From :func:`parse_sweeps`; at least one.
+        From :func:`parse_sweeps`; at least one, unless there are ``specifications``.
     sets : sequence of str
         ``--set KEY=VALUE`` options applied to every combination, before its own values.
+    specifications : sequence of Specification
+        A study's (:func:`curiosity_cli.specifications.declared_specifications`): every
+        combination of ``axes`` runs under each, its overrides after ``sets``.
 
     Returns
     -------
@@ -424,25 +438,33 @@ def plan_sweep(config_path: str | Path, axes: Sequence[SweepAxis], sets: Sequenc
     ------
     ConfigError
         The first combination that does not validate, in one line: the error its
-        overrides give, naming the sweeps when a swept key is at fault, else followed by
-        the combination.
+        overrides give, naming the specification's key in the config file, or the sweeps,
+        when one of theirs is at fault, else followed by the combination; or a
+        specification's key also swept or given with ``--set``.
     """
-    if not axes:
-        raise ValueError("a sweep needs at least one axis")
+    from curiosity_cli.specifications import SPECIFICATION, check_specifications, specification_error
+
+    if not axes and not specifications:
+        raise ValueError("a sweep needs at least one axis or specification")
     config_path = config_file(config_path)
     sets = tuple(sets)
     keys = [axis.key for axis in axes]
+    check_specifications(config_path, specifications, keys, sets)
     loaded, base_name = [], None
-    for index, overrides in enumerate(combinations(axes), start=1):
-        try:
-            config = load_config(config_path, [*sets, *overrides])
-        except ConfigError as exc:
-            raise _combination_error(exc, keys, overrides) from None
-        base_name = config.name  # the same for every combination: name cannot be swept
-        name = combination_name(overrides)
-        assert _NAME.match(name), name  # by construction: keys are config fields, values made safe
-        loaded.append(Combination(index, overrides, name, replace(config, name=name)))
-    return Sweep(base_name, config_path, sets, tuple(axes), tuple(loaded))
+    for specification in specifications or (None,):
+        own = specification.overrides if specification is not None else ()
+        for values in combinations(axes):
+            overrides = values if specification is None else (f"{SPECIFICATION}={specification.name}", *values)
+            try:
+                config = load_config(config_path, [*sets, *own, *values])
+            except ConfigError as exc:
+                error = specification_error(exc, config_path, specification) if specification is not None else None
+                raise error or _combination_error(exc, keys, overrides) from None
+            base_name = config.name  # the same for every combination: name cannot be swept
+            name = combination_name(overrides)
+            assert _NAME.match(name), name  # by construction: keys are config fields, values made safe
+            loaded.append(Combination(len(loaded) + 1, overrides, name, replace(config, name=name)))
+    return Sweep(base_name, config_path, sets, tuple(axes), tuple(loaded), tuple(specifications))
 
 
 def _combination_error(exc: ConfigError, keys: Sequence[str], overrides: Sequence[str]) -> ConfigError:
@@ -496,6 +518,7 @@ def run_sweep(
         and ``sweep.csv`` hold the others).
     """
     from curiosity_cli.reproduce import reproduce
+    from curiosity_cli.sweep_report import write_sweep_report
 
     folder = sweep.folder(results_dir)
     write_plan(sweep, folder)
@@ -514,7 +537,7 @@ def run_sweep(
     failed = [o for o in outcomes if o.error is not None]
     if failed:
         raise SweepError(
-            f"{len(failed)} of {_count(total, 'combination')} failed ({display_path(path)} has the others; "
+            f"{len(failed)} of {count(total, 'combination')} failed ({display_path(path)} has the others; "
             "run the command again to retry): "
             + "; ".join(f"combination {o.combination.index} ({o.combination.label}): {o.error}" for o in failed)
         )
@@ -541,6 +564,7 @@ def write_plan(sweep: Sweep, folder: Path) -> Path:
         "config": str(sweep.config_path.resolve()),
         "set": list(sweep.sets),
         "sweep": {axis.key: list(axis.values) for axis in sweep.axes},
+        "specifications": {s.name: list(s.overrides) for s in sweep.specifications},
         "combinations": [
             {"index": c.index, "folder": c.name, "overrides": list(c.overrides)} for c in sweep.combinations
         ],
@@ -551,232 +575,6 @@ def write_plan(sweep: Sweep, folder: Path) -> Path:
     return path
 
 
-def read_headline(folder: Path):
-    """An experiment's ``headline.csv`` as a DataFrame (empty, with its columns, if absent).
-
-    Parameters
-    ----------
-    folder : Path
-        An experiment folder.
-
-    Returns
-    -------
-    pandas.DataFrame
-        The columns of :data:`HEADLINE_COLUMNS`.
-    """
-    import pandas as pd
-
-    path = ExperimentFolder(folder).table("headline")
-    if not path.is_file():
-        return pd.DataFrame(columns=list(HEADLINE_COLUMNS))
-    text = {"dataset": str, "next_best": str, "paper_map": str}  # an empty paper_map stays ""
-    numbers = {column: [""] for column in HEADLINE_COLUMNS if column not in text}
-    return pd.read_csv(path, dtype=text, keep_default_na=False, na_values=numbers)
-
-
-def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) -> Path:
-    """Write ``SWEEP.md`` and ``sweep.csv`` from the combinations' ``headline.csv``.
-
-    Parameters
-    ----------
-    sweep : Sweep
-    folder : Path
-        The sweep's folder; each combination's experiment folder is in it.
-    outcomes : sequence of Outcome
-        One per combination run, in product order.
-
-    Returns
-    -------
-    Path
-        ``SWEEP.md``.
-    """
-    import pandas as pd
-
-    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT
-
-    folder = Path(folder)
-    keys = [axis.key for axis in sweep.axes]
-    sensitivity, pooled_rows = _sensitivity(sweep, folder, outcomes)
-    rows, sections = [], []
-    overview = [
-        "| # | " + " | ".join(keys) + " | dataset | ratio | next best | paired Wilcoxon p (pairs) | paper's ratio |",
-        "|---|" + "---|" * len(keys) + "---|---|---|---|---|",
-    ]
-    for outcome in outcomes:
-        c = outcome.combination
-        values = [text.split("=", 1)[1] for text in c.overrides]
-        cells = " | ".join(f"`{v}`" for v in values)
-        link = f"[{c.index}]({c.name}/REPORT.md)"
-        sections += [f"## {c.index}. {c.label}", ""]
-        if outcome.error is not None:
-            overview.append(f"| {c.index} | {cells} | failed | | | | |")
-            sections += [f"Failed: {outcome.error}", ""]
-            continue
-        top = read_headline(folder / c.name)
-        sections += [f"Folder `{c.name}/`, report [{c.name}/REPORT.md]({c.name}/REPORT.md), {outcome.seconds:.0f} s.", ""]
-        for row in top.to_dict("records") or [dict.fromkeys(HEADLINE_COLUMNS)]:
-            rows.append({"combination": c.index, "folder": c.name, **dict(zip(keys, values)), **row})
-        if top.empty:
-            overview.append(f"| {link} | {cells} | (no headline) | | | | |")
-            sections += [f"(no human labels or no {HEADLINE_LENGTH}-step checkpoint: no headline ratio)", ""]
-            continue
-        sections += [
-            "| dataset | topic perplexity MI | next best | its MI | ratio | paired Wilcoxon p | pairs | paper's map | paper's ratio |",
-            "|---|---|---|---|---|---|---|---|---|",
-        ]
-        for r in top.itertuples():
-            overview.append(
-                f"| {link} | {cells} | {r.dataset} | {_number(r.ratio)} | {r.next_best} | "
-                f"{_p(r.p_value)} ({r.pairs}) | {_number(r.paper_ratio)} |"
-            )
-            sections.append(
-                f"| {r.dataset} | {_number(r.topic_perplexity, 3)} | {r.next_best} | {_number(r.next_best_mi, 3)} | "
-                f"{_number(r.ratio)} | {_p(r.p_value)} | {r.pairs} | {r.paper_map} | {_number(r.paper_ratio)} |"
-            )
-        sections += ["", *_distinct_table(_read_revisits(folder / c.name))]
-    sets = ", ".join(f"`--set {s}`" for s in sweep.sets) or "none"
-    lines = [
-        f"# Parameter sweep of `{sweep.name}`: {_count(len(outcomes), 'combination')}",
-        "",
-        f"Config `{display_path(sweep.config_path)}`; --set: {sets}. Each combination is an experiment folder "
-        f"here, named by its values (`sweep.yaml` lists them). The headline is the mean MI of {HEADLINE_WEIGHT} "
-        f"exploration against human labels at {HEADLINE_LENGTH} steps over the next best weight function's.",
-        "",
-        "Run again (finished runs and labels are kept):",
-        "",
-        "```console",
-        f"$ {sweep.command(folder.parent)}",
-        "```",
-        "",
-        *sensitivity,
-        "## Headlines",
-        "",
-        *overview,
-        "",
-        *sections,
-    ]
-    columns = ["combination", "folder", *keys, *HEADLINE_COLUMNS]
-    with atomic_path(folder / "sweep.csv") as tmp:
-        pd.DataFrame(rows, columns=columns).to_csv(tmp, index=False)
-    treatments = [key for key in keys if key != REPLICATE_KEY]
-    pooled_columns = [*treatments, "seeds", *HEADLINE_COLUMNS, *(f"distinct_{w}" for w in DISTINCT_WALKERS)]
-    with atomic_path(folder / "sensitivity.csv") as tmp:
-        pd.DataFrame(pooled_rows, columns=pooled_columns).to_csv(tmp, index=False)
-    path = folder / "SWEEP.md"
-    with atomic_path(path) as tmp:
-        tmp.write_text("\n".join(lines))
-    return path
-
-
-def _read_revisits(folder: Path):
-    """An experiment's ``revisits.csv`` (:func:`~curiosity_cli.evaluate.tables.summarise_revisits`), or None if absent."""
-    import pandas as pd
-
-    path = ExperimentFolder(folder).table("revisits")
-    return pd.read_csv(path) if path.is_file() else None
-
-
-def _distinct_at_headline(revisits):
-    """The rows of ``revisits.csv`` for distinct cells at the headline length."""
-    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
-
-    return revisits[(revisits["measure"] == "distinct_cells") & (revisits["path_length"] == HEADLINE_LENGTH)]
-
-
-def _distinct_table(revisits) -> list[str]:
-    """Mean distinct cells per walker at the headline length, a row per dataset."""
-    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
-
-    if revisits is None:
-        return ["(no revisits.csv: evaluate the experiments again for distinct cells)", ""]
-    at = _distinct_at_headline(revisits)
-    if at.empty:
-        return []
-    walkers = list(dict.fromkeys(at["weight_function"]))
-    lines = [
-        f"Distinct cells seen in {HEADLINE_LENGTH} steps (mean over restarts):",
-        "",
-        "| dataset | " + " | ".join(walkers) + " |",
-        "|---|" + "---|" * len(walkers),
-    ]
-    for dataset, block in at.groupby("dataset", sort=False):
-        means = block.set_index("weight_function")["mean"]
-        lines.append(f"| {dataset} | " + " | ".join(_number(means.get(w), 1) for w in walkers) + " |")
-    return lines + [""]
-
-
-def _sensitivity(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) -> tuple[list[str], list[dict]]:
-    """SWEEP.md's first table and ``sensitivity.csv``'s rows: per treatment (the combination's
-    values but the seed) and dataset, the headline over every seed's pairs pooled
-    (:func:`~curiosity_cli.evaluate.replicates.pool`), its interval and power, and the
-    distinct cells of :data:`DISTINCT_WALKERS`."""
-    from curiosity_cli.evaluate.replicates import pool
-    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, EvaluationError
-
-    keys = [axis.key for axis in sweep.axes]
-    treatments = [key for key in keys if key != REPLICATE_KEY]
-    groups: dict[tuple, list[Path]] = {}
-    for outcome in outcomes:
-        if outcome.error is None:
-            values = dict(text.split("=", 1) for text in outcome.combination.overrides)
-            groups.setdefault(tuple(values[k] for k in treatments), []).append(folder / outcome.combination.name)
-    pooled = REPLICATE_KEY in keys
-    lines = [
-        "## Sensitivity" + (" (seeds pooled)" if pooled else ""),
-        "",
-        f"Per {' x '.join([*treatments, 'dataset'])}: topic perplexity's mean MI at "
-        f"{HEADLINE_LENGTH} steps over the next best walker, "
-        + (
-            f"every seed's paired restarts pooled (the seeds are replicates: `{REPLICATE_KEY}` is not a treatment), "
-            if pooled else ""
-        )
-        + "with the ratio's 95 % bootstrap interval, the paired Wilcoxon p against the next best, the smallest lead "
-        "detectable at 80 % power and the pairs a 10 % lead would need (REPORT.md's verdict says how), and the mean "
-        f"distinct cells {' and '.join(DISTINCT_WALKERS)} saw in {HEADLINE_LENGTH} steps, beside the paper's ratio.",
-        "",
-        "| " + " | ".join([*treatments, "dataset", "seeds", "pairs", "ratio [95 % CI]", "p", "next best",
-                         "detectable lead", "pairs for +10 %", *(f"distinct: {w}" for w in DISTINCT_WALKERS),
-                         "paper's ratio"]) + " |",
-        "|" + "---|" * (len(treatments) + 9 + len(DISTINCT_WALKERS)),
-    ]
-    rows = []
-    for values, folders in groups.items():
-        try:
-            result = pool(folders)
-        except EvaluationError as exc:
-            lines.append("| " + " | ".join(f"`{v}`" for v in values) + f" | not pooled: {exc} |")
-            continue
-        at = _distinct_at_headline(result.revisits).set_index(["dataset", "weight_function"])["mean"]
-        seeds = " ".join(map(str, result.seeds))
-        for r in result.headline.to_dict("records"):
-            distinct = {f"distinct_{w}": at.get((r["dataset"], w), float("nan")) for w in DISTINCT_WALKERS}
-            rows.append({**dict(zip(treatments, values)), "seeds": seeds, **r, **distinct})
-            lead = r["detectable_ratio"] - 1
-            lines.append(
-                "| " + " | ".join([
-                    *(f"`{v}`" for v in values), r["dataset"], seeds, str(r["pairs"]),
-                    f"{_number(r['ratio'])} [{_number(r['ratio_ci_low'])}, {_number(r['ratio_ci_high'])}]",
-                    _p(r["p_value"]), r["next_best"], f"{_number(100 * lead, 0)} %" if lead == lead else "",
-                    _number(r["pairs_for_lead"], 0) or ("> 10^6" if lead == lead else ""),
-                    *(_number(v, 1) for v in distinct.values()),
-                    _number(r["paper_ratio"]),
-                ]) + " |"
-            )
-    return lines + [""], rows
-
-
-def _number(value, digits: int = 2) -> str:
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        return ""
-    return f"{value:.{digits}f}" if value == value else ""
-
-
-def _p(value) -> str:
-    text = _number(value, 3)
-    return "< 0.001" if text and float(value) < 0.001 else text
-
-
-def _count(n: int, noun: str) -> str:
+def count(n: int, noun: str) -> str:
+    """``n`` and ``noun``, plural unless ``n`` is 1: ``3 combinations``."""
     return f"{n} {noun}{'' if n == 1 else 's'}"

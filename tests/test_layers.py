@@ -31,6 +31,10 @@ ORCHESTRATORS = {
     "__main__": "`python -m curiosity_cli`: runs the command line",
     "reproduce": "`curiosity reproduce`: extract, explore, label, evaluate and plot one experiment end to end",
     "sweep": "`curiosity reproduce --sweep`: each combination through reproduce, their headlines compared",
+    "sweep_report": "a sweep's SWEEP.md: every combination's tables, each treatment's seeds pooled (evaluate), "
+    "and a study's specification curve",
+    "specifications": "a study's declared specifications planned as sweep combinations, and its specification curve "
+    "(evaluate's pooled statistics, plots' figure)",
     "api": "curiosity from Python: the commands as functions, an experiment's results as frames",
 }
 

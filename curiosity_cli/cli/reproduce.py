@@ -22,7 +22,8 @@ def reproduce(
         help="Run every combination of the --sweep options' values (their product), each as its own experiment "
         "under results/<name>-sweep/, and compare their headlines in SWEEP.md; e.g. --sweep model.topics=16,32. "
         "Values are split on commas outside brackets; one value just fixes the key. A config's own `sweep:` "
-        "runs the same way; --sweep replaces the values of a key it declares.",
+        "runs the same way; --sweep replaces the values of a key it declares. A config's `specifications:` run "
+        "every combination under each, and SWEEP.md leads with their specification curve.",
     ),
     jobs: int = typer.Option(None, "--jobs", min=1, help="Parallel runs; default the number of cores."),
     force: bool = typer.Option(False, "--force", help="Redo runs and labels that are already finished."),
@@ -41,6 +42,7 @@ def reproduce(
     from curiosity_cli.config import load_config, with_converged_labels
     from curiosity_cli.files import display_path
     from curiosity_cli.reproduce import reproduce as run_pipeline
+    from curiosity_cli.specifications import declared_specifications
     from curiosity_cli.sweep import declared_sweeps, merge_sweeps
 
     if scheduler is not None and backend is not Backend.dask:
@@ -52,9 +54,10 @@ def reproduce(
     if converged:
         overrides = with_converged_labels(overrides)
     sweeps = merge_sweeps(declared_sweeps(config), sweeps)
-    if sweeps:
-        _reproduce_sweep(config, overrides, sweeps, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs,
-                         force=force, backend=backend.value, scheduler=scheduler)
+    specifications = declared_specifications(config)
+    if sweeps or specifications:
+        _reproduce_sweep(config, overrides, sweeps, specifications, results_dir=results_dir, cache_dir=cache_dir,
+                         jobs=jobs, force=force, backend=backend.value, scheduler=scheduler)
         return
     resolved = load_config(config, overrides)
     with StagedProgress() as progress:
@@ -65,18 +68,19 @@ def reproduce(
     typer.echo(f"wrote {display_path(report)}")
 
 
-def _reproduce_sweep(config: Path, overrides: list[str], sweeps: list[str], **options) -> None:
-    """``reproduce --sweep``: check every option and combination, then run them all."""
+def _reproduce_sweep(config: Path, overrides: list[str], sweeps: list[str], specifications, **options) -> None:
+    """``reproduce --sweep``, or of a study's specifications: check every option and combination, then run them all."""
     from curiosity_cli.files import display_path
-    from curiosity_cli.sweep import SweepSyntaxError, parse_sweeps, plan_sweep, run_sweep
+    from curiosity_cli.specifications import study_size
+    from curiosity_cli.sweep import SweepSyntaxError, count, parse_sweeps, plan_sweep, run_sweep
 
     try:
         axes = parse_sweeps(sweeps, overrides)
     except SweepSyntaxError as exc:
         raise typer.BadParameter(str(exc), param_hint="--sweep") from None
-    sweep = plan_sweep(config, axes, overrides)
-    count = len(sweep.combinations)
-    typer.echo(f"{count} combination{'' if count == 1 else 's'}, in {display_path(sweep.folder(options['results_dir']))}", err=True)
+    sweep = plan_sweep(config, axes, overrides, specifications)
+    of = f" ({study_size(sweep)})" if specifications else ""
+    typer.echo(f"{count(len(sweep.combinations), 'combination')}{of}, in {display_path(sweep.folder(options['results_dir']))}", err=True)
     with StagedProgress() as progress:
         report = run_sweep(sweep, on_stage=progress.stage, on_done=progress.advance, **options)
     typer.echo(f"wrote {display_path(report)}")

@@ -5,27 +5,31 @@ differ only in their seed are replicates of one treatment, not treatments of the
 Pooling their pairs (a restart of one seed is paired with the same restart of the same
 seed, never across seeds) gives one ratio with one interval and one p, from as many
 pairs as the replicates hold together. A sweep over ``seed`` pools this way
-(:func:`curiosity_cli.sweep.write_sweep_report`).
+(:func:`curiosity_cli.sweep_report.pool_treatments`), and so does a study's specification
+curve (:mod:`curiosity_cli.evaluate.specification_curve`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from curiosity_cli.errors import RERUN
 from curiosity_cli.evaluate.tables import (
+    HEADLINE_LENGTH,
     EvaluationError,
     headline,
     paired_effects,
     paired_tests,
     summarise,
     summarise_revisits,
+    summarise_steering,
     with_power,
 )
 from curiosity_cli.experiment.experiment import Experiment
+from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import display_path
 
@@ -46,49 +50,86 @@ class Pooled:
         :func:`~curiosity_cli.evaluate.tables.summarise_revisits` over every run.
     seeds : tuple of int
         The replicates pooled.
+    steering : pandas.DataFrame
+        :func:`~curiosity_cli.evaluate.tables.summarise_steering` over every run's ``steering.csv``.
     """
 
     headline: pd.DataFrame
     revisits: pd.DataFrame
     seeds: tuple[int, ...]
+    steering: pd.DataFrame
+
+    def mean_distinct_cells(self, dataset: str, walker: str) -> float:
+        """The walker's mean distinct cells in 80 steps (the headline length) over every pooled run; NaN without."""
+        revisits = self.revisits[self.revisits["measure"] == "distinct_cells"]
+        return _at_headline(revisits, dataset, walker)
+
+    def mean_steering(self, dataset: str, walker: str) -> float:
+        """The walker's mean steering at 80 steps (the headline length) over every pooled run
+        (:mod:`~curiosity_cli.evaluate.steering`); NaN without."""
+        return _at_headline(self.steering, dataset, walker)
 
 
-def pool(folders: Sequence[Path]) -> Pooled:
-    """Pool the ``mi.csv`` of experiment folders that differ only in their seed.
+def _at_headline(summary, dataset: str, walker: str) -> float:
+    """``mean`` of a summary's row for ``dataset``, ``walker`` and the headline length; NaN if none."""
+    match = summary[
+        (summary["dataset"] == dataset) & (summary["weight_function"] == walker)
+        & (summary["path_length"] == HEADLINE_LENGTH)
+    ]["mean"]
+    return float(match.iloc[0]) if len(match) else float("nan")
+
+
+def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Pooled:
+    """Pool the ``mi.csv`` and ``steering.csv`` of experiment folders that differ only in their seed.
 
     Parameters
     ----------
     folders : sequence of Path
         Evaluated experiment folders (``curiosity evaluate``), one per seed.
+    walkers : collection of str, optional
+        Only these walkers' runs (and ceilings') take part, e.g. the paper's four
+        (:data:`curiosity_cli.config.PAPER_WALKERS`), so the next best is one of them;
+        default every walker the folders ran.
 
     Raises
     ------
     EvaluationError
-        A folder without ``mi.csv`` or from before ``mi.csv`` named its replicate, or two
-        folders of the same seed (their pairs would count twice).
+        A folder without ``mi.csv`` or ``steering.csv``, or from before ``mi.csv`` named
+        its replicate, or two folders of the same seed (their pairs would count twice).
     """
     import pandas as pd
 
-    tables = []
+    tables, steering = [], []
     for folder in folders:
-        path = ExperimentFolder(folder).table("mi")
-        try:
-            mi = pd.read_csv(path)
-        except (OSError, ValueError) as exc:
-            raise EvaluationError(
-                f"{display_path(path)}: cannot read it ({exc}); {RERUN} makes it", rerun="evaluate", force=False
-            ) from None
+        mi = _read(ExperimentFolder(folder).table("mi"))
         if "replicate" not in mi or mi["replicate"].nunique() != 1:
             raise EvaluationError(
-                f"{display_path(path)}: replicate: expected one seed per experiment; {RERUN} makes the table again",
-                rerun="evaluate", force=False,
+                f"{display_path(ExperimentFolder(folder).table('mi'))}: replicate: expected one seed per experiment; "
+                f"{RERUN} makes the table again", rerun="evaluate", force=False,
             )
         tables.append(mi)
+        steering.append(_read(ExperimentFolder(folder).table("steering")))
     seeds = [int(mi["replicate"].iloc[0]) for mi in tables]
     if len(set(seeds)) != len(seeds):
         raise EvaluationError(f"seeds {seeds}: two experiments of the same seed cannot be pooled as replicates")
     mi = pd.concat(tables, ignore_index=True)
+    steering = pd.concat(steering, ignore_index=True)
+    if walkers is not None:
+        mi = mi[mi["weight_function"].isin(walkers) | mi["weight_function"].isin(CEILINGS)]
+        steering = steering[steering["weight_function"].isin(walkers)]
     tests = paired_tests(mi)
     paper_maps = Experiment.open(folders[0]).paper_maps()
     top = with_power(headline(summarise(mi), tests, paper_maps, paired_effects(mi, tests)), mi)
-    return Pooled(top, summarise_revisits(mi), tuple(sorted(seeds)))
+    return Pooled(top, summarise_revisits(mi), tuple(sorted(seeds)), summarise_steering(steering))
+
+
+def _read(path: Path):
+    """An evaluation table, or an error naming it and the stage that makes it."""
+    import pandas as pd
+
+    try:
+        return pd.read_csv(path)
+    except (OSError, ValueError) as exc:
+        raise EvaluationError(
+            f"{display_path(path)}: cannot read it ({exc}); {RERUN} makes it", rerun="evaluate", force=False
+        ) from None

@@ -457,6 +457,44 @@ def _revisits_section(revisits, lengths: list[int], config: ExperimentConfig) ->
     return lines
 
 
+def _steering_section(steering, lengths: list[int]) -> list[str]:
+    """Per map and walker, the mean steering at 80 steps (or the longest length without 80),
+    with what it means (:mod:`~curiosity_cli.evaluate.steering`)."""
+    from curiosity_cli.evaluate.tables import summarise_steering
+
+    if steering is None or steering.dropna(subset=["steering"]).empty:
+        return []
+    length = HEADLINE_LENGTH if HEADLINE_LENGTH in lengths else max(lengths)
+    summary = summarise_steering(steering)
+    summary = summary[summary["path_length"] == length]
+    if summary.empty:
+        return []
+    walkers = _order(summary["weight_function"])
+    lines = [
+        "## Steering",
+        "",
+        f"How strongly each walker's moves depended on its weights: at every move of a path of {length} steps, the "
+        "total-variation distance between the walker's chances of stepping to each neighbour and stochastic "
+        "coverage's chances on the same neighbours, averaged over the moves; mean ± 95 % CI half-width over "
+        "restarts (`steering.csv` has every run and length). 0 means the walker stepped exactly as stochastic "
+        "coverage would have: its perplexities changed no move. Random walk, which ignores coverage, shows how far "
+        "from coverage a walker can get on these paths; a perplexity walker close to 0 and far below random walk "
+        "is stochastic coverage in all but name, and a reading that leaves this number unchanged cannot explain a "
+        "change in its MI.",
+        "",
+        f"| map | {' | '.join(_label(w) for w in walkers)} |",
+        "|---" * (len(walkers) + 1) + "|",
+    ]
+    for dataset, block in summary.groupby("dataset", sort=False):
+        cells = {r["weight_function"]: r for r in block.to_dict("records")}
+        row = [
+            f"{cells[w]['mean']:.3f} ± {(cells[w]['ci_high'] - cells[w]['ci_low']) / 2:.3f}" if w in cells else ""
+            for w in walkers
+        ]
+        lines.append(f"| {dataset} | {' | '.join(row)} |")
+    return lines + [""]
+
+
 def _short_means(mi, restarts: int) -> list[str]:
     """A note per (dataset, weight function) whose means are over fewer runs than the configured ``restarts``."""
     counts = mi.groupby(["dataset", "weight_function"], sort=True)["restart"].nunique()
@@ -499,6 +537,7 @@ def write_report(
     lines += ["Against the batch labeling Z_b (paper Fig. 4):", ""]
     lines += _mi_table(summary, "batch", lengths)
     lines += _revisits_section(evaluation.revisits, lengths, config)
+    lines += _steering_section(evaluation.steering, lengths)
     lines += _convergence_section(evaluation.convergence, config)
     lines += _effects_table(evaluation.effects, lengths)
     lines += _classes_sections(evaluation.classes_summary)

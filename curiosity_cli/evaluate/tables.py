@@ -37,6 +37,10 @@ Written under ``results/<experiment>/``:
   check that Z_p has forgotten how its chain started (:func:`label_convergence`).
 - ``revisits.csv``: the same as ``summary.csv`` for each revisit column (``measure``), per
   (dataset, weight function, path length).
+- ``steering.csv``: per run (``replicate`` and ``restart``) of a walker that scores its
+  moves and checkpoint length: the moves scored (``steps``) and the mean total-variation
+  distance of the walker's step distribution from stochastic coverage's on the same
+  candidates (``steering``, :mod:`~curiosity_cli.evaluate.steering`); none for planned walkers.
 - ``headline.csv``: per dataset, topic-perplexity MI at 80 steps (against human labels,
   or against Z_b on a map without them: ``against``) divided by the next best walker's,
   the paired difference to it with its CI and Wilcoxon p, whether topic perplexity beats
@@ -123,6 +127,7 @@ class Evaluation:
     classes_summary: pd.DataFrame | None = None
     convergence: pd.DataFrame | None = None
     revisits: pd.DataFrame | None = None
+    steering: pd.DataFrame | None = None
 
 
 @dataclass(frozen=True)
@@ -133,6 +138,7 @@ class LabelRows:
     classes: list[dict]  # one per run, checkpoint and class with pixels
     left_out: list[str]  # runs of the grid without usable labels, each naming the file at fault and why
     notes: list[str]  # label files of runs outside the grid, which change no number
+    steering: list[dict]  # one per run that scored its moves and checkpoint (steering.csv)
 
 
 def run_rows(
@@ -227,6 +233,7 @@ def label_rows(experiment: Experiment) -> LabelRows:
         A map of the config that cannot be loaded, naming it.
     """
     from curiosity_cli.evaluate.label_stage import examples_changed, read_label_file
+    from curiosity_cli.evaluate.steering import steering_rows
     from curiosity_cli.explore.runs import RunError, read_run
 
     layout = experiment.folder
@@ -237,7 +244,7 @@ def label_rows(experiment: Experiment) -> LabelRows:
     planned = _planned_label_files(experiment)
     files, notes = _in_grid(layout, files, planned)
     skipped = []
-    rows, class_rows, otherwise = [], [], []
+    rows, class_rows, steering, otherwise = [], [], [], []
     batches = {}  # per map: what is wrong with its batch reference, None if nothing
     for path in files:
         try:
@@ -279,12 +286,15 @@ def label_rows(experiment: Experiment) -> LabelRows:
             continue
         try:
             steps = (run.path, run.boxed_in())
+            candidates = run.candidates()
         except RunError as exc:
             skipped.append(str(exc))
             continue
         mi, classes = run_rows(meta, arrays, class_names.get(meta["dataset"]), steps)
         rows += mi
         class_rows += classes
+        if mi:
+            steering += steering_rows(mi[0], candidates, arrays["lengths"].tolist())
     if otherwise:
         raise EvaluationError(
             f"{len(otherwise)} label files or runs were made otherwise than {display_path(layout.config)} "
@@ -293,7 +303,7 @@ def label_rows(experiment: Experiment) -> LabelRows:
             rerun="label", force=False,
         )
     skipped += _unlabelled_runs(layout, files, planned)
-    return LabelRows(rows, class_rows, skipped, notes)
+    return LabelRows(rows, class_rows, skipped, notes, steering)
 
 
 def _batch_change(path: Path, recipe) -> str | None:
@@ -396,6 +406,15 @@ def summarise_revisits(mi):
     ).dropna(subset=["value"])
     grouped = long.groupby(["dataset", "weight_function", "path_length", "measure"], sort=False)["value"]
     return pd.DataFrame(_mean_ci(grouped))
+
+
+def summarise_steering(steering):
+    """Mean, standard deviation and 95 % CI of ``steering.csv``'s ``steering`` per (dataset,
+    weight function, length) (:mod:`~curiosity_cli.evaluate.steering`)."""
+    import pandas as pd
+
+    grouped = steering.dropna(subset=["steering"]).groupby(["dataset", "weight_function", "path_length"], sort=False)
+    return pd.DataFrame(_mean_ci(grouped["steering"]))
 
 
 def within_noise(mean: float, sem: float, tolerance: float = CONVERGENCE_TOLERANCE) -> bool:
@@ -694,7 +713,10 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
     skipped = [*found.notes, *found.left_out]
     if not found.mi:
         raise EvaluationError(f"{display_path(layout.labels)}: every label file was left out: " + "; ".join(skipped))
+    from curiosity_cli.evaluate.steering import STEERING_COLUMNS
+
     mi = pd.DataFrame(found.mi).sort_values(_KEYS, ignore_index=True)
+    steering = pd.DataFrame(found.steering, columns=list(STEERING_COLUMNS)).sort_values(_KEYS, ignore_index=True)
     class_columns = [*_KEYS, "class_id", "class_name", "pixels", "found", "first_step", "topic", "recall"]
     classes = pd.DataFrame(found.classes, columns=class_columns).sort_values([*_KEYS, "class_id"], ignore_index=True)
     summary = summarise(mi)
@@ -707,7 +729,7 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
     convergence = label_convergence(mi)
     tables = {
         "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
-        "effects": effects, "headline": top, "convergence": convergence, "revisits": revisits,
+        "effects": effects, "headline": top, "convergence": convergence, "revisits": revisits, "steering": steering,
     }
     # every file is written whole before any replaces its old self, and tables.json
     # records each one's digest: a failure (a full disk) leaves the old set or a mix that
@@ -725,4 +747,6 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
         temporary(layout.skipped).write_text(json.dumps(skipped, indent=2) + "\n")
         record = experiment.record_tables(written, inputs)
         temporary(layout.tables_record).write_text(record)
-    return Evaluation(mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits)
+    return Evaluation(
+        mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits, steering
+    )

@@ -129,12 +129,12 @@ class Experiment:
 
     def inputs(self) -> dict:
         """What the tables are made from, as it is now: the saved config, the maps table, every
-        run's ``run.json`` and ``path.csv``, label file, example map and batch reference
-        (size and digest), and each map's facts."""
+        run's ``run.json``, ``path.csv`` and ``candidates.csv`` (steering), label file, example
+        map and batch reference (size and digest), and each map's facts."""
         layout = self.folder
         root = layout.root
         files = [layout.config, layout.maps_csv]
-        files += [run / name for run in layout.run_folders() for name in ("run.json", "path.csv")]
+        files += [run / name for run in layout.run_folders() for name in ("run.json", "path.csv", "candidates.csv")]
         files += layout.label_files() + sorted(layout.labels.glob("*/examples/*.npz")) + sorted(layout.batches.glob("*.npz"))
         names = [str(path.relative_to(root)) for path in files if path.is_file()]
         return {

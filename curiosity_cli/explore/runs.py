@@ -177,6 +177,33 @@ class Run:
             )
         return column.to_numpy()
 
+    def candidates(self):
+        """``candidates.csv``'s ``step``, ``coverage`` and ``weight``: a row per scored neighbour (none for a plan).
+
+        Returns
+        -------
+        pandas.DataFrame
+
+        Raises
+        ------
+        RunError
+            ``candidates.csv`` missing, unreadable, without those columns, or with a step
+            outside the path.
+        """
+        import pandas as pd
+
+        csv = self.folder / "candidates.csv"
+        try:
+            table = pd.read_csv(csv, usecols=["step", "coverage", "weight"])
+        except FileNotFoundError:
+            raise RunError(f"{display_path(csv)}: not found; the run folder is incomplete") from None
+        except (ValueError, OSError) as exc:
+            raise RunError(f"{display_path(csv)}: corrupt ({exc})") from None
+        steps = table["step"]
+        if len(table) and (steps.dtype.kind not in "iu" or steps.min() < 0 or steps.max() >= self.path.size - 1):
+            raise RunError(f"{display_path(csv)}: step: expected whole numbers 0 .. {self.path.size - 2}, the moves of the path")
+        return table
+
 
 def finished_meta(folder: Path) -> dict | None:
     """The ``run.json`` of a run folder that exists under its real name (so it was written whole) and reads back.

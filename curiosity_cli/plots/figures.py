@@ -147,17 +147,17 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
     except PlotError as exc:
         notes.append(f"no MI figures: {exc}")
         summary = None
-    with _style():
+    with figure_style():
         if summary is not None:
             for against, stem in (("human", "mi-vs-length-human"), ("batch", "mi-vs-length-batch")):
                 fig = mi_figure(summary, against, order)
                 if fig is None:
                     notes.append(f"{stem}: {summary_path.name} has no MI against {against} labels (no map has them)")
                 else:
-                    written += _save(fig, out / stem)
+                    written += save_figure(fig, out / stem)
 
         if "distinct_cells" in mi:
-            written += _save(distinct_figure(mi, order), out / "mi-vs-distinct")
+            written += save_figure(distinct_figure(mi, order), out / "mi-vs-distinct")
         else:
             notes.append("mi-vs-distinct: mi.csv has no distinct_cells column (evaluate the experiment again)")
 
@@ -179,16 +179,16 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
                 example, z_p = z_ps[-1]
                 path = read_path(experiment_dir, name, example.weight_function, example.restart, notes)
                 if path is not None:
-                    written += _save(path_figure(m, path, example, z_p, z_b), out / f"path-{name}")
+                    written += save_figure(path_figure(m, path, example, z_p, z_b), out / f"path-{name}")
             elif not examples:
                 notes.append(f"path-{name}: no example path labelling under labels/{name}/examples/ (label the experiment)")
             if z_b is None and not z_ps:
                 notes.append(f"labelings-{name}: neither a batch nor a path labelling to draw")
             else:
-                written += _save(labelings_figure(m, z_b, z_ps), out / f"labelings-{name}")
+                written += save_figure(labelings_figure(m, z_b, z_ps), out / f"labelings-{name}")
 
         if traces:
-            written += _save(convergence_figure(traces), out / "batch-convergence")
+            written += save_figure(convergence_figure(traces), out / "batch-convergence")
         else:
             notes.append("batch-convergence: no batch log-likelihood trace under batch/ (label the experiment)")
     written.skipped[:] = list(dict.fromkeys(notes))  # a corrupt file is named once, not once per figure
@@ -565,14 +565,15 @@ def _show(ax, rgb: np.ndarray, shape: tuple[int, int]) -> None:
 
 
 @contextlib.contextmanager
-def _style():
+def figure_style():
+    """The house style of every figure (font sizes), as a context."""
     import matplotlib
 
     with matplotlib.rc_context(_RC):
         yield
 
 
-def _save(fig, stem: Path) -> list[Path]:
+def save_figure(fig, stem: Path) -> list[Path]:
     """Write ``stem``.png and ``stem``.pdf atomically; returns both paths."""
     paths = []
     for suffix in (".png", ".pdf"):

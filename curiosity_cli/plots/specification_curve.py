@@ -1,0 +1,115 @@
+"""The specification-curve figure (Simonsohn, Simmons & Nelson, 2020) of a study.
+
+Top: one point per specification and map, topic perplexity's ratio at 80 steps with its
+95 % interval, sorted by ratio (:func:`curiosity_cli.evaluate.specification_curve.curve_table`),
+coloured by map; a filled point where topic perplexity leads every other walker at
+p < 0.05, a hollow one elsewhere; the paper's ratio of each paper map our maps stand in
+for as a dashed line named by it, and 1 (no lead) in grey. Below, aligned with the points, a panel of dots: a
+row per map and per value of each varied key, a dot where the point's specification used it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+from curiosity_cli.plots.figures import figure_style, save_figure
+
+#: Points up to which the specifications are named under the dot panel.
+_NAMED = 40
+
+
+def specification_curve_figure(
+    table, choices: Mapping[str, Mapping[str, str]], label: str = "specification", datasets: list[str] | None = None,
+):
+    """The figure (module docstring).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        :func:`~curiosity_cli.evaluate.specification_curve.curve_table`, in its order (its
+        ``dataset``, ``ratio``, ``ratio_ci_low``, ``ratio_ci_high``, ``beats_all``,
+        ``paper_map`` and ``paper_ratio``), with a column ``label`` naming each row's
+        specification.
+    choices : mapping of str to mapping of str to str
+        Per specification (as ``label`` names it): each varied key and the value it used,
+        the keys in the order the panel lists them.
+    label : str
+        The column of ``table`` naming the specification.
+    datasets : list of str, optional
+        The maps in the order of the panel's rows and colours; default as they first come in ``table``.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib
+    import numpy as np
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+    datasets = [d for d in dict.fromkeys([*(datasets or []), *table["dataset"]]) if (table["dataset"] == d).any()]
+    colours = {d: matplotlib.colormaps["tab10"](i % 10) for i, d in enumerate(datasets)}
+    rows = [("map", d) for d in datasets]
+    for values in choices.values():
+        for key, value in values.items():
+            if (key, value) not in rows:
+                rows.append((key, value))
+    keys = list(dict.fromkeys(k for k, _ in rows))
+    rows.sort(key=lambda kv: keys.index(kv[0]))  # a key's values together (stable), keys as first seen
+    n = len(table)
+    x = np.arange(n)
+    fig = Figure(figsize=(max(6.4, 1.8 + 0.22 * n), 3.6 + 0.2 * len(rows) + (1.2 if n <= _NAMED else 0)), layout="constrained")
+    top, dots = fig.subplots(2, 1, sharex=True, height_ratios=[3.4, 0.2 * len(rows) + 0.3])
+    top.axhline(1.0, color="0.6", linewidth=0.8)
+    papers = table.dropna(subset=["paper_ratio"]).drop_duplicates("paper_map")
+    for paper in papers.itertuples():
+        top.axhline(paper.paper_ratio, color="0.25", linestyle="--", linewidth=1)
+        top.annotate(
+            f"{paper.paper_map} (paper): {paper.paper_ratio:.2f}", (0, paper.paper_ratio), xycoords=("axes fraction", "data"),
+            xytext=(4, 2), textcoords="offset points", fontsize=8, color="0.25",
+        )
+    for dataset in datasets:
+        at = (table["dataset"] == dataset).to_numpy()
+        ratio = table.loc[at, "ratio"].to_numpy(float)
+        low, high = table.loc[at, "ratio_ci_low"].to_numpy(float), table.loc[at, "ratio_ci_high"].to_numpy(float)
+        top.errorbar(x[at], ratio, yerr=[ratio - low, high - ratio], fmt="none", ecolor=colours[dataset], elinewidth=1)
+        leads = table.loc[at, "beats_all"].astype(bool).to_numpy()
+        top.scatter(x[at][leads], ratio[leads], color=colours[dataset], s=26, zorder=3)
+        top.scatter(x[at][~leads], ratio[~leads], facecolor="white", edgecolor=colours[dataset], s=26, zorder=3)
+    top.set_ylabel("MI ratio at 80 steps:\ntopic perplexity / next best")
+    top.grid(True, axis="y", color="0.92")
+    handles = [Line2D([], [], color=colours[d], marker="o", linestyle="", label=d) for d in datasets]
+    handles += [
+        Line2D([], [], color="0.25", linestyle="--", label="the paper's ratio of the map ours stand in for"),
+        Line2D([], [], color="0.3", marker="o", linestyle="", label="leads every walker, p < 0.05"),
+        Line2D([], [], markeredgecolor="0.3", markerfacecolor="white", marker="o", linestyle="", label="does not"),
+    ]
+    fig.legend(handles=handles, loc="outside lower center", fontsize=8, frameon=False, ncols=min(len(handles), 3))
+    for i, record in enumerate(table.to_dict("records")):
+        used = {("map", record["dataset"]), *choices.get(record[label], {}).items()}
+        for j, row in enumerate(rows):
+            hit = row in used
+            dots.scatter(i, j, s=16 if hit else 4, color="0.1" if hit else "0.85", zorder=2)
+    dots.set_yticks(range(len(rows)), [f"{k}: {v}" for k, v in rows], fontsize=8)
+    dots.set_ylim(len(rows) - 0.5, -0.5)
+    dots.set_xlim(-0.6, n - 0.4)
+    for j in range(1, len(rows)):
+        if rows[j][0] != rows[j - 1][0]:
+            dots.axhline(j - 0.5, color="0.8", linewidth=0.6)
+    if n <= _NAMED:
+        dots.set_xticks(x, table[label].astype(str).tolist(), rotation=90, fontsize=8)
+    else:
+        dots.set_xticks([])
+    dots.set_xlabel("specification and map, sorted by ratio")
+    fig.suptitle("Specification curve: topic perplexity's lead at 80 steps\n(seeds pooled; 95 % bootstrap intervals)")
+    return fig
+
+
+def write_specification_curve(
+    table, choices: Mapping[str, Mapping[str, str]], stem: Path, label: str = "specification",
+    datasets: list[str] | None = None,
+) -> list[Path]:
+    """Write :func:`specification_curve_figure` as ``stem``.png and ``stem``.pdf; returns both paths."""
+    with figure_style():
+        return save_figure(specification_curve_figure(table, choices, label, datasets), Path(stem))

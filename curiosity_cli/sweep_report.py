@@ -1,0 +1,330 @@
+"""A sweep's report: ``SWEEP.md``, ``sweep.csv`` and ``sensitivity.csv`` (:mod:`curiosity_cli.sweep` runs it).
+
+``SWEEP.md`` opens with how to run the sweep again, then, for a study that declares
+specifications (:mod:`curiosity_cli.specifications`), the specification curve; else the
+sensitivity table, which pools the seeds of each treatment (:func:`pool_treatments`);
+then every combination's headline. ``sweep.csv`` has a row per combination and dataset,
+``sensitivity.csv`` a row per treatment and dataset, the seeds pooled.
+
+Seeds are replicates, not treatments: the combinations that differ only in ``seed``
+(:data:`REPLICATE_KEY`) are pooled into one headline
+(:func:`curiosity_cli.evaluate.replicates.pool`), once per treatment, and every table
+that shows a treatment's numbers reads them from that one pooling.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from curiosity_cli.config import PAPER_WALKERS
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.sweep import Combination, Outcome, Sweep, count
+
+if TYPE_CHECKING:
+    from curiosity_cli.evaluate.replicates import Pooled
+
+#: The headline columns, as ``headline.csv`` has them (:func:`curiosity_cli.evaluate.tables.headline`).
+HEADLINE_COLUMNS = (
+    "dataset", "topic_perplexity", "next_best", "next_best_mi", "ratio", "p_value", "pairs", "paper_map", "paper_ratio",
+    "ratio_ci_low", "ratio_ci_high", "detectable_ratio", "pairs_for_lead",
+)
+#: The key whose values are replicates, pooled in SWEEP.md's first table, not treatments.
+REPLICATE_KEY = "seed"
+#: The walkers whose distinct cells the first table of SWEEP.md shows beside the ratio.
+DISTINCT_WALKERS = ("stochastic-coverage", "topic-perplexity")
+
+
+def read_headline(folder: Path):
+    """An experiment's ``headline.csv`` as a DataFrame (empty, with its columns, if absent).
+
+    Parameters
+    ----------
+    folder : Path
+        An experiment folder.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The columns of :data:`HEADLINE_COLUMNS`.
+    """
+    import pandas as pd
+
+    path = ExperimentFolder(folder).table("headline")
+    if not path.is_file():
+        return pd.DataFrame(columns=list(HEADLINE_COLUMNS))
+    text = {"dataset": str, "next_best": str, "paper_map": str}  # an empty paper_map stays ""
+    numbers = {column: [""] for column in HEADLINE_COLUMNS if column not in text}
+    return pd.read_csv(path, dtype=text, keep_default_na=False, na_values=numbers)
+
+
+def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) -> Path:
+    """Write ``SWEEP.md``, ``sweep.csv`` and ``sensitivity.csv`` from the combinations' tables (module docstring).
+
+    A study that declares specifications also gets its specification curve
+    (:func:`curiosity_cli.specifications.specification_lead`: ``specifications.csv`` and
+    the figure), which SWEEP.md leads with in place of the sensitivity table: the same
+    pooled numbers, in the same rows, and more. Every treatment's seeds are pooled once
+    (:func:`pool_treatments`), over the paper's walkers only in a study.
+
+    Parameters
+    ----------
+    sweep : Sweep
+    folder : Path
+        The sweep's folder; each combination's experiment folder is in it.
+    outcomes : sequence of Outcome
+        One per combination run, in product order.
+
+    Returns
+    -------
+    Path
+        ``SWEEP.md``.
+    """
+    import pandas as pd
+
+    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT
+    from curiosity_cli.specifications import specification_lead, study_size
+
+    folder = Path(folder)
+    keys = sweep.keys
+    treatments = pool_treatments(sweep, folder, outcomes, PAPER_WALKERS if sweep.specifications else None)
+    sensitivity, pooled_rows = _sensitivity(sweep, treatments)
+    # a study's curve has the sensitivity table's rows and numbers, and more: it takes its place
+    lead = specification_lead(sweep, folder, treatments) if sweep.specifications else sensitivity
+    rows, sections = [], []
+    overview = [
+        "| # | " + " | ".join(keys) + " | dataset | ratio | next best | paired Wilcoxon p (pairs) | paper's ratio |",
+        "|---|" + "---|" * len(keys) + "---|---|---|---|---|",
+    ]
+    for outcome in outcomes:
+        c = outcome.combination
+        values = [text.split("=", 1)[1] for text in c.overrides]
+        cells = " | ".join(f"`{v}`" for v in values)
+        link = f"[{c.index}]({c.name}/REPORT.md)"
+        sections += [f"## {c.index}. {c.label}", ""]
+        if outcome.error is not None:
+            overview.append(f"| {c.index} | {cells} | failed | | | | |")
+            sections += [f"Failed: {outcome.error}", ""]
+            continue
+        top = read_headline(folder / c.name)
+        sections += [f"Folder `{c.name}/`, report [{c.name}/REPORT.md]({c.name}/REPORT.md), {outcome.seconds:.0f} s.", ""]
+        for row in top.to_dict("records") or [dict.fromkeys(HEADLINE_COLUMNS)]:
+            rows.append({"combination": c.index, "folder": c.name, **dict(zip(keys, values)), **row})
+        if top.empty:
+            overview.append(f"| {link} | {cells} | (no headline) | | | | |")
+            sections += [f"(no human labels or no {HEADLINE_LENGTH}-step checkpoint: no headline ratio)", ""]
+            continue
+        sections += [
+            "| dataset | topic perplexity MI | next best | its MI | ratio | paired Wilcoxon p | pairs | paper's map | paper's ratio |",
+            "|---|---|---|---|---|---|---|---|---|",
+        ]
+        for r in top.itertuples():
+            overview.append(
+                f"| {link} | {cells} | {r.dataset} | {number(r.ratio)} | {r.next_best} | "
+                f"{p_text(r.p_value)} ({r.pairs}) | {number(r.paper_ratio)} |"
+            )
+            sections.append(
+                f"| {r.dataset} | {number(r.topic_perplexity, 3)} | {r.next_best} | {number(r.next_best_mi, 3)} | "
+                f"{number(r.ratio)} | {p_text(r.p_value)} | {r.pairs} | {r.paper_map} | {number(r.paper_ratio)} |"
+            )
+        sections += ["", *_distinct_table(_read_revisits(folder / c.name))]
+    sets = ", ".join(f"`--set {s}`" for s in sweep.sets) or "none"
+    lines = [
+        f"# Specification curve of `{sweep.name}`: {study_size(sweep)} ({count(len(outcomes), 'combination')})"
+        if sweep.specifications else f"# Parameter sweep of `{sweep.name}`: {count(len(outcomes), 'combination')}",
+        "",
+        f"Config `{display_path(sweep.config_path)}`; --set: {sets}. Each combination is an experiment folder "
+        f"here, named by its values (`sweep.yaml` lists them). The headline is the mean MI of {HEADLINE_WEIGHT} "
+        f"exploration against human labels at {HEADLINE_LENGTH} steps over the next best weight function's.",
+        "",
+        "Run again (finished runs and labels are kept):",
+        "",
+        "```console",
+        f"$ {sweep.command(folder.parent)}",
+        "```",
+        "",
+        *lead,
+        "## Headlines",
+        "",
+        *overview,
+        "",
+        *sections,
+    ]
+    columns = ["combination", "folder", *keys, *HEADLINE_COLUMNS]
+    with atomic_path(folder / "sweep.csv") as tmp:
+        pd.DataFrame(rows, columns=columns).to_csv(tmp, index=False)
+    pooled_columns = [
+        *(key for key in keys if key != REPLICATE_KEY), "seeds", *HEADLINE_COLUMNS,
+        *(f"distinct_{w}" for w in DISTINCT_WALKERS),
+    ]
+    with atomic_path(folder / "sensitivity.csv") as tmp:
+        pd.DataFrame(pooled_rows, columns=pooled_columns).to_csv(tmp, index=False)
+    path = folder / "SWEEP.md"
+    with atomic_path(path) as tmp:
+        tmp.write_text("\n".join(lines))
+    return path
+
+
+def _read_revisits(folder: Path):
+    """An experiment's ``revisits.csv`` (:func:`~curiosity_cli.evaluate.tables.summarise_revisits`), or None if absent."""
+    import pandas as pd
+
+    path = ExperimentFolder(folder).table("revisits")
+    return pd.read_csv(path) if path.is_file() else None
+
+
+def _distinct_at_headline(revisits):
+    """The rows of ``revisits.csv`` for distinct cells at the headline length."""
+    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
+
+    return revisits[(revisits["measure"] == "distinct_cells") & (revisits["path_length"] == HEADLINE_LENGTH)]
+
+
+def _distinct_table(revisits) -> list[str]:
+    """Mean distinct cells per walker at the headline length, a row per dataset."""
+    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
+
+    if revisits is None:
+        return ["(no revisits.csv: evaluate the experiments again for distinct cells)", ""]
+    at = _distinct_at_headline(revisits)
+    if at.empty:
+        return []
+    walkers = list(dict.fromkeys(at["weight_function"]))
+    lines = [
+        f"Distinct cells seen in {HEADLINE_LENGTH} steps (mean over restarts):",
+        "",
+        "| dataset | " + " | ".join(walkers) + " |",
+        "|---|" + "---|" * len(walkers),
+    ]
+    for dataset, block in at.groupby("dataset", sort=False):
+        means = block.set_index("weight_function")["mean"]
+        lines.append(f"| {dataset} | " + " | ".join(number(means.get(w), 1) for w in walkers) + " |")
+    return lines + [""]
+
+
+@dataclass(frozen=True)
+class Treatment:
+    """The combinations of a sweep that differ only in their seed, and their pairs pooled.
+
+    Attributes
+    ----------
+    values : dict of str to str
+        Each key of the sweep but the seed (``specification`` first in a study), and its value.
+    combinations : tuple of Combination
+        Its combinations that finished, one per seed.
+    pooled : Pooled or None
+        :func:`~curiosity_cli.evaluate.replicates.pool` of their folders; None when they
+        could not be pooled (``error`` says why).
+    error : str or None
+    """
+
+    values: dict[str, str]
+    combinations: tuple[Combination, ...]
+    pooled: Pooled | None
+    error: str | None = None
+
+
+def pool_treatments(
+    sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], walkers: Sequence[str] | None = None,
+) -> list[Treatment]:
+    """Pool each treatment's seeds once (:func:`~curiosity_cli.evaluate.replicates.pool`), in the order of
+    their first combination; combinations that failed take no part.
+
+    Parameters
+    ----------
+    sweep : Sweep
+    folder : Path
+        The sweep's folder.
+    outcomes : sequence of Outcome
+    walkers : sequence of str, optional
+        As :func:`~curiosity_cli.evaluate.replicates.pool`'s.
+    """
+    from curiosity_cli.evaluate.replicates import pool
+    from curiosity_cli.evaluate.tables import EvaluationError
+
+    keys = [key for key in sweep.keys if key != REPLICATE_KEY]
+    groups: dict[tuple, list[Combination]] = {}
+    for outcome in outcomes:
+        if outcome.error is None:
+            values = dict(text.split("=", 1) for text in outcome.combination.overrides)
+            groups.setdefault(tuple(values[k] for k in keys), []).append(outcome.combination)
+    treatments = []
+    for values, members in groups.items():
+        try:
+            pooled, error = pool([folder / c.name for c in members], walkers), None
+        except EvaluationError as exc:
+            pooled, error = None, str(exc)
+        treatments.append(Treatment(dict(zip(keys, values)), tuple(members), pooled, error))
+    return treatments
+
+
+def _sensitivity(sweep: Sweep, treatments: Sequence[Treatment]) -> tuple[list[str], list[dict]]:
+    """SWEEP.md's sensitivity table and ``sensitivity.csv``'s rows: per treatment (the combination's
+    values but the seed) and dataset, the headline over every seed's pairs pooled
+    (:func:`pool_treatments`), its interval and power, and the distinct cells of
+    :data:`DISTINCT_WALKERS`."""
+    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
+
+    keys = [key for key in sweep.keys if key != REPLICATE_KEY]
+    pooled = REPLICATE_KEY in sweep.keys
+    lines = [
+        "## Sensitivity" + (" (seeds pooled)" if pooled else ""),
+        "",
+        f"Per {' x '.join([*keys, 'dataset'])}: topic perplexity's mean MI at "
+        f"{HEADLINE_LENGTH} steps over the next best walker, "
+        + (
+            f"every seed's paired restarts pooled (the seeds are replicates: `{REPLICATE_KEY}` is not a treatment), "
+            if pooled else ""
+        )
+        + "with the ratio's 95 % bootstrap interval, the paired Wilcoxon p against the next best, the smallest lead "
+        "detectable at 80 % power and the pairs a 10 % lead would need (REPORT.md's verdict says how), and the mean "
+        f"distinct cells {' and '.join(DISTINCT_WALKERS)} saw in {HEADLINE_LENGTH} steps, beside the paper's ratio.",
+        "",
+        "| " + " | ".join([*keys, "dataset", "seeds", "pairs", "ratio [95 % CI]", "p", "next best",
+                         "detectable lead", "pairs for +10 %", *(f"distinct: {w}" for w in DISTINCT_WALKERS),
+                         "paper's ratio"]) + " |",
+        "|" + "---|" * (len(keys) + 9 + len(DISTINCT_WALKERS)),
+    ]
+    rows = []
+    for treatment in treatments:
+        values = treatment.values.values()
+        result = treatment.pooled
+        if result is None:
+            lines.append("| " + " | ".join(f"`{v}`" for v in values) + f" | not pooled: {treatment.error} |")
+            continue
+        seeds = " ".join(map(str, result.seeds))
+        for r in result.headline.to_dict("records"):
+            distinct = {f"distinct_{w}": result.mean_distinct_cells(r["dataset"], w) for w in DISTINCT_WALKERS}
+            rows.append({**treatment.values, "seeds": seeds, **r, **distinct})
+            lead = r["detectable_ratio"] - 1
+            lines.append(
+                "| " + " | ".join([
+                    *(f"`{v}`" for v in values), r["dataset"], seeds, str(r["pairs"]),
+                    f"{number(r['ratio'])} [{number(r['ratio_ci_low'])}, {number(r['ratio_ci_high'])}]",
+                    p_text(r["p_value"]), r["next_best"], f"{number(100 * lead, 0)} %" if lead == lead else "",
+                    number(r["pairs_for_lead"], 0) or ("> 10^6" if lead == lead else ""),
+                    *(number(v, 1) for v in distinct.values()),
+                    number(r["paper_ratio"]),
+                ]) + " |"
+            )
+    return lines + [""], rows
+
+
+def number(value, digits: int = 2) -> str:
+    """A number for a table: ``digits`` decimals, empty for NaN or nothing."""
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return ""
+    return f"{value:.{digits}f}" if value == value else ""
+
+
+def p_text(value) -> str:
+    """A p-value for a table: 3 decimals, ``< 0.001`` below that."""
+    text = number(value, 3)
+    return "< 0.001" if text and float(value) < 0.001 else text
+
+

@@ -1,0 +1,166 @@
+"""A study's declared specifications: planning, running and resuming, the curve against the mi.csv files, errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+from scipy import stats
+from small_maps import edit_yaml
+from test_sweep import sweep, tiny_yaml
+
+from curiosity_cli.config import CONFIG_DIR
+from curiosity_cli.evaluate.power import ratio_interval
+from curiosity_cli.specifications import Specification, declared_specifications
+from curiosity_cli.sweep import declared_sweeps, parse_sweeps, plan_sweep
+
+WALKERS = ["random-walk", "stochastic-coverage", "topic-perplexity"]
+SPECIFICATIONS = {"default": {}, "clamp": {"explore.coverage": "clamp", "explore.min_d2": 0.5}}
+FOLDERS = [f"specification-{s}_seed-{seed}" for s in SPECIFICATIONS for seed in (1, 2)]
+
+
+def study_yaml(own_map: Path, folder: Path, specifications=SPECIFICATIONS) -> Path:
+    """The tiny experiment as a study: 3 of the paper's walkers, seeds 1 and 2, two specifications;
+    the map stands in for Montreal1, so the curve has the paper's ratio to compare."""
+    config = tiny_yaml(own_map, folder)
+    edit_yaml(own_map, stands_in_for="Montreal1")
+    text = yaml.safe_load(config.read_text())
+    text["explore"]["weight_functions"] = WALKERS
+    text["sweep"] = {"seed": [1, 2]}
+    text["specifications"] = specifications
+    config.write_text(yaml.safe_dump(text, sort_keys=False))
+    return config
+
+
+def test_a_study_plans_each_specification_on_each_seed_named_by_them_alone(own_map, tmp_path):
+    config = study_yaml(own_map, tmp_path)
+    specifications = declared_specifications(config)
+    assert specifications == (
+        Specification("default", ()), Specification("clamp", ("explore.coverage=clamp", "explore.min_d2=0.5")),
+    )
+    plan = plan_sweep(config, parse_sweeps(declared_sweeps(config)), (), specifications)
+    assert [c.name for c in plan.combinations] == FOLDERS
+    assert [(c.config.explore.coverage, c.config.explore.min_d2, c.config.seed) for c in plan.combinations] == [
+        ("literal", 0.25, 1), ("literal", 0.25, 2), ("clamp", 0.5, 1), ("clamp", 0.5, 2),
+    ]
+    assert plan.combinations[2].overrides == ("specification=clamp", "seed=1")
+    assert plan.keys == ["specification", "seed"]
+    # the command resumes the study from the config alone: the specifications are not --sweep options
+    assert "--sweep seed=1,2" in plan.command() and "specification" not in plan.command()
+    # reordered, or with another specification declared, the same specifications keep their folders
+    reordered = {"others": {"explore.coverage": "others"}, "clamp": SPECIFICATIONS["clamp"], "default": {}}
+    again = study_yaml(own_map, tmp_path, reordered)
+    names = [c.name for c in plan_sweep(again, parse_sweeps(["seed=1,2"]), (), declared_specifications(again)).combinations]
+    assert names == ["specification-others_seed-1", "specification-others_seed-2", *FOLDERS[2:], *FOLDERS[:2]]
+    # without a sweep, a combination per specification
+    alone = plan_sweep(config, (), (), specifications)
+    assert [c.name for c in alone.combinations] == ["specification-default", "specification-clamp"]
+    # a config without specifications declares none: readings.yaml runs as before
+    assert declared_specifications(CONFIG_DIR / "readings.yaml") == ()
+
+
+def _pooled(folder: Path, specification: str) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Both seeds' mi.csv and steering.csv of a specification, at 80 steps."""
+    mi = pd.concat(pd.read_csv(folder / f"specification-{specification}_seed-{s}" / "mi.csv") for s in (1, 2))
+    steering = pd.concat(pd.read_csv(folder / f"specification-{specification}_seed-{s}" / "steering.csv") for s in (1, 2))
+    return mi[mi["path_length"] == 80], steering[steering["path_length"] == 80]
+
+
+def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give_and_resumes(own_map, tmp_path):
+    config = study_yaml(own_map, tmp_path)
+    results = tmp_path / "results"
+    result = sweep(config, results)
+    assert result.exit_code == 0, result.output
+    assert "4 combinations (2 specifications x 2 seeds), in" in result.stderr
+    folder = results / "tiny-sweep"
+    assert sorted(p.name for p in folder.iterdir() if p.is_dir()) == sorted(FOLDERS)
+    plan = yaml.safe_load((folder / "sweep.yaml").read_text())
+    assert plan["specifications"] == {"default": [], "clamp": ["explore.coverage=clamp", "explore.min_d2=0.5"]}
+
+    report = (folder / "SWEEP.md").read_text()
+    assert report.startswith("# Specification curve of `tiny`: 2 specifications x 2 seeds (4 combinations)\n")
+    assert report.index("## Specification curve") < report.index("![specification curve](specification-curve.png)")
+    assert report.index("![specification curve]") < report.index("## Headlines")
+    assert "## Sensitivity" not in report, "the curve's table has its rows and numbers"
+    for suffix in (".png", ".pdf"):
+        assert (folder / f"specification-curve{suffix}").stat().st_size > 1000
+    table = pd.read_csv(folder / "specifications.csv", dtype={"seeds": str})
+    assert sorted(table["specification"]) == ["clamp", "default"] and (table["dataset"] == "own").all()
+    assert table["ratio"].is_monotonic_increasing, "sorted by ratio, as the figure"
+
+    for row in table.to_dict("records"):
+        mi, steering = _pooled(folder, row["specification"])
+        means = mi.groupby("weight_function")["mi_human"].mean()
+        others = means.drop("topic-perplexity")
+        next_best = others.idxmax()
+        assert row["next_best"] == next_best and row["seeds"] == "1 2"
+        assert row["ratio"] == pytest.approx(means["topic-perplexity"] / others.max())
+        # paired by seed and restart, never across seeds: 2 restarts x 2 seeds
+        pairs = mi.pivot_table(index=["replicate", "restart"], columns="weight_function", values="mi_human")
+        assert row["pairs"] == len(pairs) == 4
+        assert row["p_value"] == pytest.approx(stats.wilcoxon(pairs["topic-perplexity"], pairs[next_best]).pvalue)
+        low, high = ratio_interval(pairs["topic-perplexity"].to_numpy(), pairs[next_best].to_numpy())
+        assert (row["ratio_ci_low"], row["ratio_ci_high"]) == pytest.approx((low, high))
+        assert row["paper_ratio"] == 1.51 and row["paper_inside"] == (low <= 1.51 <= high)
+        # 4 pairs cannot reach p < 0.05 with Wilcoxon's test: no specification leads
+        assert not row["beats_all"]
+        walker = mi.groupby("weight_function")["distinct_cells"].mean()
+        assert row["distinct_topic-perplexity"] == pytest.approx(walker["topic-perplexity"])
+        assert row["distinct_stochastic-coverage"] == pytest.approx(walker["stochastic-coverage"])
+        ours = steering[steering["weight_function"] == "topic-perplexity"]["steering"]
+        assert len(ours) == 4 and row["steering_topic-perplexity"] == pytest.approx(ours.mean())
+        assert f"| `{row['specification']}` | own | {row['ratio']:.2f} [{row['ratio_ci_low']:.2f}, " in report
+    inside = int(table["paper_inside"].sum())
+    assert "leads every other walker at p < 0.05" in report and "in 0 of 2 on own: 0 of 2 specification-map pairs" in report
+    assert f"the paper's ratio lies inside the 95 % interval in {inside} of 2 on own (Montreal1: 1.51)" in report
+
+    finished = sorted(folder.glob("*/runs/*/*/restart-*/*")) + sorted(folder.glob("*/labels/*/*/*.npz"))
+    assert len(finished) > 4 * 3 * 2
+    mtimes = {path: path.stat().st_mtime_ns for path in finished}
+    first = (folder / "specifications.csv").read_bytes()
+    (folder / "specifications.csv").unlink()
+    # declared in the other order: the same folders, nothing redone, the same curve
+    study_yaml(own_map, tmp_path, {"clamp": SPECIFICATIONS["clamp"], "default": {}})
+    result = sweep(config, results)
+    assert result.exit_code == 0, result.output
+    assert result.stderr.count("exploring (6 runs already done)") == 4
+    assert {path: path.stat().st_mtime_ns for path in finished} == mtimes
+    assert (folder / "specifications.csv").read_bytes() == first
+
+
+@pytest.mark.parametrize(
+    ("specifications", "options", "message"),
+    [
+        ({"clamp": {"explore.coverage": "clmap"}}, (), "tiny.yaml: specifications.clamp.explore.coverage: got 'clmap'"),
+        ({"x": {"explore.nope": 1}}, (), "tiny.yaml: specifications.x.explore.nope: "),
+        ({"x": {"model.topics": 0}}, (), "tiny.yaml: specifications.x.model.topics: got 0"),
+        ({"x": {"seed": 3}}, (), "tiny.yaml: specifications.x.seed: seed is also swept; give it in one of them"),
+        ({"x": {"explore.coverage": "clamp"}}, ("--set", "explore.coverage=others"),
+         "tiny.yaml: specifications.x.explore.coverage: explore.coverage is also given with --set"),
+        ({"x": {"explore": {"coverage": "clamp"}, "explore.coverage": "others"}}, (),
+         "tiny.yaml: specifications.x.explore.coverage: explore is set too; give each key once"),
+        ({"x": {"name": "y"}}, (), "tiny.yaml: specifications.x.name: a specification cannot rename"),
+        ({"a b": {}}, (), "tiny.yaml: specifications: 'a b': expected a name of 1 to 80 letters"),
+        ({"x": [1]}, (), "tiny.yaml: specifications.x: expected a mapping of dotted keys to values"),
+        ([1, 2], (), "tiny.yaml: specifications: expected a mapping of names to overrides"),
+    ],
+)
+def test_a_bad_specification_is_refused_in_one_line_before_anything_is_written(own_map, tmp_path, specifications, options, message):
+    config = study_yaml(own_map, tmp_path, {"default": {}, **specifications} if isinstance(specifications, dict) else specifications)
+    result = sweep(config, tmp_path / "results", *options)
+    assert result.exit_code == 1, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("Error: ") and message in lines[0], result.stderr
+    assert not (tmp_path / "results").exists()
+
+
+def test_only_the_study_config_itself_declares_specifications(own_map, tmp_path):
+    base = study_yaml(own_map, tmp_path)
+    edit_yaml(base, sweep=...)
+    child = tmp_path / "child.yaml"
+    child.write_text(f"base: {base}\nname: child\n")
+    result = sweep(child, tmp_path / "results")
+    assert result.exit_code == 1
+    assert "tiny.yaml: specifications: only the experiment config itself may declare specifications" in result.stderr
