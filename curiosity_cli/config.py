@@ -292,8 +292,7 @@ class LabelConfig:
     warm_sweeps: int | None = _spec(min=1)
     check_restarts: int = _spec(min=0)
     batch_sweeps: int = _spec(min=1)
-    # the one experiment key with a default: configs saved before it existed label on the CPU, as they did
-    device: str = _spec(choices=LABEL_DEVICES, default="cpu")
+    device: str = _spec(choices=LABEL_DEVICES)
 
 
 @dataclass(frozen=True)
