@@ -20,30 +20,17 @@ Prints and never asserts: timings depend on the machine.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import statistics
 import time
 
-from curiosity_cli.config import CONFIG_DIR, load_config
-from curiosity_cli.data import load_map
+from bench_label import setup  # the same maps and Φ_p as the CPU benchmark (this script's folder is on the path)
+
 from curiosity_cli.evaluate.label_sampling import map_chains
-from curiosity_cli.explore.walker import explore
 from curiosity_cli.topics.devices import cuda_missing
-from curiosity_cli.words.extract import extract_words
 
 CHAINS = (16, 64, 256)
 
-
-def setup(name: str, runs: int, steps: int):
-    config = load_config(CONFIG_DIR / "paper.yaml", [f"datasets=[{name}]", "name=bench", "seed=0"])
-    store = extract_words(load_map(name), config.words).store
-    settings = dataclasses.replace(config.explore, path_length=steps, checkpoints=(steps,))
-    phis = [
-        explore(store, "topic-perplexity", r, model=config.model, settings=settings, seed=r).checkpoints[steps].dense()
-        for r in range(runs)
-    ]
-    return config, store, phis
 
 
 def time_devices(config, store, phis, chains: int, devices: list[str], sweeps: int, repeats: int) -> dict:

@@ -42,14 +42,12 @@ READINGS = {
 
 
 def steering(run) -> tuple[float, float, float]:
-    from curiosity_cli.explore.walker import move_probabilities
+    from curiosity_cli.evaluate.steering import step_distances
 
-    distances, spreads = [], []
+    _, distances = step_distances(run.candidate_step, run.coverage, run.weight)
+    spreads = []
     for step in np.unique(run.candidate_step):
         here = run.candidate_step == step
-        walker, _ = move_probabilities(run.weight[here])
-        coverage, _ = move_probabilities(1.0 / run.coverage[here])
-        distances.append(0.5 * np.abs(walker - coverage).sum())
         finite = run.topic_perplexity[here][np.isfinite(run.topic_perplexity[here])]
         if finite.size > 1:
             spreads.append(finite.max() / finite.min())
