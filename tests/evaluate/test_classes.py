@@ -167,7 +167,7 @@ def test_run_rows_give_classes_found_recall_and_first_steps_per_checkpoint():
 
 
 def test_a_label_file_is_current_only_for_the_recipe_it_was_made_from(tmp_path):
-    config = SimpleNamespace(label=LabelConfig(sweeps=2, warm_sweeps=1, check_restarts=1, batch_sweeps=3))
+    config = SimpleNamespace(label=LabelConfig(sweeps=2, warm_sweeps=1, check_restarts=1, batch_sweeps=3, device="cpu"))
     recipe = label_recipe("run-digest", "batch-digest", config, "human-digest", 1)
     path = ExperimentFolder(tmp_path).label_file("own", "random-walk", 1)
     assert label_changes(path, recipe) == NOT_LABELLED
@@ -178,7 +178,7 @@ def test_a_label_file_is_current_only_for_the_recipe_it_was_made_from(tmp_path):
     # another share of a cell makes a class found; other sweeps; a batch reference made again
     other_share = Recipe({**recipe.inputs, "class_share_percent": CLASS_SHARE_PERCENT + 5})
     assert label_changes(path, other_share) == f"class_share_percent was {CLASS_SHARE_PERCENT}, now {CLASS_SHARE_PERCENT + 5}"
-    more_sweeps = SimpleNamespace(label=LabelConfig(sweeps=4, warm_sweeps=1, check_restarts=1, batch_sweeps=3))
+    more_sweeps = SimpleNamespace(label=LabelConfig(sweeps=4, warm_sweeps=1, check_restarts=1, batch_sweeps=3, device="cpu"))
     assert label_changes(path, label_recipe("run-digest", "batch-digest", more_sweeps, "human-digest", 1)) == (
         "label.sweeps was 2, now 4"
     )
@@ -187,7 +187,7 @@ def test_a_label_file_is_current_only_for_the_recipe_it_was_made_from(tmp_path):
     )
     # checking fewer restarts leaves this one's file current; checking it too asks for its second chain
     for checked, change in ((0, None), (2, "second_start was absent, now 'placed'")):
-        other = SimpleNamespace(label=LabelConfig(sweeps=2, warm_sweeps=1, check_restarts=checked, batch_sweeps=3))
+        other = SimpleNamespace(label=LabelConfig(sweeps=2, warm_sweeps=1, check_restarts=checked, batch_sweeps=3, device="cpu"))
         assert label_changes(path, label_recipe("run-digest", "batch-digest", other, "human-digest", 1)) == change
     with np.load(path) as npz:
         assert json.loads(str(npz["meta"]))["restart"] == 1

@@ -106,7 +106,8 @@ def test_an_example_map_copied_from_another_is_refused_by_evaluate_and_redone_by
     tables = _tables(work)
     examples = sorted((work / LABELS / "examples").glob("*.npz"))
     shutil.copy(examples[1], examples[0])
-    assert_clean_error(run_cli(["evaluate", EXPERIMENT], cwd=work), examples[0].name, "were written")
+    # named by its size ("... were written") or, when the two maps happen to be as long, its digest ("... was written")
+    assert_clean_error(run_cli(["evaluate", EXPERIMENT], cwd=work), examples[0].name, "written")
     relabelled = run_cli(LABEL, cwd=work)
     assert relabelled.code == 0 and "labelled 1 runs" in relabelled.stdout, relabelled.output
     assert run_cli(["evaluate", EXPERIMENT], cwd=work).code == 0
