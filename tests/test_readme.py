@@ -25,9 +25,10 @@ def test_ci_runs_the_readme_test_command_verbatim():
     assert "pytest" in COMMANDS[1] and "[test]" in COMMANDS[1]
 
 
-def test_readme_picture_exists():
-    (picture,) = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", README)
-    assert (PROJECT_ROOT / picture).is_file()
+def test_readme_pictures_exist():
+    pictures = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", README)
+    assert "docs/datasets.png" in pictures and "docs/specification-curve.png" in pictures
+    assert all((PROJECT_ROOT / picture).is_file() for picture in pictures), pictures
 
 
 def test_readme_links_to_files_that_exist():
