@@ -103,17 +103,10 @@ EXPLORE_READINGS = {
     "revisits": ("once", "again"),
     "refine_picks": ("uniform", "recent"),
 }
-#: What a run recipe leaves out: each reading at what every run did before its key existed,
-#: so that the runs of older experiments stay current (a run's recipe names a reading only
-#: when it is another).
-UNRECORDED_READINGS = {
-    "candidates": 4,
-    "candidate_context": "neighbourhood",
-    "candidate_sweeps": 1,
-    "path_topics": "smoothed",
-    "revisits": "once",
-    "refine_picks": "uniform",
-}
+#: What a run recipe leaves out: each reading at what every run did before its key existed
+#: (the first value of each, and one pass over the temporary labels), so that the runs of
+#: older experiments stay current (a run's recipe names a reading only when it is another).
+UNRECORDED_READINGS = {key: values[0] for key, values in EXPLORE_READINGS.items()} | {"candidate_sweeps": 1}
 
 #: Where a config's ORB words are (``words.orb_detector``): at ORB's keypoints, or at every
 #: point of a regular grid (:mod:`curiosity_cli.words.orb_grid`), as near the density of the

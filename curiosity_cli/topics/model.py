@@ -288,8 +288,6 @@ class TopicModel:
         ParameterError
             Naming ``cell``, ``words`` or ``time``.
         """
-        from curiosity_cli.topics._gibbs_kernels import add_cell_kernel
-
         cell = check_int("cell", cell, 0, self.n_cells - 1)
         if self._cell_first[cell] >= 0:
             raise ParameterError(f"cell: cell {cell} is already in the model")
@@ -306,12 +304,7 @@ class TopicModel:
         self._order[self._n_observed] = cell
         self._times[self._n_observed] = time
         self._n_observed += 1
-        add_cell_kernel(
-            cell, first, words.size, self._words, self._topics, self._nwk, self._nk, self._inv,
-            self._ncz, self._ng, self._table, self._k, self._v * self._beta,
-            self._key(), np.uint64(self._counter), not self._frozen,
-        )
-        self._counter += 1
+        self._draw_new_topics(cell, first, words.size)
 
     def add_words(self, cell: int, words, *, time: int | None = None) -> None:
         """Add more words to an observed cell, each with a uniformly random topic.
@@ -336,8 +329,6 @@ class TopicModel:
         ParameterError
             Naming ``cell`` (not in the model), ``words`` or ``time``.
         """
-        from curiosity_cli.topics._gibbs_kernels import add_cell_kernel
-
         cell = check_int("cell", cell, 0, self.n_cells - 1)
         if self._cell_first[cell] < 0:
             raise ParameterError(f"cell: cell {cell} is not in the model yet; add_cell adds it")
@@ -363,8 +354,15 @@ class TopicModel:
         self._times[at : n - 1] = self._times[at + 1 : n].copy()
         self._order[n - 1] = cell
         self._times[n - 1] = time
+        self._draw_new_topics(cell, end, n_new)
+
+    def _draw_new_topics(self, cell: int, first: int, count: int) -> None:
+        """Give words ``first .. first + count - 1`` of ``cell`` uniformly random topics from the
+        stream of this event, count them, and advance the event counter."""
+        from curiosity_cli.topics._gibbs_kernels import add_cell_kernel
+
         add_cell_kernel(
-            cell, end, n_new, self._words, self._topics, self._nwk, self._nk, self._inv,
+            cell, first, count, self._words, self._topics, self._nwk, self._nk, self._inv,
             self._ncz, self._ng, self._table, self._k, self._v * self._beta,
             self._key(), np.uint64(self._counter), not self._frozen,
         )
