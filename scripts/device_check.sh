@@ -12,7 +12,9 @@
 #   b. scripts/device_compare.py: a small experiment labelled on both devices, label files
 #      compared byte for byte, and where the devices part if they do not agree
 #   c. the paper grid (bench_pipeline.py --full-grid --grid-only --grids paper --jobs 16) with
-#      --device cuda, then CPU only, each stage timed: in the time left (DEVICE_CHECK_SECONDS)
+#      --device cuda, then CPU only, each stage timed, and the label stage's timeline from its
+#      files (batch references, first and last label file): in the time left (DEVICE_CHECK_SECONDS)
+# DEVICE_CHECK_SKIP names parts to leave out, e.g. DEVICE_CHECK_SKIP=a (the benchmark, when its kernels did not change).
 set -u
 cd "$(dirname "$0")/.."
 small=0
@@ -64,10 +66,13 @@ else
     fi
 fi
 
+skip=${DEVICE_CHECK_SKIP:-}
 part "a. benchmark: CPU lock-step vs CUDA, ns per word-sample per chain"
-if [ $small = 1 ]; then bench=(--map aerial-mosaic --chains 8 16 --runs 2 --steps 10 --repeats 1)
+if [[ "$skip" == *a* ]]; then summary+=("a. benchmark: skipped (DEVICE_CHECK_SKIP)")
+elif [ $small = 1 ]; then bench=(--map aerial-mosaic --chains 8 16 --runs 2 --steps 10 --repeats 1)
 else bench=(--chains 16 64 256 --repeats 3); fi
-if timeout "$(limit 170 240)" "$PY" scripts/bench_label_devices.py "${bench[@]}" --json "$OUT/bench.json"; then
+if [[ "$skip" == *a* ]]; then :
+elif timeout "$(limit 170 240)" "$PY" scripts/bench_label_devices.py "${bench[@]}" --json "$OUT/bench.json"; then
     summary+=("a. benchmark: $OUT/bench.json")
 else
     summary+=("a. benchmark: failed or timed out (exit $?)")
@@ -103,10 +108,29 @@ for device in "${devices[@]}"; do
         grep -A12 "## Time" "$tmp"/quick/REPORT.md 2>/dev/null
         rm -rf "$tmp"
     else
+        tmp=$(mktemp -d)
         timeout "$t" "$PY" scripts/bench_pipeline.py --full-grid --grid-only --grids paper --jobs "$jobs" --device "$device" \
-            > "$OUT/grid_$device.log" 2>&1
+            --results-dir "$tmp" > "$OUT/grid_$device.log" 2>&1
         status=$?
         tail -25 "$OUT/grid_$device.log"
+        "$PY" - "$tmp" <<'PY'
+import json, sys
+from pathlib import Path
+import numpy as np
+folder = next(Path(sys.argv[1]).glob("*/config.yaml")).parent
+def times(pattern):
+    return sorted(p.stat().st_mtime for p in folder.glob(pattern))
+runs, labels = times("runs/**/run.json"), times("labels/*/*/restart-*.npz")
+t0 = runs[0] if runs else 0
+print(f"label stage from its files ({folder.name}), seconds after the first run.json:")
+print(f"  runs explored: last at {runs[-1] - t0:.0f}" if runs else "  no runs")
+for batch in sorted(folder.glob("batch/*.npz")):
+    with np.load(batch) as npz:
+        print(f"  batch {batch.stem}: written at {batch.stat().st_mtime - t0:.0f}, {json.loads(str(npz['meta']))['seconds']:.1f} s of sweeps")
+if labels:
+    print(f"  label files: {len(labels)}, first at {labels[0] - t0:.0f}, last at {labels[-1] - t0:.0f}")
+PY
+        rm -rf "$tmp"
     fi
     if [ $status = 0 ]; then summary+=("c. paper grid on $device: $(grep -m1 'min end to end' "$OUT/grid_$device.log" | sed 's/.*: //')")
     else summary+=("c. paper grid on $device: failed or timed out (exit $status; $OUT/grid_$device.log)"); tail -5 "$OUT/grid_$device.log"; fi

@@ -609,3 +609,15 @@ def mutual_information_naive(a, b) -> float:
             if p_ij > 0:
                 total += p_ij * math.log2(p_ij / (p_i * p_j))
     return total
+
+
+# --------------------------------------------------------------------------- label tables
+
+
+def pixel_tables_naive(pixel_words, reference, n_classes, word_labels, n_labels) -> np.ndarray:
+    """Twin of ``PixelTables(pixel_words, reference, n_classes).tables(word_labels, n_labels)``: each column's pixel map drawn, then counted."""
+    out = np.zeros((word_labels.shape[1], n_labels, n_classes), np.int64)
+    for r in range(word_labels.shape[1]):
+        pixels = word_labels[:, r][pixel_words]
+        np.add.at(out[r], (pixels.ravel(), np.asarray(reference).ravel()), 1)
+    return out

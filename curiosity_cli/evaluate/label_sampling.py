@@ -15,7 +15,7 @@ then used to compute topic labels for each pixel in the map in batch mode."
   every schedule it compares.
 - **Z_b** (:func:`batch_labels`): a model learned on all words of the map with random
   access (Algorithm 1), then each word's maximum-likelihood topic.
-- **Pixels** (:func:`pixel_labels`): the per-pixel texton words carry the labels; with a
+- **Pixels** (:func:`pixel_labels`, :func:`pixel_words`): the per-pixel texton words carry the labels; with a
   word stride ``s`` each pixel takes the label of its nearest texton word (ties go to
   the upper and left one). ORB words take part in the cells' neighbourhoods only.
 """
@@ -165,7 +165,7 @@ def label_with_phi(store: WordStore, phi: np.ndarray, model: ModelConfig, *, swe
     return labels[:, 0]
 
 
-def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1, on_sweep=None):
+def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1):
     """Z_b of every word of the map: a model learned on all of it (Algorithm 1).
 
     Parameters
@@ -177,8 +177,6 @@ def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int
     seed : int
     threads : int
         For the sweeps (the result does not depend on it).
-    on_sweep : callable, optional
-        Called with the sweep number after each sweep.
 
     Returns
     -------
@@ -193,18 +191,15 @@ def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int
     for sweep in range(sweeps):
         topic_model.refine_batch(1, threads=threads)
         trace[sweep] = topic_model.log_likelihood()
-        if on_sweep is not None:
-            on_sweep(sweep + 1)
     return topic_model.ml_topics().astype(np.int16), trace
 
 
 def pixel_labels(store: WordStore, word_labels: np.ndarray, image_shape: tuple[int, int]) -> np.ndarray:
-    """Spread the labels of the texton words over the pixels of the map.
+    """Spread the labels of the texton words over the pixels of the map (:func:`pixel_words`).
 
     Parameters
     ----------
     store : WordStore
-        Its texton words sit on a regular grid every ``stride`` pixels from (0, 0).
     word_labels : (N,) int ndarray
         A label per word of ``store``.
     image_shape : (int, int)
@@ -214,14 +209,40 @@ def pixel_labels(store: WordStore, word_labels: np.ndarray, image_shape: tuple[i
     -------
     (H, W) int16 ndarray
     """
+    return np.asarray(word_labels)[pixel_words(store, image_shape)].astype(np.int16, copy=False)
+
+
+def pixel_words(store: WordStore, image_shape: tuple[int, int]) -> np.ndarray:
+    """The word whose label each pixel of the map takes.
+
+    Its texton words sit on a regular grid every ``stride`` pixels from (0, 0); each pixel
+    takes its nearest texton word (ties go to the upper and left one; of two texton words
+    at one place, the later in the store).
+
+    Parameters
+    ----------
+    store : WordStore
+    image_shape : (int, int)
+        Rows and columns of the map.
+
+    Returns
+    -------
+    (H, W) int64 ndarray
+        Indices into the store's words.
+
+    Raises
+    ------
+    ParameterError
+        The store has no texton words, or they leave a ``stride`` x ``stride`` block of the map without one.
+    """
     texton = next((t for t in store.types if t.kind == "texton"), None)
     if texton is None:
         raise ParameterError("store: has no texton words to label pixels with")
     stride = int(store.params.get("stride", 1))
     rows, cols = image_shape
     is_texton = (store.words >= texton.offset) & (store.words < texton.offset + texton.size)
-    grid = np.full((-(-rows // stride), -(-cols // stride)), -1, np.int16)
-    grid[store.rows[is_texton] // stride, store.cols[is_texton] // stride] = word_labels[is_texton]
+    grid = np.full((-(-rows // stride), -(-cols // stride)), -1, np.int64)
+    grid[store.rows[is_texton] // stride, store.cols[is_texton] // stride] = np.flatnonzero(is_texton)
     if (grid < 0).any():
         raise ParameterError(f"store: texton words do not cover every {stride} x {stride} block of the map")
     # on a regular grid the nearest word is the nearest along each axis (ties go up and left)

@@ -35,11 +35,11 @@ A map's runs to label are cut into blocks
 to the end, around :data:`CHAINS_PER_BLOCK` chains on the CPU, every chain of the map
 on a GPU), a run's chains (and a checked run's second chain) in one block, whose chains
 advance in lock-step in one task; a run's labels depend only on the run, never on its
-block, so a killed ``label`` relabels what it lost to the same bytes. With loky, batch
-references are computed in this process, one map after the other on ``jobs`` threads,
-and a worker reads each map's word store, human labels and Z_b once. On a Dask cluster,
-batch references are tasks too, each map's word store goes to the cluster once and its
-human labels and Z_b pixel labels once; each run's ``run.json`` and checkpoint counts Φ_p
+block, so a killed ``label`` relabels what it lost to the same bytes. Batch references
+come first, every map's at once, each a task on its share of the cores. With loky, a
+worker reads each map's word store, human labels and Z_b once. On a Dask cluster, each
+map's word store goes to the cluster once and its human labels and Z_b pixel labels
+once; each run's ``run.json`` and checkpoint counts Φ_p
 (a few kilobytes) travel with its block, so workers need no copy of the maps, stores or
 results. Either way this process writes every file, and the same functions
 (:mod:`~curiosity_cli.evaluate.label_sampling`) compute the labels, so the results are
@@ -52,7 +52,7 @@ import json
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import lru_cache, partial
 from pathlib import Path
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -71,6 +71,7 @@ from curiosity_cli.files import CorruptFileError, atomic_path, display_path, not
 from curiosity_cli.paths import DEFAULT_CACHE
 
 if TYPE_CHECKING:
+    from curiosity_cli.evaluate.pixel_tables import PixelTables
     from curiosity_cli.experiment.maps import StoreInfo
     from curiosity_cli.experiment.workers import Workers
     from curiosity_cli.explore.runs import Run
@@ -104,14 +105,30 @@ class MapInputs:
 
 
 class MapArrays(NamedTuple):
-    """A map as its runs' labelling needs it in a worker: read there once (loky) or shipped once (Dask)."""
+    """A map as its runs' labelling needs it in a worker: made there once (loky) or shipped once (Dask).
+
+    Made by :func:`map_arrays`.
+    """
 
     store: WordStore
-    human: np.ndarray | None  # (H, W) class ids
-    n_classes: int
-    batch: np.ndarray  # (H, W) Z_b
-    shape: tuple[int, int]
+    pixel_words: np.ndarray  # (H, W): the word whose label each pixel takes
+    human: PixelTables | None  # tables against the human labels, None for a map without them
+    batch: PixelTables  # tables against Z_b
     cell_classes: np.ndarray | None  # (n_cells, C) pixels of each class per cell, None without human labels
+
+
+def map_arrays(
+    store: WordStore, human: np.ndarray | None, n_classes: int, batch: np.ndarray, shape: tuple[int, int], cell_classes,
+    *, topics: int,
+) -> MapArrays:
+    """A map's :class:`MapArrays` from its words, its (H, W) human labels (or None) of ``n_classes``, its (H, W) Z_b
+    of ``topics``, its image ``shape`` and its class pixels per cell (or None)."""
+    from curiosity_cli.evaluate.label_sampling import pixel_words
+    from curiosity_cli.evaluate.pixel_tables import PixelTables
+
+    words = pixel_words(store, shape)
+    human_tables = None if human is None else PixelTables(words, human, n_classes)
+    return MapArrays(store, words, human_tables, PixelTables(words, batch, topics), cell_classes)
 
 
 @dataclass(frozen=True)
@@ -223,23 +240,6 @@ def _batch_is_current(path: Path, recipe: Recipe) -> bool:
     return change is None
 
 
-def _compute_batch(
-    info: StoreInfo, config: ExperimentConfig, store: WordStore, image_shape: tuple[int, int], *, threads: int = 1,
-    on_sweep: Callable[[int], None] | None = None,
-) -> tuple:
-    """A map's batch reference, in this process or a worker: ``(pixel labels, word labels, trace, seconds)``."""
-    from curiosity_cli.evaluate.label_sampling import batch_labels, pixel_labels
-    from curiosity_cli.seeds import name_key
-
-    seed = int(np.random.SeedSequence((config.seed, name_key(info.name), _BATCH_TAG)).generate_state(1, np.uint64)[0])
-    started = time.perf_counter()
-    word_labels, trace = batch_labels(
-        store, config.model, sweeps=config.label.batch_sweeps, seed=seed, threads=threads, on_sweep=on_sweep
-    )
-    seconds = time.perf_counter() - started
-    return pixel_labels(store, word_labels, image_shape), word_labels, trace, seconds
-
-
 def _write_batch(path: Path, recipe: Recipe, labels, word_labels, trace, seconds: float) -> None:
     meta = {RECIPE_KEY: recipe.record(), "seconds": round(seconds, 2)}
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -272,11 +272,11 @@ def _map_references(entry: str, batch_file: str) -> tuple:
 
 
 @lru_cache(maxsize=4)
-def _map_arrays(entry: str, store_path: str, batch_file: str) -> MapArrays:
-    """A map's arrays, read once per (loky) worker."""
+def _map_arrays(entry: str, store_path: str, batch_file: str, topics: int) -> MapArrays:
+    """A map's arrays, made once per (loky) worker."""
     from curiosity_cli.words.store import load_store
 
-    return MapArrays(load_store(Path(store_path)), *_map_references(entry, batch_file))
+    return map_arrays(load_store(Path(store_path)), *_map_references(entry, batch_file), topics=topics)
 
 
 def label_block(
@@ -292,10 +292,9 @@ def label_block(
     start), advance in lock-step (:func:`~curiosity_cli.evaluate.label_sampling.label_paths`);
     a run's labels depend only on the run, never on the runs labelled with it.
     """
-    from curiosity_cli.evaluate.information import contingency
-    from curiosity_cli.evaluate.label_sampling import label_paths, pixel_labels
+    from curiosity_cli.evaluate.label_sampling import label_paths
 
-    store, human, n_classes, batch, shape, cell_classes = arrays
+    store, pixel_words, human, batch, cell_classes = arrays
     k = config.model.topics
     chains = []  # (run index, array-name prefix: how the chain starts)
     for index, run in enumerate(runs):
@@ -313,17 +312,18 @@ def label_block(
         device=device,
     )
     for j, active, labels in labelled:
+        human_tables = None if human is None else human.tables(labels, k)
+        batch_tables = batch.tables(labels, k)
         for column, c in enumerate(active):
             index, prefix = chains[c]
-            pixels = pixel_labels(store, labels[:, column], shape)
             if human is not None:
-                tables[index].setdefault(prefix + "human", []).append(contingency(pixels, human, k, n_classes))
-            tables[index].setdefault(prefix + "batch", []).append(contingency(pixels, batch, k, k))
+                tables[index].setdefault(prefix + "human", []).append(human_tables[column])
+            tables[index].setdefault(prefix + "batch", []).append(batch_tables[column])
             length = lengths[index][j]
             if not prefix and runs[index].meta["restart"] == 0 and (
                 length in EXAMPLE_LENGTHS or length == lengths[index][-1]
             ):
-                examples[index][length] = pixels
+                examples[index][length] = labels[pixel_words, column]
     out = []
     for index, run in enumerate(runs):
         arrays_out = {"lengths": np.array(lengths[index], np.int32)}
@@ -567,7 +567,8 @@ def label_experiment(
             for name, map_inputs in {m.name: m for _, m, _ in tasks}.items():
                 store = workers.ship_file(map_inputs.store_path, load_store)
                 shipped[name] = workers.ship(
-                    MapArrays, store, *_map_references(map_inputs.entry, map_inputs.batch_path), key=f"map-{name}"
+                    partial(map_arrays, topics=config.model.topics), store,
+                    *_map_references(map_inputs.entry, map_inputs.batch_path), key=f"map-{name}",
                 )
         if on_stage is not None:
             on_stage("labelling runs" + (" on the GPU" if device == "cuda" else ""), sum(len(block) for block, *_ in tasks))
@@ -651,40 +652,26 @@ def _batch_references(
     """Each map's batch reference, computed where missing or not made from its recipe (``recipes`` by map name);
     ``(files by map, how many reused, problems)``.
 
-    With loky, in this process, one map after the other on ``jobs`` threads with a
-    progress unit per sweep; an error stops the command. On a Dask cluster, as tasks, a
-    map's sweeps counted when it arrives; a map whose reference failed is left out of the
-    files and named in the problems.
+    Every map's at once, each a task on its share of the cores
+    (:meth:`~curiosity_cli.experiment.workers.Workers.whole_machine_threads`): its sweeps
+    scale with threads less well than maps side by side do. A map's sweeps are counted
+    when it arrives; a map whose reference failed is left out of the files and named in
+    the problems.
     """
     from curiosity_cli.words.store import load_store
 
     sweeps = config.label.batch_sweeps
     files = {info.name: ExperimentFolder(folder).batch(info.name) for info in stores.values()}
-    stale = {
-        entry: info for entry, info in stores.items() if force or not _batch_is_current(files[info.name], recipes[info.name])
-    }
+    stale = [info for info in stores.values() if force or not _batch_is_current(files[info.name], recipes[info.name])]
     problems = []
-
-    def swept(*_) -> None:
-        if on_done is not None:
-            on_done()
-
-    if not workers.ships:
-        for info in stale.values():
-            if on_stage is not None:
-                on_stage(f"batch reference {info.name}", sweeps)
-            computed = _compute_batch(
-                info, config, load_store(info.path), info.facts.shape, threads=workers.jobs, on_sweep=swept
-            )
-            _write_batch(files[info.name], recipes[info.name], *computed)
-    elif stale:
+    if stale:
         threads = workers.whole_machine_threads(len(stale))  # reaches a scheduler first: no stage for an unusable one
         if on_stage is not None:
-            on_stage(f"batch references of {', '.join(info.name for info in stale.values())}", len(stale) * sweeps)
+            what = "batch reference" + ("s of " if len(stale) > 1 else " ")
+            on_stage(what + ", ".join(info.name for info in stale), len(stale) * sweeps)
         computed = workers.compute(
-            _compute_batch, list(stale.values()),
-            args=lambda info: (config, workers.ship_file(info.path, load_store), info.facts.shape),
-            key=lambda info: f"batch-{info.name}", threads=threads,
+            _batch_task, stale, key=lambda info: f"batch-{info.name}", threads=threads,
+            args=lambda info: (config, workers.ship_file(info.path, load_store) if workers.ships else None),
         )
         with computed as results:
             for info, outcome in results:
@@ -693,9 +680,25 @@ def _batch_references(
                     del files[info.name]
                 else:
                     _write_batch(files[info.name], recipes[info.name], *outcome)
-                for _ in range(sweeps):
-                    swept()
+                if on_done is not None:
+                    for _ in range(sweeps):
+                        on_done()
     return files, len(stores) - len(stale), problems
+
+
+def _batch_task(info: StoreInfo, config: ExperimentConfig, store: WordStore | None = None, *, threads: int = 1) -> tuple:
+    """A map's batch reference, in a worker: ``(pixel labels, word labels, trace, seconds)``; from its word ``store``
+    when shipped (Dask), else read here."""
+    from curiosity_cli.evaluate.label_sampling import batch_labels, pixel_labels
+    from curiosity_cli.seeds import name_key
+    from curiosity_cli.words.store import load_store
+
+    store = load_store(info.path) if store is None else store
+    seed = int(np.random.SeedSequence((config.seed, name_key(info.name), _BATCH_TAG)).generate_state(1, np.uint64)[0])
+    started = time.perf_counter()
+    word_labels, trace = batch_labels(store, config.model, sweeps=config.label.batch_sweeps, seed=seed, threads=threads)
+    seconds = time.perf_counter() - started
+    return pixel_labels(store, word_labels, info.facts.shape), word_labels, trace, seconds
 
 
 def _label_task(
@@ -706,5 +709,5 @@ def _label_task(
     when shipped (Dask), else read once. One thread (``threads`` is 1): the blocks keep every worker busy."""
     runs, inputs, device = task
     if arrays is None:
-        arrays = _map_arrays(inputs.entry, inputs.store_path, inputs.batch_path)
+        arrays = _map_arrays(inputs.entry, inputs.store_path, inputs.batch_path, config.model.topics)
     return label_block(runs, inputs, arrays, config, device=device)

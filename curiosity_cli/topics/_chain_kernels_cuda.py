@@ -37,7 +37,7 @@ import math
 import numpy as np
 
 from curiosity_cli._numba import import_cuda
-from curiosity_cli.topics._rng import _GOLDEN, _MIX1, _MIX2, _S27, _S30, _S31, _S40, _TWO_M24
+from curiosity_cli.topics._rng import _GOLDEN, _MIX1, _MIX2, _S27, _S30, _S31, _S32, _S40, _TWO_M24
 
 cuda = import_cuda()
 try:
@@ -168,28 +168,93 @@ def sweep_colour_kernel(colour_cells, n_chains, cell_first, cell_count, words, t
 
 
 @cuda.jit
-def ml_kernel(n_chains, cell_first, cell_count, words, phid, ng, alpha, out):
+def ml_kernel(n_chains, cell_first, cell_count, words, counts, beta, norm, ng, alpha, out):
     """``ml_chains_kernel`` over every cell in index order: one thread per (cell, chain), ``out`` (N, R) int16.
 
-    The weight ``phid[w, k, r] * (float64(ng[cell, k, r]) + alpha)`` in float64, ties to the lowest topic.
+    The weight ``phid * (float64(ng[cell, k, r]) + alpha)`` in float64, ties to the lowest
+    topic, with ``phid = (float64(counts[w, k, r]) + beta) * norm[k, r]`` computed here
+    as :class:`~curiosity_cli.topics.chains.FrozenChains` computes it in numpy for the CPU.
     """
     t = cuda.grid(1)
     if t >= cell_first.shape[0] * n_chains:
         return
     r = t % n_chains
     cell = t // n_chains
-    n_topics = phid.shape[1]
+    n_topics = counts.shape[1]
     first = cell_first[cell]
     for i in range(first, first + cell_count[cell]):
         w = words[i]
         best = np.float64(-1.0)
         best_k = 0
         for k in range(n_topics):
-            v = dmul(phid[w, k, r], dadd(np.float64(ng[cell, k, r]), alpha))
+            phid = dmul(dadd(np.float64(counts[w, k, r]), beta), norm[k, r])
+            v = dmul(phid, dadd(np.float64(ng[cell, k, r]), alpha))
             if v > best:
                 best = v
                 best_k = k
         out[i, r] = best_k
+
+
+@cuda.jit
+def phiw_kernel(counts, beta, inv, phiw):
+    """eq. 5's fixed factors, as numpy computes them for the CPU: ``phiw = (float32(counts) + beta) * inv[k, r]``
+    in float32, one thread per element of the (V, K, R) arrays."""
+    t = cuda.grid(1)
+    n_topics, n_chains = counts.shape[1], counts.shape[2]
+    if t >= counts.shape[0] * n_topics * n_chains:
+        return
+    r = t % n_chains
+    k = (t // n_chains) % n_topics
+    w = t // (n_chains * n_topics)
+    phiw[w, k, r] = fmul(fadd(np.float32(counts[w, k, r]), beta), inv[k, r])
+
+
+@cuda.jit
+def start_uniform_kernel(n_chains, n_topics, cell_first, cell_count, topics, ncz, keys):
+    """``start_chain_kernel``'s uniform start of every chain, one thread per (cell, chain), cells in index order:
+    cell ``c`` draws its words' topics from stream ``(c, c)`` and counts them in ``ncz`` (zero before);
+    the neighbourhood sums follow (:func:`neighbour_sums_kernel`)."""
+    t = cuda.grid(1)
+    if t >= cell_first.shape[0] * n_chains:
+        return
+    r = t % n_chains
+    cell = t // n_chains
+    state = _stream_start(keys[r], np.uint64(cell), cell)
+    first = cell_first[cell]
+    for i in range(first, first + cell_count[cell]):
+        state = uadd(state, _GOLDEN)
+        k = np.int32(((_mix(state) >> _S32) * np.uint64(n_topics)) >> _S32)
+        topics[i, r] = k
+        ncz[cell, k, r] += 1
+
+
+@cuda.jit
+def neighbour_sums_kernel(n_chains, ncz, table, ng):
+    """``ng[c] = ncz[c] + the sum of ncz over c's neighbours``, one thread per (cell, chain): the sums the CPU
+    builds word by word, the same integers."""
+    t = cuda.grid(1)
+    if t >= ncz.shape[0] * n_chains:
+        return
+    r = t % n_chains
+    cell = t // n_chains
+    for k in range(ncz.shape[1]):
+        total = ncz[cell, k, r]
+        for j in range(table.shape[1]):
+            d = table[cell, j]
+            if d >= 0:
+                total += ncz[d, k, r]
+        ng[cell, k, r] = total
+
+
+@cuda.jit
+def put_columns_kernel(columns, source, target):
+    """``target[:, columns[p]] = source[:, p]`` for (rows, R) ``target`` and (rows, P) ``source``, a thread per element of ``source``."""
+    t = cuda.grid(1)
+    if t >= source.shape[0] * source.shape[1]:
+        return
+    p = t % source.shape[1]
+    row = t // source.shape[1]
+    target[row, columns[p]] = source[row, p]
 
 
 def launch(kernel, threads: int, *args) -> None:

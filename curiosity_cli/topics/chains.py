@@ -28,15 +28,18 @@ What a device does for each step of the interface:
 ==============  ==============================================================================
 step            CPU / CUDA
 ==============  ==============================================================================
-``start``       both: the CPU start kernel, per chain (a placed start is sequential over
-                the cells); CUDA then copies topics, counts and sums to the GPU
-``switch``      both: eq. 5's fixed factors ``phiw`` computed here (numpy float32); CUDA
-                copies them to the GPU
+``start``       CPU: the start kernel, per chain. CUDA: uniform starts on the GPU, a thread per
+                (cell, chain), then the neighbourhood sums from the cell counts (the same
+                integers); a placed start, sequential over the cells, on the CPU, its
+                chain then put in its column on the GPU
+``switch``      the frozen counts to the device; eq. 5's fixed factors ``phiw`` computed there
+                (CPU: numpy float32; CUDA: a thread per element, the same roundings)
 ``keep``        CPU: indexing; CUDA: to the host, indexing, back
 ``sweep``       CPU: one kernel call over the cells in colour order, every chain in
                 lock-step; CUDA: one launch per colour, a thread per (cell, chain)
 ``topics``      CPU: a copy; CUDA: a copy from the GPU
-``ml_topics``   CPU: the ML kernel; CUDA: its twin on the GPU, one thread per (cell, chain)
+``ml_topics``   CPU: the ML kernel; CUDA: its twin on the GPU, one thread per (cell, chain),
+                the float64 factors computed in the kernel from the counts already there
 ==============  ==============================================================================
 
 Chains per block (:func:`block_chains`): the CPU holds chains in multiples of
@@ -144,12 +147,11 @@ class FrozenChains:
             raise ParameterError("cells: must be non-decreasing (words grouped by cell)")
         self._cell_count = np.bincount(word_cells, minlength=n_cells).astype(np.int64)
         self._cell_first = np.concatenate([[0], np.cumsum(self._cell_count)[:-1]]).astype(np.int64)
-        self._cells = np.arange(n_cells, dtype=np.int64)
         self._order, self._colour_starts = sweep_order(self._table)
         self.device = device
         engine = _CudaEngine if device == "cuda" else _CpuEngine
         self._engine = engine(self._order, self._colour_starts, self._cell_first, self._cell_count, self._words,
-                              self._table, self._alpha)
+                              self._table, self._alpha, self._beta)
         self._counts = None  # (V, K, R) int32 frozen word-topic counts
         self._keys = None  # (R padded,) uint64
         self._n = 0  # real chains
@@ -178,7 +180,6 @@ class FrozenChains:
             words drawn before it, cells in index order) instead of uniformly random
             ones (the default).
         """
-        from curiosity_cli.topics._chain_kernels import start_chain_kernel
         from curiosity_cli.topics._rng import mix
 
         n = len(phis)
@@ -190,21 +191,11 @@ class FrozenChains:
         if len(placed) != n:
             raise ParameterError(f"placed: got {len(placed)}, expected one per chain ({n})")
         keys = [mix(np.uint64(check_int("seeds", s, 0, 2**64 - 1))) for s in seeds]
-        phiw = self._set_phis(phis)
+        counts, inv = self._set_phis(phis)
         self._n = n
-        held = phiw.shape[2]
+        held = counts.shape[2]
         self._keys = np.array(_padded(keys, held), np.uint64)
-        placed = _padded(placed, held)
-        n_cells = self._table.shape[0]
-        topics = np.zeros((self._words.size, held), np.int8)
-        ncz = np.zeros((n_cells, self._k, held), np.int32)
-        ng = np.zeros((n_cells, self._k, held), np.int32)
-        for r in range(held):
-            start_chain_kernel(
-                r, placed[r], self._cells, self._cell_first, self._cell_count, self._words, topics, phiw,
-                ncz, ng, self._table, np.float32(self._alpha), self._keys[r],
-            )
-        self._engine.put(topics, ncz, ng, phiw, self._keys)
+        self._engine.start(counts, inv, self._keys, np.array(_padded(placed, held), bool))
         self._sweeps = 0
 
     def switch(self, phis: Sequence[np.ndarray]) -> None:
@@ -212,7 +203,7 @@ class FrozenChains:
         self._started("switch")
         if len(phis) != self.n_chains:
             raise ParameterError(f"phis: got {len(phis)}, expected one per chain ({self.n_chains})")
-        self._engine.set_phiw(self._set_phis(phis))
+        self._engine.set_counts(*self._set_phis(phis))
 
     def keep(self, chains: Sequence[int]) -> None:
         """Keep only the listed chains, in that order (the others have no more checkpoints)."""
@@ -222,13 +213,9 @@ class FrozenChains:
             raise ParameterError(f"chains: expected a non-empty list of chains in 0..{self.n_chains - 1}")
         self._n = index.size
         index = np.array(_padded(list(index), _held(index.size)), np.int64)
-        topics, ncz, ng, phiw = self._engine.get()
         self._counts = np.ascontiguousarray(self._counts[:, :, index])
         self._keys = self._keys[index]
-        self._engine.put(
-            np.ascontiguousarray(topics[:, index]), np.ascontiguousarray(ncz[:, :, index]),
-            np.ascontiguousarray(ng[:, :, index]), np.ascontiguousarray(phiw[:, :, index]), self._keys,
-        )
+        self._engine.keep(index, self._keys)
 
     def sweep(self, sweeps: int) -> None:
         """``sweeps`` Gibbs sweeps of every chain over every word, cells in colour order (:func:`sweep_order`)."""
@@ -247,7 +234,7 @@ class FrozenChains:
     def counts(self) -> tuple[np.ndarray, np.ndarray]:
         """``(ncz, ng)``, each (n_cells, K, R) int32: each chain's cell topic counts and neighbourhood sums."""
         self._started("counts")
-        _, ncz, ng, _ = self._engine.get()
+        _, ncz, ng = self._engine.get()
         return ncz[:, :, : self._n].copy(), ng[:, :, : self._n].copy()
 
     def ml_topics(self) -> np.ndarray:
@@ -258,11 +245,11 @@ class FrozenChains:
         """
         self._started("ml_topics")
         norm = 1.0 / (self._counts.sum(axis=0, dtype=np.int64) + self._v * self._beta)  # (K, R)
-        phid = (self._counts + self._beta) * norm
-        return self._engine.ml_topics(phid)[:, : self._n]
+        return self._engine.ml_topics(norm)[:, : self._n]
 
-    def _set_phis(self, phis: Sequence[np.ndarray]) -> np.ndarray:
-        """Each chain's frozen counts, kept, and eq. 5's fixed factors ``phiw`` (V, K, R held) float32, padded (:data:`LANES`)."""
+    def _set_phis(self, phis: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """Each chain's frozen counts, kept, padded (:data:`LANES`): ``(counts, inv)``, (V, K, R held) int32 and
+        ``1 / (n_k + V beta)`` (K, R held) float32, from which a device makes eq. 5's fixed factors (:func:`_phiw`)."""
         phis = _padded(list(phis), _held(len(phis)))
         counts = np.empty((self._v, self._k, len(phis)), np.int32)
         for r, phi in enumerate(phis):
@@ -274,102 +261,183 @@ class FrozenChains:
             if phi.size and (phi.min() < 0 or phi.sum(axis=0, dtype=np.int64).max() > np.iinfo(np.int32).max):
                 raise ParameterError(f"phis: chain {r}'s counts must be >= 0 and each topic's total fit in int32")
             counts[:, :, r] = phi
-        inv = (1.0 / (counts.sum(axis=0, dtype=np.int64) + self._v * self._beta)).astype(np.float32)  # (K, R)
         self._counts = counts
-        return (counts.astype(np.float32) + np.float32(self._beta)) * inv
+        return counts, (1.0 / (counts.sum(axis=0, dtype=np.int64) + self._v * self._beta)).astype(np.float32)
 
     def _started(self, name: str) -> None:
         if self._keys is None:
             raise ParameterError(f"{name}: no chains yet; start() them first")
 
 
+def _phiw(counts: np.ndarray, inv: np.ndarray, beta: float) -> np.ndarray:
+    """eq. 5's fixed factors (V, K, R) float32: ``(float32(counts) + beta) * inv``, one rounding each."""
+    return (counts.astype(np.float32) + np.float32(beta)) * inv
+
+
 class _CpuEngine:
     """The chains' state in numpy arrays, advanced by ``_chain_kernels.py`` (the interface: module docstring)."""
 
-    def __init__(self, order, colour_starts, cell_first, cell_count, words, table, alpha):
+    def __init__(self, order, colour_starts, cell_first, cell_count, words, table, alpha, beta):
         self._fixed = (order, cell_first, cell_count, words)
         self._table = table
         self._alpha = alpha  # float64 in the ML weights, float32 in the sweeps'
-        self._state = None
+        self._beta = beta
+        self._state = None  # [topics, ncz, ng]
 
-    def put(self, topics, ncz, ng, phiw, keys) -> None:
-        self._state = [topics, ncz, ng, phiw]
+    def set_counts(self, counts, inv) -> None:
+        self._counts = counts
+        self._phiw = _phiw(counts, inv, self._beta)
+
+    def start(self, counts, inv, keys, placed) -> None:
+        self.set_counts(counts, inv)
+        self._keys = tuple(keys)
+        self._state = _start_on_cpu(
+            self._phiw, keys, placed, self._fixed[1], self._fixed[2], self._fixed[3], self._table, self._alpha
+        )
+
+    def keep(self, index, keys) -> None:
+        self._state = [np.ascontiguousarray(a[..., index]) for a in self._state]
+        self._counts = np.ascontiguousarray(self._counts[:, :, index])
+        self._phiw = np.ascontiguousarray(self._phiw[:, :, index])
         self._keys = tuple(keys)
 
     def get(self) -> tuple:
         return tuple(self._state)
 
-    def set_phiw(self, phiw) -> None:
-        self._state[3] = phiw
-
     def sweep(self, counter) -> None:
         from curiosity_cli.topics._chain_kernels import sweep_chains_kernel
 
-        topics, ncz, ng, phiw = self._state
+        topics, ncz, ng = self._state
         order, cell_first, cell_count, words = self._fixed
         sweep_chains_kernel(
-            order, cell_first, cell_count, words, topics, phiw, ncz, ng, self._table, np.float32(self._alpha), self._keys, counter
+            order, cell_first, cell_count, words, topics, self._phiw, ncz, ng, self._table, np.float32(self._alpha),
+            self._keys, counter,
         )
 
-    def ml_topics(self, phid) -> np.ndarray:
+    def ml_topics(self, norm) -> np.ndarray:
         from curiosity_cli.topics._chain_kernels import ml_chains_kernel
 
         _, cell_first, cell_count, words = self._fixed
         out = np.empty((words.size, len(self._keys)), np.int16)
         cells = np.arange(cell_first.size, dtype=np.int64)
+        phid = (self._counts + self._beta) * norm
         ml_chains_kernel(cells, cell_first, cell_count, words, phid, self._state[2], self._alpha, self._keys, out)
         return out
 
 
-class _CudaEngine:
-    """The chains' state on a CUDA GPU, advanced by ``_chain_kernels_cuda.py`` (the interface: module docstring)."""
+def _start_on_cpu(phiw, keys, placed, cell_first, cell_count, words, table, alpha) -> list[np.ndarray]:
+    """``[topics, ncz, ng]`` of chains started by the CPU start kernel, chain ``r`` with ``keys[r]`` and ``placed[r]``."""
+    from curiosity_cli.topics._chain_kernels import start_chain_kernel
 
-    def __init__(self, order, colour_starts, cell_first, cell_count, words, table, alpha):
+    n_cells, n_topics, held = table.shape[0], phiw.shape[1], phiw.shape[2]
+    topics = np.zeros((words.size, held), np.int8)
+    ncz = np.zeros((n_cells, n_topics, held), np.int32)
+    ng = np.zeros((n_cells, n_topics, held), np.int32)
+    cells = np.arange(n_cells, dtype=np.int64)
+    for r in range(held):
+        start_chain_kernel(
+            r, placed[r], cells, cell_first, cell_count, words, topics, phiw, ncz, ng, table, np.float32(alpha), keys[r]
+        )
+    return [topics, ncz, ng]
+
+
+class _CudaEngine:
+    """The chains' state on a CUDA GPU, advanced by ``_chain_kernels_cuda.py`` (the interface: module docstring).
+
+    The frozen counts go to the GPU once per :meth:`set_counts`; eq. 5's factors and the
+    ML weights are computed there, as numpy computes them for the CPU.
+    """
+
+    def __init__(self, order, colour_starts, cell_first, cell_count, words, table, alpha, beta):
         from numba import cuda
 
         self._cuda = cuda
         self._colours = [
             cuda.to_device(np.ascontiguousarray(order[a:b])) for a, b in zip(colour_starts[:-1], colour_starts[1:])
         ]
+        self._host = (cell_first, cell_count, words, table)  # for the placed starts, made on the CPU
         self._cell_first = cuda.to_device(cell_first)
         self._cell_count = cuda.to_device(cell_count)
         self._words = cuda.to_device(words)
         self._table = cuda.to_device(table)
         self._n_words = words.size
         self._alpha = alpha
-        self._state = None
+        self._beta = beta
+        self._state = None  # [topics, ncz, ng] on the GPU
 
-    def put(self, topics, ncz, ng, phiw, keys) -> None:
+    def set_counts(self, counts, inv) -> None:
+        from curiosity_cli.topics._chain_kernels_cuda import launch, phiw_kernel
+
+        self._counts = self._cuda.to_device(counts)
+        self._phiw = self._cuda.device_array(counts.shape, np.float32)
+        launch(phiw_kernel, counts.size, self._counts, np.float32(self._beta), self._cuda.to_device(inv), self._phiw)
+
+    def start(self, counts, inv, keys, placed) -> None:
+        """Uniform starts on the GPU; placed ones on the CPU (they are sequential over the cells), put in their columns."""
+        from curiosity_cli.topics._chain_kernels_cuda import launch, neighbour_sums_kernel, start_uniform_kernel
+
+        cuda = self._cuda
+        self.set_counts(counts, inv)
+        self._keys = cuda.to_device(np.ascontiguousarray(keys, np.uint64))
+        n_cells, n_topics, held = self._table.shape[0], counts.shape[1], counts.shape[2]
+        topics = cuda.to_device(np.zeros((self._n_words, held), np.int8))
+        ncz = cuda.to_device(np.zeros((n_cells, n_topics, held), np.int32))
+        ng = cuda.device_array((n_cells, n_topics, held), np.int32)
+        launch(start_uniform_kernel, n_cells * held, held, n_topics, self._cell_first, self._cell_count, topics, ncz,
+               self._keys)
+        launch(neighbour_sums_kernel, n_cells * held, held, ncz, self._table, ng)
+        self._state = [topics, ncz, ng]
+        columns = np.flatnonzero(placed)
+        if columns.size:
+            cell_first, cell_count, words, table = self._host
+            started = _start_on_cpu(
+                _phiw(counts[:, :, columns], inv[:, columns], self._beta), keys[columns], placed[columns],
+                cell_first, cell_count, words, table, self._alpha,
+            )
+            self._put_columns(columns, started)
+
+    def _put_columns(self, columns, host_arrays) -> None:
+        """Put the host arrays' chains (each (..., P)) into the GPU state's ``columns``."""
+        from curiosity_cli.topics._chain_kernels_cuda import launch, put_columns_kernel
+
         to = self._cuda.to_device
-        self._state = [to(topics), to(ncz), to(ng), to(phiw)]
+        where = to(columns.astype(np.int64))
+        held = self._keys.shape[0]
+        for target, source in zip(self._state, host_arrays):
+            source = np.ascontiguousarray(source.reshape(-1, columns.size))
+            launch(put_columns_kernel, source.size, where, to(source), target.reshape(source.shape[0], held))
+
+    def keep(self, index, keys) -> None:
+        to = self._cuda.to_device
+        self._state = [to(np.ascontiguousarray(a.copy_to_host()[..., index])) for a in self._state]
+        self._counts = to(np.ascontiguousarray(self._counts.copy_to_host()[:, :, index]))
+        self._phiw = to(np.ascontiguousarray(self._phiw.copy_to_host()[:, :, index]))
         self._keys = to(np.ascontiguousarray(keys, np.uint64))
 
     def get(self) -> tuple:
         return tuple(a.copy_to_host() for a in self._state)
 
-    def set_phiw(self, phiw) -> None:
-        self._state[3] = self._cuda.to_device(phiw)
-
     def sweep(self, counter) -> None:
         from curiosity_cli.topics._chain_kernels_cuda import launch, sweep_colour_kernel
 
-        topics, ncz, ng, phiw = self._state
+        topics, ncz, ng = self._state
         n_chains = self._keys.shape[0]
         for cells in self._colours:
             launch(
                 sweep_colour_kernel, cells.shape[0] * n_chains, cells, n_chains, self._cell_first, self._cell_count,
-                self._words, topics, phiw, ncz, ng, self._table, np.float32(self._alpha), self._keys, counter,
+                self._words, topics, self._phiw, ncz, ng, self._table, np.float32(self._alpha), self._keys, counter,
             )
         self._cuda.synchronize()
 
-    def ml_topics(self, phid) -> np.ndarray:
+    def ml_topics(self, norm) -> np.ndarray:
         from curiosity_cli.topics._chain_kernels_cuda import launch, ml_kernel
 
         n_chains = self._keys.shape[0]
         out = self._cuda.device_array((self._n_words, n_chains), np.int16)
         launch(
             ml_kernel, self._cell_first.shape[0] * n_chains, n_chains, self._cell_first, self._cell_count, self._words,
-            self._cuda.to_device(np.ascontiguousarray(phid)), self._state[2], float(self._alpha), out,
+            self._counts, float(self._beta), self._cuda.to_device(np.ascontiguousarray(norm)), self._state[2],
+            float(self._alpha), out,
         )
         return out.copy_to_host()
 
