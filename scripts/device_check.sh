@@ -14,7 +14,8 @@
 #   c. the paper grid (bench_pipeline.py --full-grid --grid-only --grids paper --jobs 16) with
 #      --device cuda, then CPU only, each stage timed, and the label stage's timeline from its
 #      files (batch references, first and last label file): in the time left (DEVICE_CHECK_SECONDS)
-# DEVICE_CHECK_SKIP names parts to leave out, e.g. DEVICE_CHECK_SKIP=a (the benchmark, when its kernels did not change).
+# DEVICE_CHECK_SKIP names parts to leave out: a (the benchmark, when its kernels did not change), b (the comparison),
+# gpu-grid (part c on the CPU only); e.g. DEVICE_CHECK_SKIP=a,b.
 set -u
 cd "$(dirname "$0")/.."
 small=0
@@ -83,9 +84,10 @@ if [ $gpu = 1 ]; then compare=(--devices cpu cuda); else compare=(--devices cpu 
 if [ $small = 1 ]; then compare+=(--restarts 1 --steps 20 --sweeps 2 --warm-sweeps 1 --batch-sweeps 2 --jobs 2 --diagnose --diagnose-chains 2 --diagnose-sweeps 1)
 else compare+=(--restarts 3 --steps 40 --jobs 16); fi
 rm -rf /tmp/device-compare
-timeout "$(limit 200 60)" "$PY" scripts/device_compare.py --out /tmp/device-compare "${compare[@]}"
-status=$?
+if [[ "$skip" == *b* ]]; then status=skipped
+else timeout "$(limit 200 60)" "$PY" scripts/device_compare.py --out /tmp/device-compare "${compare[@]}"; status=$?; fi
 case $status in
+    skipped) summary+=("b. label files: skipped (DEVICE_CHECK_SKIP)");;
     0) summary+=("b. label files ${compare[1]} vs ${compare[2]}: the same bytes");;
     1) summary+=("b. label files ${compare[1]} vs ${compare[2]}: DIFFERENT (the log says where)");;
     *) summary+=("b. label files: failed or timed out (exit $status)");;
@@ -93,7 +95,7 @@ esac
 
 part "c. the paper grid, --jobs 16, each stage timed (in the time left)"
 jobs=$(nproc); [ "$jobs" -gt 16 ] && jobs=16
-devices=(cpu); [ $gpu = 1 ] && devices=(cuda cpu)
+devices=(cpu); [ $gpu = 1 ] && [[ "$skip" != *gpu-grid* ]] && devices=(cuda cpu)
 for device in "${devices[@]}"; do
     t=$(limit 600 5)
     if [ "$t" -lt 60 ]; then summary+=("c. paper grid on $device: not run, $t s left"); continue; fi

@@ -61,3 +61,16 @@ def test_one_worker_keeps_blocks_of_two_vectors():
 def test_a_gpu_takes_each_map_whole_and_small_blocks_stay_small():
     assert plan_blocks([[1, 2], [1], []], 4, lanes=8, most=None) == [[[0, 1]], [[0]], []]
     assert plan_blocks([[1, 1, 2]], 2, lanes=8, most=1) == [[[0], [1], [2]]]
+
+
+def test_a_map_of_more_words_gets_no_larger_blocks_and_the_grid_finishes_sooner():
+    words = [1_123_410, 1_073_645, 1_660_656]  # the paper grid's maps: aerial-mosaic, sentinel-coast, reef-mosaic
+
+    def weighted_finish(plan):
+        costs = [_block_cost(sum(c[i] for i in b), 8) * n for c, blocks, n in zip(PAPER, plan, words) for b in blocks]
+        return _makespan(costs, 16)
+
+    plan = plan_blocks(PAPER, 16, lanes=8, most=16, words=words)
+    largest = [max(sum(c[i] for i in b) for b in blocks) for c, blocks in zip(PAPER, plan)]
+    assert largest[2] <= min(largest[:2])
+    assert weighted_finish(plan) < weighted_finish(plan_blocks(PAPER, 16, lanes=8, most=16))

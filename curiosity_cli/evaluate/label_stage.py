@@ -35,9 +35,12 @@ A map's runs to label are cut into blocks
 to the end, around :data:`CHAINS_PER_BLOCK` chains on the CPU, every chain of the map
 on a GPU), a run's chains (and a checked run's second chain) in one block, whose chains
 advance in lock-step in one task; a run's labels depend only on the run, never on its
-block, so a killed ``label`` relabels what it lost to the same bytes. Batch references
-come first, every map's at once, each a task on its share of the cores. With loky, a
-worker reads each map's word store, human labels and Z_b once. On a Dask cluster, each
+block, so a killed ``label`` relabels what it lost to the same bytes. Batch references are
+computed every map's at once, each a task on its share of the cores: beside the blocks
+where each task gets a worker of its own at once (a GPU's one block per map; a block
+needs Z_b only to compare its first Z_p with it, and waits for the file then,
+:class:`WrittenBatch`), else before them. With loky, a worker reads each map's word
+store, human labels and Z_b once. On a Dask cluster, each
 map's word store goes to the cluster once and its human labels and Z_b pixel labels
 once; each run's ``run.json`` and checkpoint counts Φ_p
 (a few kilobytes) travel with its block, so workers need no copy of the maps, stores or
@@ -102,6 +105,7 @@ class MapInputs:
     entry: str  # the config's datasets entry (a name or a YAML path)
     store_path: str
     batch_path: str
+    batch_digest: str  # of the batch reference's recipe: the file a worker may use is the one made from it
 
 
 class MapArrays(NamedTuple):
@@ -113,22 +117,63 @@ class MapArrays(NamedTuple):
     store: WordStore
     pixel_words: np.ndarray  # (H, W): the word whose label each pixel takes
     human: PixelTables | None  # tables against the human labels, None for a map without them
-    batch: PixelTables  # tables against Z_b
+    batch: PixelTables | WrittenBatch  # tables against Z_b
     cell_classes: np.ndarray | None  # (n_cells, C) pixels of each class per cell, None without human labels
 
 
 def map_arrays(
-    store: WordStore, human: np.ndarray | None, n_classes: int, batch: np.ndarray, shape: tuple[int, int], cell_classes,
+    store: WordStore, human: np.ndarray | None, n_classes: int, shape: tuple[int, int], cell_classes, batch,
     *, topics: int,
 ) -> MapArrays:
-    """A map's :class:`MapArrays` from its words, its (H, W) human labels (or None) of ``n_classes``, its (H, W) Z_b
-    of ``topics``, its image ``shape`` and its class pixels per cell (or None)."""
+    """A map's :class:`MapArrays` from its words, its (H, W) human labels (or None) of ``n_classes``, its image
+    ``shape``, its class pixels per cell (or None) and its Z_b of ``topics``: the (H, W) pixel labels, or
+    ``(path, digest)`` of the batch file this command writes (:class:`WrittenBatch`)."""
     from curiosity_cli.evaluate.label_sampling import pixel_words
     from curiosity_cli.evaluate.pixel_tables import PixelTables
 
     words = pixel_words(store, shape)
     human_tables = None if human is None else PixelTables(words, human, n_classes)
-    return MapArrays(store, words, human_tables, PixelTables(words, batch, topics), cell_classes)
+    batch_tables = PixelTables(words, batch, topics) if isinstance(batch, np.ndarray) else WrittenBatch(*batch, words, topics)
+    return MapArrays(store, words, human_tables, batch_tables, cell_classes)
+
+
+#: How often (s) a label task that needs Z_b checks whether its batch reference is written.
+BATCH_POLL_SECONDS = 0.2
+
+
+class WrittenBatch:
+    """Z_b's tables (:class:`~curiosity_cli.evaluate.pixel_tables.PixelTables`) from the batch file at ``path`` made
+    from the recipe ``digest``, read when first needed: a label task may start while its map's batch reference is
+    still being computed beside it, and waits for the file only when it first compares a Z_p with Z_b.
+
+    The command that runs the task writes the file (atomically) or, when the batch
+    reference fails, stops the task; a command killed outright takes its workers with it.
+    """
+
+    def __init__(self, path: str, digest: str, pixel_words: np.ndarray, topics: int):
+        self._path, self._digest, self._pixel_words, self._topics = Path(path), digest, pixel_words, topics
+        self._tables = None
+
+    def tables(self, word_labels: np.ndarray, n_labels: int) -> np.ndarray:
+        """As :meth:`PixelTables.tables <curiosity_cli.evaluate.pixel_tables.PixelTables.tables>`, once the file is there."""
+        from curiosity_cli.evaluate.pixel_tables import PixelTables
+
+        if self._tables is None:
+            self._tables = PixelTables(self._pixel_words, self._wait(), self._topics)
+        return self._tables.tables(word_labels, n_labels)
+
+    def _wait(self) -> np.ndarray:
+        """Z_b's (H, W) pixel labels, once the file made from the recipe is there."""
+        from curiosity_cli.experiment.recipes import recorded_digest
+
+        while True:
+            try:
+                with open_npz(self._path) as npz:
+                    if recorded_digest(read_meta(npz)) == self._digest:
+                        return npz["labels"]
+            except (FileNotFoundError, CorruptFileError):
+                pass  # not written yet, or the one before it
+            time.sleep(BATCH_POLL_SECONDS)
 
 
 @dataclass(frozen=True)
@@ -256,27 +301,28 @@ def path_seed(run_seed, *, second: bool = False) -> int:
     return int(np.random.SeedSequence((*run_seed, tag)).generate_state(1, np.uint64)[0])
 
 
-def _map_references(entry: str, batch_file: str) -> tuple:
-    """A map's (human labels or None, number of classes, batch pixel labels, image shape, class pixels per cell or None)."""
+def _map_references(entry: str) -> tuple:
+    """A map's (human labels or None, number of classes, image shape, class pixels per cell or None)."""
     from curiosity_cli.data import load_map
     from curiosity_cli.evaluate.information import cell_class_pixels
 
     map_data = load_map(entry)
     n_classes = max(c.id for c in map_data.legend) + 1 if map_data.labels is not None else 0
-    with open_npz(batch_file) as npz:
-        batch = npz["labels"]
     cell_classes = None
     if map_data.labels is not None:
         cell_classes = cell_class_pixels(map_data.labels, map_data.config.cell_width, n_classes)
-    return map_data.labels, n_classes, batch, map_data.image.shape[:2], cell_classes
+    return map_data.labels, n_classes, map_data.image.shape[:2], cell_classes
 
 
 @lru_cache(maxsize=4)
-def _map_arrays(entry: str, store_path: str, batch_file: str, topics: int) -> MapArrays:
-    """A map's arrays, made once per (loky) worker."""
+def _map_arrays(inputs: MapInputs, topics: int) -> MapArrays:
+    """A map's arrays, made once per (loky) worker; its Z_b read when first needed (:class:`WrittenBatch`)."""
     from curiosity_cli.words.store import load_store
 
-    return map_arrays(load_store(Path(store_path)), *_map_references(entry, batch_file), topics=topics)
+    return map_arrays(
+        load_store(Path(inputs.store_path)), *_map_references(inputs.entry), (inputs.batch_path, inputs.batch_digest),
+        topics=topics,
+    )
 
 
 def label_block(
@@ -497,7 +543,7 @@ def label_experiment(
         reached or has unusable workers.
     """
     from curiosity_cli.experiment.maps import prepare_stores
-    from curiosity_cli.experiment.workers import Workers, plan_blocks
+    from curiosity_cli.experiment.workers import Workers, cores, plan_blocks
     from curiosity_cli.topics.chains import LANES, block_chains
     from curiosity_cli.topics.devices import resolve_device
     from curiosity_cli.explore.runs import RunError
@@ -527,14 +573,11 @@ def label_experiment(
 
     with computing as workers:
         batch_recipes = {info.name: experiment.batch_recipe(info.name) for info in stores.values()}
-        batch_files, reused, batch_problems = _batch_references(
-            folder, config, stores, batch_recipes, workers, force, on_stage, on_done,
-        )
-        problems += batch_problems
-        inputs = {
-            info.name: MapInputs(info.name, entry, str(info.path), str(batch_files[info.name]))
-            for entry, info in stores.items() if info.name in batch_files
-        }
+        batch_files = {info.name: layout.batch(info.name) for info in stores.values()}
+        stale = [
+            info for info in stores.values()
+            if force or not _batch_is_current(batch_files[info.name], batch_recipes[info.name])
+        ]
         skipped, to_label, recipes, relabelled = 0, {}, {}, []
         for run in finished:
             info = by_name[run.meta["dataset"]]
@@ -546,48 +589,80 @@ def label_experiment(
                 continue
             if change not in (None, NOT_LABELLED):
                 relabelled.append(f"{display_path(path)}: {change}")
-            if info.name in inputs:  # else its batch reference failed, named in problems
-                try:
-                    to_label.setdefault(info.name, []).append(RunInputs.of(run, (info.vocabulary_size, config.model.topics)))
-                    recipes[run.folder] = recipe
-                except RunError as exc:
-                    problems.append(str(exc))
+            try:
+                to_label.setdefault(info.name, []).append(RunInputs.of(run, (info.vocabulary_size, config.model.topics)))
+                recipes[run.folder] = recipe
+            except RunError as exc:
+                problems.append(str(exc))
         if relabelled:
             note(f"labelling {len(relabelled)} runs again whose label files were made otherwise, e.g. {relabelled[0]}")
         todo = len(runs) - skipped
-        tasks = []  # (runs, map inputs, device): blocks labelled in lock-step
+        inputs = {
+            info.name: MapInputs(
+                info.name, entry, str(info.path), str(batch_files[info.name]), batch_recipes[info.name].digest
+            )
+            for entry, info in stores.items()
+        }
+        blocks = []  # LabelTask: runs labelled in lock-step
         counts = {name: [1 + is_checked(config, run.meta["restart"]) for run in map_runs] for name, map_runs in to_label.items()}
         most = chains_per_block if device == "cpu" else block_chains(device)
-        plan = plan_blocks(list(counts.values()), workers.jobs if device == "cpu" else 1, lanes=LANES, most=most)
+        words = [sum(by_name[name].word_counts.values()) for name in counts]
+        plan = plan_blocks(
+            list(counts.values()), workers.jobs if device == "cpu" else 1, lanes=LANES, most=most, words=words
+        )
         for (name, map_runs), map_blocks in zip(to_label.items(), plan):
             for block in map_blocks:
-                tasks.append(([map_runs[i] for i in block], inputs[name], device))
+                blocks.append(LabelTask([map_runs[i] for i in block], inputs[name], device))
+        # beside the blocks where every task gets a worker at once, so no block waits for a worker a batch
+        # reference holds (loky only: a Dask worker cannot see the file it waits for); else before them
+        beside = bool(stale) and not workers.ships and len(stale) + len(blocks) <= workers.jobs
+        tasks = []
+        if beside:
+            threads = max(1, (cores() - len(blocks)) // len(stale))
+            tasks = [BatchTask(info, threads) for info in stale]
+        else:
+            batch_problems = _batch_references(config, stale, batch_files, batch_recipes, workers, on_stage, on_done)
+            problems += batch_problems
+            failed_maps = {info.name for info in stale if info.name not in batch_files}
+            for task in [task for task in blocks if task.inputs.name in failed_maps]:
+                blocks.remove(task)  # its runs are not labelled: counted as failed, named in problems
+        tasks += blocks
         shipped = {}  # loky workers read the maps' files themselves
         if workers.ships:  # before the stage starts: an unusable cluster is the only message
-            for name, map_inputs in {m.name: m for _, m, _ in tasks}.items():
+            for name, map_inputs in {task.inputs.name: task.inputs for task in blocks}.items():
                 store = workers.ship_file(map_inputs.store_path, load_store)
+                with open_npz(Path(map_inputs.batch_path)) as npz:
+                    batch = npz["labels"]
                 shipped[name] = workers.ship(
-                    partial(map_arrays, topics=config.model.topics), store,
-                    *_map_references(map_inputs.entry, map_inputs.batch_path), key=f"map-{name}",
+                    partial(map_arrays, topics=config.model.topics), store, *_map_references(map_inputs.entry), batch,
+                    key=f"map-{name}",
                 )
         if on_stage is not None:
-            on_stage("labelling runs" + (" on the GPU" if device == "cuda" else ""), sum(len(block) for block, *_ in tasks))
-        labelled = 0
+            what = "labelling runs" + (" on the GPU" if device == "cuda" else "")
+            if beside:
+                what += " beside the batch reference" + ("s of " if len(stale) > 1 else " of ") + ", ".join(i.name for i in stale)
+            on_stage(what, sum(len(task.runs) for task in blocks) + len(stale) * beside)
+        labelled, reused = 0, len(stores) - len(stale)
         computed = workers.compute(
-            _label_task, tasks, args=lambda task: (config, shipped.get(task[1].name)), threads=1,
-            key=lambda task: "label-{dataset}/{weight_function}/restart-{restart:03d}".format(**task[0][0].meta)
-            + f"+{len(task[0]) - 1}",
+            _stage_task, tasks, args=lambda task: (config, shipped.get(task.inputs.name) if isinstance(task, LabelTask) else None),
+            threads=1, key=_task_key,
         )
         with computed as results:
-            for (block, *_), outcome in results:
-                for index, run in enumerate(block):
-                    if isinstance(outcome, str):
-                        problems.append("{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome)
-                    else:
-                        arrays, examples, meta = outcome[index]
+            for task, outcome in results:
+                if isinstance(task, BatchTask):
+                    if isinstance(outcome, str):  # its map's blocks would wait for it: stop them all
+                        problems.append(f"the batch reference of {task.info.name}: {outcome}; labelling stopped there")
+                        break
+                    _write_batch(batch_files[task.info.name], batch_recipes[task.info.name], *outcome)
+                elif isinstance(outcome, str):
+                    problems += ["{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome
+                                 for run in task.runs]
+                else:
+                    for run, (arrays, examples, meta) in zip(task.runs, outcome):
                         write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
                         labelled += 1
-                    if on_done is not None:
+                if on_done is not None:
+                    for _ in range(1 if isinstance(task, BatchTask) else len(task.runs)):
                         on_done()
     if problems or left_out:
         failed = todo - labelled + len(left_out)
@@ -646,23 +721,20 @@ def _runs_as_configured(experiment: Experiment, runs: list[Path]) -> tuple[list,
 
 
 def _batch_references(
-    folder: Path, config: ExperimentConfig, stores: dict[str, StoreInfo], recipes: dict[str, Recipe], workers: Workers,
-    force: bool, on_stage: Callable[[str, int], None] | None, on_done: Callable[[], None] | None,
-) -> tuple[dict[str, Path], int, list[str]]:
-    """Each map's batch reference, computed where missing or not made from its recipe (``recipes`` by map name);
-    ``(files by map, how many reused, problems)``.
+    config: ExperimentConfig, stale: list[StoreInfo], files: dict[str, Path], recipes: dict[str, Recipe], workers: Workers,
+    on_stage: Callable[[str, int], None] | None, on_done: Callable[[], None] | None,
+) -> list[str]:
+    """Compute the ``stale`` maps' batch references before any label block, and write them to ``files`` (by map name);
+    a line for each that failed, whose map is then left out of ``files``.
 
     Every map's at once, each a task on its share of the cores
     (:meth:`~curiosity_cli.experiment.workers.Workers.whole_machine_threads`): its sweeps
     scale with threads less well than maps side by side do. A map's sweeps are counted
-    when it arrives; a map whose reference failed is left out of the files and named in
-    the problems.
+    when it arrives.
     """
     from curiosity_cli.words.store import load_store
 
     sweeps = config.label.batch_sweeps
-    files = {info.name: ExperimentFolder(folder).batch(info.name) for info in stores.values()}
-    stale = [info for info in stores.values() if force or not _batch_is_current(files[info.name], recipes[info.name])]
     problems = []
     if stale:
         threads = workers.whole_machine_threads(len(stale))  # reaches a scheduler first: no stage for an unusable one
@@ -670,20 +742,50 @@ def _batch_references(
             what = "batch reference" + ("s of " if len(stale) > 1 else " ")
             on_stage(what + ", ".join(info.name for info in stale), len(stale) * sweeps)
         computed = workers.compute(
-            _batch_task, stale, key=lambda info: f"batch-{info.name}", threads=threads,
-            args=lambda info: (config, workers.ship_file(info.path, load_store) if workers.ships else None),
+            _stage_task, [BatchTask(info, threads) for info in stale], key=_task_key,
+            args=lambda task: (config, workers.ship_file(task.info.path, load_store) if workers.ships else None),
         )
         with computed as results:
-            for info, outcome in results:
+            for task, outcome in results:
                 if isinstance(outcome, str):
-                    problems.append(f"the batch reference of {info.name}: {outcome}; its runs were not labelled")
-                    del files[info.name]
+                    problems.append(f"the batch reference of {task.info.name}: {outcome}; its runs were not labelled")
+                    del files[task.info.name]
                 else:
-                    _write_batch(files[info.name], recipes[info.name], *outcome)
+                    _write_batch(files[task.info.name], recipes[task.info.name], *outcome)
                 if on_done is not None:
                     for _ in range(sweeps):
                         on_done()
-    return files, len(stores) - len(stale), problems
+    return problems
+
+
+class BatchTask(NamedTuple):
+    """A map's batch reference, computed in a worker on ``threads`` threads."""
+
+    info: StoreInfo
+    threads: int
+
+
+class LabelTask(NamedTuple):
+    """A block of one map's runs, labelled in lock-step in a worker on ``device``."""
+
+    runs: list[RunInputs]
+    inputs: MapInputs
+    device: str
+
+
+def _task_key(task: BatchTask | LabelTask) -> str:
+    """A task's name on the Dask dashboard."""
+    if isinstance(task, BatchTask):
+        return f"batch-{task.info.name}"
+    return "label-{dataset}/{weight_function}/restart-{restart:03d}".format(**task.runs[0].meta) + f"+{len(task.runs) - 1}"
+
+
+def _stage_task(task: BatchTask | LabelTask, config: ExperimentConfig, shipped=None, *, threads: int = 1):
+    """A task of the stage in a worker: a batch reference (:func:`_batch_task`) or a block of runs (:func:`_label_task`);
+    ``shipped`` is its map's word store (a batch reference) or arrays (a block) on Dask, else None."""
+    if isinstance(task, BatchTask):
+        return _batch_task(task.info, config, shipped, threads=task.threads)
+    return _label_task(task, config, shipped)
 
 
 def _batch_task(info: StoreInfo, config: ExperimentConfig, store: WordStore | None = None, *, threads: int = 1) -> tuple:
@@ -701,13 +803,9 @@ def _batch_task(info: StoreInfo, config: ExperimentConfig, store: WordStore | No
     return pixel_labels(store, word_labels, info.facts.shape), word_labels, trace, seconds
 
 
-def _label_task(
-    task: tuple[list[RunInputs], MapInputs, str], config: ExperimentConfig, arrays: MapArrays | None = None, *,
-    threads: int = 1,
-) -> list[tuple]:
+def _label_task(task: LabelTask, config: ExperimentConfig, arrays: MapArrays | None = None) -> list[tuple]:
     """Label a block of runs in a worker on its device: ``(arrays, examples, meta)`` per run; ``arrays`` are its map's
-    when shipped (Dask), else read once. One thread (``threads`` is 1): the blocks keep every worker busy."""
-    runs, inputs, device = task
+    when shipped (Dask), else made once per worker. One thread: the blocks keep every worker busy."""
     if arrays is None:
-        arrays = _map_arrays(inputs.entry, inputs.store_path, inputs.batch_path, config.model.topics)
-    return label_block(runs, inputs, arrays, config, device=device)
+        arrays = _map_arrays(task.inputs, config.model.topics)
+    return label_block(task.runs, task.inputs, arrays, config, device=task.device)

@@ -474,7 +474,9 @@ def _loaded_from_bytes(load: Callable, name: str, data: bytes):
 _ONE_VECTOR_COST = 1.45
 
 
-def plan_blocks(chain_counts: Sequence[Sequence[int]], workers: int, *, lanes: int, most: int | None) -> list[list[list[int]]]:
+def plan_blocks(
+    chain_counts: Sequence[Sequence[int]], workers: int, *, lanes: int, most: int | None, words: Sequence[int] | None = None,
+) -> list[list[list[int]]]:
     """Cut each map's runs into blocks of chains so that ``workers`` workers finish together, as early as they can.
 
     A block's chains advance in lock-step in one task and are held in multiples of
@@ -482,9 +484,11 @@ def plan_blocks(chain_counts: Sequence[Sequence[int]], workers: int, *, lanes: i
     multiple of ``lanes``, up to ``3 * most``) are tried, each map's runs cut either into
     blocks filled to ``s`` in order or into ``ceil(chains / s)`` blocks of nearly equal
     chains; the blocks are dealt largest first to the least busy worker, and the plan whose
-    last worker finishes first wins (ties: the smaller blocks). So a grid of 252 chains on 16 workers is 12 blocks of 21 (one
-    round) rather than 18 of 16 (a second round of 2), and 77 chains on 2 workers are 2
-    blocks rather than 5.
+    last worker finishes first wins (ties: the smaller blocks). A block costs its chains
+    held times its map's words. So 252 chains of three maps of equal words on 16 workers
+    are 12 blocks of 21 (one round) rather than 18 of 16 (a second round of 2), and 77
+    chains on 2 workers are 2 blocks rather than 5; with the paper grid's words (reef-mosaic
+    1.5 times the others'), 15 blocks of 16 and three of 4, reef-mosaic's first.
 
     Parameters
     ----------
@@ -497,6 +501,8 @@ def plan_blocks(chain_counts: Sequence[Sequence[int]], workers: int, *, lanes: i
     most : int or None
         The block size past which the time per chain stops falling (below ``lanes``:
         blocks of that size); None: every map's runs in one block (a GPU).
+    words : sequence of int, optional
+        Per map, its words: a chain's sweeps cost in proportion (default: the same for every map).
 
     Returns
     -------
@@ -506,13 +512,14 @@ def plan_blocks(chain_counts: Sequence[Sequence[int]], workers: int, *, lanes: i
     if most is None:
         return [[list(range(len(counts)))] if len(counts) else [] for counts in chain_counts]
     best = None
+    words = [1] * len(chain_counts) if words is None else words
     sizes = [most] if most < lanes else range(lanes, 3 * most + 1, lanes)  # below a vector: as asked (tests)
     for size in sizes:
         for cut in (_full_blocks, _even_blocks):
             plan = [cut(counts, size) for counts in chain_counts]
             costs = [
-                _block_cost(sum(counts[i] for i in block), lanes)
-                for counts, blocks in zip(chain_counts, plan) for block in blocks
+                _block_cost(sum(counts[i] for i in block), lanes) * n_words
+                for counts, blocks, n_words in zip(chain_counts, plan, words) for block in blocks
             ]
             finish = _makespan(costs, workers)
             if best is None or finish < best[0] - 1e-9:

@@ -1,0 +1,46 @@
+"""A map's batch reference beside its label blocks: the labels it gives before them, and a block that waits for it."""
+
+from __future__ import annotations
+
+import shutil
+import threading
+
+import numpy as np
+import pytest
+from test_dask_labels import label_contents
+from test_pipeline import small_experiment
+
+from curiosity_cli.evaluate.label_stage import WrittenBatch, _write_batch, label_experiment
+from curiosity_cli.evaluate.pixel_tables import PixelTables
+from curiosity_cli.experiment.recipes import Recipe
+from curiosity_cli.experiment.workers import cores
+
+
+@pytest.mark.skipif(cores() < 2, reason="a batch reference beside a block needs two workers")
+def test_a_batch_reference_beside_the_blocks_gives_the_labels_it_gives_before_them(own_map, tmp_path):
+    # 2 runs (4 chains with the checked ones) are one block: with 2 workers it and the batch reference run side by side
+    config, folder = small_experiment(own_map, tmp_path / "beside", restarts=1, weight_functions=("random-walk", "lawnmower"))
+    shutil.copytree(folder, tmp_path / "before" / "grid")
+    stages = []
+    label_experiment(config, folder, cache_dir=tmp_path / "beside" / "cache", jobs=2, on_stage=lambda *s: stages.append(s))
+    assert stages == [("labelling runs beside the batch reference of own", 3)]
+    label_experiment(config, tmp_path / "before" / "grid", cache_dir=tmp_path / "beside" / "cache", jobs=1,
+                     on_stage=lambda *s: stages.append(s))
+    assert stages[1:] == [("batch reference own", 8), ("labelling runs", 2)]
+    assert label_contents(folder) == label_contents(tmp_path / "before" / "grid")
+
+
+def test_a_block_waits_for_the_batch_file_made_from_its_recipe(tmp_path):
+    pixel_words = np.arange(12).reshape(3, 4)
+    path = tmp_path / "batch" / "own.npz"
+    stale = Recipe({"sweeps": 1})
+    current = Recipe({"sweeps": 2})
+    batch = np.arange(12).reshape(3, 4) % 3
+    _write_batch(path, stale, batch * 0, None, np.zeros(1), 0.0)  # the one before: not used
+    waiting = WrittenBatch(str(path), current.digest, pixel_words, 3)
+    labels = np.arange(12)[:, None] % 3
+    writer = threading.Timer(0.5, _write_batch, (path, current, batch, None, np.zeros(1), 0.0))
+    writer.start()
+    got = waiting.tables(labels, 3)
+    writer.join()
+    np.testing.assert_array_equal(got, PixelTables(pixel_words, batch, 3).tables(labels, 3))
