@@ -110,6 +110,26 @@ def open_npz(path: Path):
             raise corrupt(_reason(exc)) from None
 
 
+def read_meta(npz, required: tuple[str, ...] = ()) -> dict:
+    """The JSON ``meta`` of an ``.npz`` file this package wrote (a batch reference, a label file), with the ``required`` keys.
+
+    Raises
+    ------
+    KeyError, ValueError
+        No meta, not a JSON object, or a required key missing: read inside
+        :func:`open_npz`, the file is reported as corrupt.
+    """
+    import json
+
+    meta = json.loads(str(npz["meta"]))
+    if not isinstance(meta, dict):
+        raise ValueError("its meta is not a JSON object")
+    missing = [key for key in required if key not in meta]
+    if missing:
+        raise KeyError(f"its meta lacks {', '.join(missing)}")
+    return meta
+
+
 def _reason(exc: Exception) -> str:
     """An exception's message without the quotes a KeyError adds, or its type if it has none."""
     text = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)

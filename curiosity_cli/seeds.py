@@ -8,3 +8,8 @@ import zlib
 def name_key(name: str) -> int:
     """A map's or weight function's name as seed entropy (CRC-32, the same on every machine)."""
     return zlib.crc32(name.encode())
+
+
+#: Seed entropy tags of the label stage's random streams, after a run's own seed entropy or
+#: a map's: a run's labelling chain, a map's batch reference, a run's second (checking) chain.
+PATH_TAG, BATCH_TAG, SECOND_CHAIN_TAG = 1, 2, 3

@@ -2,11 +2,8 @@
 
 Written under ``results/<experiment>/``:
 
-- ``batch/<dataset>.npz``: the batch reference Z_b of a map: ``labels`` (H, W) int16
-  pixel topics, ``word_labels`` (N,) int16, ``log_likelihood`` (batch_sweeps,) float64
-  and ``meta`` (JSON: its recipe, :meth:`~curiosity_cli.experiment.experiment.Experiment.batch_recipe`, and seconds). Reused while its
-  recipe is the one the experiment's settings give; otherwise computed again, with a note
-  saying what changed.
+- ``batch/<dataset>.npz``: the batch reference Z_b of a map
+  (:mod:`~curiosity_cli.evaluate.batch_references`).
 - ``labels/<dataset>/<weight function>/restart-<NNN>.npz``: for one run, per checkpoint
   length (``lengths``), the contingency tables of Z_p against the human labels
   (``human``, (n, K, C) int64, absent for a map without labels) and against Z_b
@@ -39,7 +36,7 @@ block, so a killed ``label`` relabels what it lost to the same bytes. Batch refe
 computed every map's at once, each a task on its share of the cores: beside the blocks
 where each task gets a worker of its own at once (a GPU's one block per map; a block
 needs Z_b only to compare its first Z_p with it, and waits for the file then,
-:class:`WrittenBatch`), else before them. With loky, a worker reads each map's word
+:class:`~curiosity_cli.evaluate.batch_references.WrittenBatch`), else before them. With loky, a worker reads each map's word
 store, human labels and Z_b once. On a Dask cluster, each
 map's word store goes to the cluster once and its human labels and Z_b pixel labels
 once; each run's ``run.json`` and checkpoint counts Φ_p
@@ -62,7 +59,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from curiosity_cli.config import ExperimentConfig
-from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
+from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import (
@@ -70,12 +67,14 @@ from curiosity_cli.experiment.recipes import (
 )
 from curiosity_cli.experiment.saved_config import record_label_settings
 from curiosity_cli.experiment.wholeness import FILES_KEY, changed, records
-from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz, remove_leftovers
+from curiosity_cli.evaluate.batch_references import (
+    BatchTask, WrittenBatch, batch_is_current, batch_task, compute_batch_references, write_batch,
+)
+from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz, read_meta, remove_leftovers
 from curiosity_cli.paths import DEFAULT_CACHE
 
 if TYPE_CHECKING:
     from curiosity_cli.evaluate.pixel_tables import PixelTables
-    from curiosity_cli.experiment.maps import StoreInfo
     from curiosity_cli.experiment.workers import Workers
     from curiosity_cli.explore.runs import Run
     from curiosity_cli.words.store import WordStore
@@ -86,8 +85,6 @@ NOT_LABELLED = "not labelled yet"
 EXAMPLE_LENGTHS = (80,)
 #: The prefix of the second chain's tables' names in a checked run's label file.
 SECOND_PREFIX = f"{SECOND_START}_"
-# tags that keep the label streams apart from the runs' own and from each other
-_PATH_TAG, _BATCH_TAG, _SECOND_CHAIN_TAG = 1, 2, 3
 #: Chains labelled in lock-step in one task: past 16 they gained no more on the 2-core
 #: AVX2 machine (``scripts/bench_label.py``), and smaller blocks share out better.
 CHAINS_PER_BLOCK = 16
@@ -127,7 +124,7 @@ def map_arrays(
 ) -> MapArrays:
     """A map's :class:`MapArrays` from its words, its (H, W) human labels (or None) of ``n_classes``, its image
     ``shape``, its class pixels per cell (or None) and its Z_b of ``topics``: the (H, W) pixel labels, or
-    ``(path, digest)`` of the batch file this command writes (:class:`WrittenBatch`)."""
+    ``(path, digest)`` of the batch file this command writes (:class:`~curiosity_cli.evaluate.batch_references.WrittenBatch`)."""
     from curiosity_cli.evaluate.label_sampling import pixel_words
     from curiosity_cli.evaluate.pixel_tables import PixelTables
 
@@ -135,45 +132,6 @@ def map_arrays(
     human_tables = None if human is None else PixelTables(words, human, n_classes)
     batch_tables = PixelTables(words, batch, topics) if isinstance(batch, np.ndarray) else WrittenBatch(*batch, words, topics)
     return MapArrays(store, words, human_tables, batch_tables, cell_classes)
-
-
-#: How often (s) a label task that needs Z_b checks whether its batch reference is written.
-BATCH_POLL_SECONDS = 0.2
-
-
-class WrittenBatch:
-    """Z_b's tables (:class:`~curiosity_cli.evaluate.pixel_tables.PixelTables`) from the batch file at ``path`` made
-    from the recipe ``digest``, read when first needed: a label task may start while its map's batch reference is
-    still being computed beside it, and waits for the file only when it first compares a Z_p with Z_b.
-
-    The command that runs the task writes the file (atomically) or, when the batch
-    reference fails, stops the task; a command killed outright takes its workers with it.
-    """
-
-    def __init__(self, path: str, digest: str, pixel_words: np.ndarray, topics: int):
-        self._path, self._digest, self._pixel_words, self._topics = Path(path), digest, pixel_words, topics
-        self._tables = None
-
-    def tables(self, word_labels: np.ndarray, n_labels: int) -> np.ndarray:
-        """As :meth:`PixelTables.tables <curiosity_cli.evaluate.pixel_tables.PixelTables.tables>`, once the file is there."""
-        from curiosity_cli.evaluate.pixel_tables import PixelTables
-
-        if self._tables is None:
-            self._tables = PixelTables(self._pixel_words, self._wait(), self._topics)
-        return self._tables.tables(word_labels, n_labels)
-
-    def _wait(self) -> np.ndarray:
-        """Z_b's (H, W) pixel labels, once the file made from the recipe is there."""
-        from curiosity_cli.experiment.recipes import recorded_digest
-
-        while True:
-            try:
-                with open_npz(self._path) as npz:
-                    if recorded_digest(read_meta(npz)) == self._digest:
-                        return npz["labels"]
-            except (FileNotFoundError, CorruptFileError):
-                pass  # not written yet, or the one before it
-            time.sleep(BATCH_POLL_SECONDS)
 
 
 @dataclass(frozen=True)
@@ -248,56 +206,11 @@ class _DenseCheckpoints(Sequence):
 LABEL_META_KEYS = ("dataset", "weight_function", "restart", "run_seed", "store", "vocabulary_hashes", "sweeps")
 
 
-def read_meta(npz, required: tuple[str, ...] = ()) -> dict:
-    """The JSON ``meta`` of a batch reference or label file, with the ``required`` keys.
-
-    Raises
-    ------
-    KeyError, ValueError
-        No meta, not a JSON object, or a required key missing: read inside
-        :func:`~curiosity_cli.files.open_npz`, the file is reported as corrupt.
-    """
-    meta = json.loads(str(npz["meta"]))
-    if not isinstance(meta, dict):
-        raise ValueError("its meta is not a JSON object")
-    missing = [key for key in required if key not in meta]
-    if missing:
-        raise KeyError(f"its meta lacks {', '.join(missing)}")
-    return meta
-
-
-def _batch_is_current(path: Path, recipe: Recipe) -> bool:
-    """Whether a batch reference file exists and was made from ``recipe``.
-
-    A corrupt one is not, nor one made otherwise; each is noted on stderr, saying why,
-    as computed again.
-    """
-    try:
-        with open_npz(path) as npz:
-            change = recipe.changes(read_meta(npz))
-    except FileNotFoundError:
-        return False
-    except CorruptFileError as exc:
-        note(f"{exc}; computing it again")
-        return False
-    if change is not None:
-        note(f"{display_path(path)}: {change}; computing it again")
-    return change is None
-
-
-def _write_batch(path: Path, recipe: Recipe, labels, word_labels, trace, seconds: float) -> None:
-    meta = {RECIPE_KEY: recipe.record(), "seconds": round(seconds, 2)}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as handle:
-            np.savez_compressed(
-                handle, labels=labels, word_labels=word_labels, log_likelihood=trace, meta=json.dumps(meta, sort_keys=True)
-            )
-
-
 def path_seed(run_seed, *, second: bool = False) -> int:
     """The seed of a run's labelling chain (``second``: of its checking chain), from the run's own seed entropy."""
-    tag = _SECOND_CHAIN_TAG if second else _PATH_TAG
+    from curiosity_cli.seeds import PATH_TAG, SECOND_CHAIN_TAG
+
+    tag = SECOND_CHAIN_TAG if second else PATH_TAG
     return int(np.random.SeedSequence((*run_seed, tag)).generate_state(1, np.uint64)[0])
 
 
@@ -316,7 +229,7 @@ def _map_references(entry: str) -> tuple:
 
 @lru_cache(maxsize=4)
 def _map_arrays(inputs: MapInputs, topics: int) -> MapArrays:
-    """A map's arrays, made once per (loky) worker; its Z_b read when first needed (:class:`WrittenBatch`)."""
+    """A map's arrays, made once per (loky) worker; its Z_b read when first needed (:class:`~curiosity_cli.evaluate.batch_references.WrittenBatch`)."""
     from curiosity_cli.words.store import load_store
 
     return map_arrays(
@@ -576,7 +489,7 @@ def label_experiment(
         batch_files = {info.name: layout.batch(info.name) for info in stores.values()}
         stale = [
             info for info in stores.values()
-            if force or not _batch_is_current(batch_files[info.name], batch_recipes[info.name])
+            if force or not batch_is_current(batch_files[info.name], batch_recipes[info.name])
         ]
         skipped, to_label, recipes, relabelled = 0, {}, {}, []
         for run in finished:
@@ -621,7 +534,7 @@ def label_experiment(
             threads = max(1, (cores() - len(blocks)) // len(stale))
             tasks = [BatchTask(info, threads) for info in stale]
         else:
-            batch_problems = _batch_references(config, stale, batch_files, batch_recipes, workers, on_stage, on_done)
+            batch_problems = compute_batch_references(config, stale, batch_files, batch_recipes, workers, on_stage, on_done)
             problems += batch_problems
             failed_maps = {info.name for info in stale if info.name not in batch_files}
             for task in [task for task in blocks if task.inputs.name in failed_maps]:
@@ -645,7 +558,7 @@ def label_experiment(
         labelled, reused = 0, len(stores) - len(stale)
         computed = workers.compute(
             _stage_task, tasks, args=lambda task: (config, shipped.get(task.inputs.name) if isinstance(task, LabelTask) else None),
-            threads=1, key=_task_key,
+            threads=1, key=lambda task: task.key,
         )
         with computed as results:
             for task, outcome in results:
@@ -653,7 +566,7 @@ def label_experiment(
                     if isinstance(outcome, str):  # its map's blocks would wait for it: stop them all
                         problems.append(f"the batch reference of {task.info.name}: {outcome}; labelling stopped there")
                         break
-                    _write_batch(batch_files[task.info.name], batch_recipes[task.info.name], *outcome)
+                    write_batch(batch_files[task.info.name], batch_recipes[task.info.name], *outcome)
                 elif isinstance(outcome, str):
                     problems += ["{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome
                                  for run in task.runs]
@@ -720,51 +633,6 @@ def _runs_as_configured(experiment: Experiment, runs: list[Path]) -> tuple[list,
     return finished, problems
 
 
-def _batch_references(
-    config: ExperimentConfig, stale: list[StoreInfo], files: dict[str, Path], recipes: dict[str, Recipe], workers: Workers,
-    on_stage: Callable[[str, int], None] | None, on_done: Callable[[], None] | None,
-) -> list[str]:
-    """Compute the ``stale`` maps' batch references before any label block, and write them to ``files`` (by map name);
-    a line for each that failed, whose map is then left out of ``files``.
-
-    Every map's at once, each a task on its share of the cores
-    (:meth:`~curiosity_cli.experiment.workers.Workers.whole_machine_threads`): its sweeps
-    scale with threads less well than maps side by side do. A map's sweeps are counted
-    when it arrives.
-    """
-    from curiosity_cli.words.store import load_store
-
-    sweeps = config.label.batch_sweeps
-    problems = []
-    if stale:
-        threads = workers.whole_machine_threads(len(stale))  # reaches a scheduler first: no stage for an unusable one
-        if on_stage is not None:
-            what = "batch reference" + ("s of " if len(stale) > 1 else " ")
-            on_stage(what + ", ".join(info.name for info in stale), len(stale) * sweeps)
-        computed = workers.compute(
-            _stage_task, [BatchTask(info, threads) for info in stale], key=_task_key,
-            args=lambda task: (config, workers.ship_file(task.info.path, load_store) if workers.ships else None),
-        )
-        with computed as results:
-            for task, outcome in results:
-                if isinstance(outcome, str):
-                    problems.append(f"the batch reference of {task.info.name}: {outcome}; its runs were not labelled")
-                    del files[task.info.name]
-                else:
-                    _write_batch(files[task.info.name], recipes[task.info.name], *outcome)
-                if on_done is not None:
-                    for _ in range(sweeps):
-                        on_done()
-    return problems
-
-
-class BatchTask(NamedTuple):
-    """A map's batch reference, computed in a worker on ``threads`` threads."""
-
-    info: StoreInfo
-    threads: int
-
-
 class LabelTask(NamedTuple):
     """A block of one map's runs, labelled in lock-step in a worker on ``device``."""
 
@@ -772,35 +640,19 @@ class LabelTask(NamedTuple):
     inputs: MapInputs
     device: str
 
-
-def _task_key(task: BatchTask | LabelTask) -> str:
-    """A task's name on the Dask dashboard."""
-    if isinstance(task, BatchTask):
-        return f"batch-{task.info.name}"
-    return "label-{dataset}/{weight_function}/restart-{restart:03d}".format(**task.runs[0].meta) + f"+{len(task.runs) - 1}"
+    @property
+    def key(self) -> str:
+        """Its name on the Dask dashboard."""
+        return "label-{dataset}/{weight_function}/restart-{restart:03d}".format(**self.runs[0].meta) + f"+{len(self.runs) - 1}"
 
 
 def _stage_task(task: BatchTask | LabelTask, config: ExperimentConfig, shipped=None, *, threads: int = 1):
-    """A task of the stage in a worker: a batch reference (:func:`_batch_task`) or a block of runs (:func:`_label_task`);
+    """A task of the stage in a worker: a batch reference (:func:`~curiosity_cli.evaluate.batch_references.batch_task`)
+    or a block of runs (:func:`_label_task`);
     ``shipped`` is its map's word store (a batch reference) or arrays (a block) on Dask, else None."""
     if isinstance(task, BatchTask):
-        return _batch_task(task.info, config, shipped, threads=task.threads)
+        return batch_task(task, config, shipped)
     return _label_task(task, config, shipped)
-
-
-def _batch_task(info: StoreInfo, config: ExperimentConfig, store: WordStore | None = None, *, threads: int = 1) -> tuple:
-    """A map's batch reference, in a worker: ``(pixel labels, word labels, trace, seconds)``; from its word ``store``
-    when shipped (Dask), else read here."""
-    from curiosity_cli.evaluate.label_sampling import batch_labels, pixel_labels
-    from curiosity_cli.seeds import name_key
-    from curiosity_cli.words.store import load_store
-
-    store = load_store(info.path) if store is None else store
-    seed = int(np.random.SeedSequence((config.seed, name_key(info.name), _BATCH_TAG)).generate_state(1, np.uint64)[0])
-    started = time.perf_counter()
-    word_labels, trace = batch_labels(store, config.model, sweeps=config.label.batch_sweeps, seed=seed, threads=threads)
-    seconds = time.perf_counter() - started
-    return pixel_labels(store, word_labels, info.facts.shape), word_labels, trace, seconds
 
 
 def _label_task(task: LabelTask, config: ExperimentConfig, arrays: MapArrays | None = None) -> list[tuple]:

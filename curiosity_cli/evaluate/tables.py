@@ -310,7 +310,7 @@ def _batch_change(path: Path, recipe) -> str | None:
     """What is wrong with a map's batch reference (missing, corrupt, or made otherwise than
     ``recipe``), in words; None if nothing. Its label files were compared with it, and the
     figures draw it."""
-    from curiosity_cli.evaluate.label_stage import read_meta
+    from curiosity_cli.files import read_meta
 
     try:
         with open_npz(path) as npz:

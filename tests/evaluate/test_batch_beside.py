@@ -10,7 +10,8 @@ import pytest
 from test_dask_labels import label_contents
 from test_pipeline import small_experiment
 
-from curiosity_cli.evaluate.label_stage import WrittenBatch, _write_batch, label_experiment
+from curiosity_cli.evaluate.batch_references import WrittenBatch, write_batch
+from curiosity_cli.evaluate.label_stage import label_experiment
 from curiosity_cli.evaluate.pixel_tables import PixelTables
 from curiosity_cli.experiment.recipes import Recipe
 from curiosity_cli.experiment.workers import cores
@@ -36,10 +37,10 @@ def test_a_block_waits_for_the_batch_file_made_from_its_recipe(tmp_path):
     stale = Recipe({"sweeps": 1})
     current = Recipe({"sweeps": 2})
     batch = np.arange(12).reshape(3, 4) % 3
-    _write_batch(path, stale, batch * 0, None, np.zeros(1), 0.0)  # the one before: not used
+    write_batch(path, stale, batch * 0, None, np.zeros(1), 0.0)  # the one before: not used
     waiting = WrittenBatch(str(path), current.digest, pixel_words, 3)
     labels = np.arange(12)[:, None] % 3
-    writer = threading.Timer(0.5, _write_batch, (path, current, batch, None, np.zeros(1), 0.0))
+    writer = threading.Timer(0.5, write_batch, (path, current, batch, None, np.zeros(1), 0.0))
     writer.start()
     got = waiting.tables(labels, 3)
     writer.join()
