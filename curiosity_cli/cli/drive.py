@@ -50,7 +50,10 @@ def drive(
     config: Path = typer.Option("paper-grid", "--config", help=_CONFIG_HELP),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a config key, e.g. --set drive.gamma=0.5."),
     seed: int = typer.Option(None, "--seed", min=0, help="Seed of the topic models; default the config's seed."),
-    out: Path = typer.Option(None, "--out", help="Run folder (log.jsonl, config, provenance, frames/); default results/drive/<date-time>."),
+    out: Path = typer.Option(None, "--out", help="Run folder (log.jsonl, config, provenance, frames/), new or empty; default a new results/drive/<date-time>."),
+    force: bool = typer.Option(False, "--force", help="With --out: replace the earlier run in that folder."),
+    timeline: Path = typer.Option(None, "--timeline", metavar="RUN_FOLDER", help="Instead of driving, draw a replay's surprise timeline again from its run folder's log.jsonl (the bag must still be where it was)."),
+    strict: bool = typer.Option(False, "--strict", help="Stop a replay at its first message that holds no usable frame (damaged or empty), instead of skipping it with a `skipped` record in the log."),
     video_out: Path = typer.Option(None, "--video-out", help="Write the annotated video here (.mp4, .avi or .mkv)."),
     png_every: int = typer.Option(0, "--png-every", min=0, metavar="N", help="Write an annotated PNG every N frames into <out>/frames/."),
     max_frames: int = typer.Option(None, "--max-frames", min=1, help="Stop after this many frames."),
@@ -63,9 +66,16 @@ def drive(
     """
     from curiosity_cli.config import load_config
     from curiosity_cli.drive.bags import is_bag
+    from curiosity_cli.drive.driver import RUN_LOG
     from curiosity_cli.drive.session import drive_session
     from curiosity_cli.files import display_path
 
+    if timeline is not None:
+        from curiosity_cli.drive.session import redraw_timeline
+
+        for path in redraw_timeline(timeline):
+            typer.echo(f"wrote {display_path(path)}")
+        return
     if dry_run and serial is not None:
         raise typer.BadParameter("--dry-run sends nothing; leave out --serial", param_hint="--dry-run")
     if (camera == "sim") != (sim_map is not None):
@@ -109,11 +119,12 @@ def drive(
         outcome, folder = drive_session(
             resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic,
             port=None if dry_run else port, baud=baud, sim_map=map_data, start=start_at, heading_deg=heading_deg or 0.0,
-            out=out, video_out=video_out, png_every=png_every, max_frames=max_frames,
+            out=out, force=force, strict=strict, video_out=video_out, png_every=png_every, max_frames=max_frames,
             on_status=lambda line: typer.echo(line, err=True), on_frame=progress, on_replay=bar.stage,
         )
     stopped = {True: "; STOP acknowledged", False: "; STOP sent, not acknowledged", None: ""}[outcome.stop_acked]
-    typer.echo(f"drove {outcome.frames} frames: {outcome.detail}{stopped}; log in {display_path(folder / 'log.jsonl')}")
+    skipped = f"; {outcome.skipped} damaged messages skipped (`skipped` in the log)" if outcome.skipped else ""
+    typer.echo(f"drove {outcome.frames} frames: {outcome.detail}{stopped}{skipped}; log in {display_path(folder / RUN_LOG)}")
     if video_out is not None:
         typer.echo(f"wrote {display_path(video_out)}")
     if outcome.reason in _SIGNAL_EXIT:

@@ -6,6 +6,10 @@ bare ``.mcap`` or ``.db3`` files, read with ``rosbags`` (pure Python; no ROS ins
 :data:`ENCODINGS` or ``sensor_msgs/CompressedImage`` (JPEG, PNG); every frame becomes an
 RGB ``(H, W, 3)`` uint8 array as the live cameras deliver it (16-bit values keep their
 top 8 bits, so a ``mono16`` frame of ``v * 257`` is the ``mono8`` frame of ``v``).
+
+A message that is damaged (empty or cut data, a JPEG that does not decode, a 0 x 0 image)
+is a :class:`BadMessage`: the replay may skip it and go on. An encoding the camera does
+not decode is not: every message of the topic has it.
 """
 
 from __future__ import annotations
@@ -22,6 +26,9 @@ IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
 #: What a bag's storage is told by: its suffix, or a ROS 2 bag folder's metadata file.
 BAG_SUFFIXES = (".bag", ".mcap", ".db3")
+#: YUV 4:2:2 encodings, two bytes a pixel: ROS's ``yuv422`` is UYVY order, ``yuv422_yuy2`` (usb_cam's) YUYV.
+_YUV422 = {"yuv422": "COLOR_YUV2RGB_UYVY", "uyvy": "COLOR_YUV2RGB_UYVY", "yuv422_yuy2": "COLOR_YUV2RGB_YUYV",
+           "yuyv": "COLOR_YUV2RGB_YUYV"}
 _BAYER = {  # ROS names the pattern from the top-left pixel; OpenCV from the second row's second and third
     "bayer_rggb8": "COLOR_BayerBG2RGB", "bayer_bggr8": "COLOR_BayerRG2RGB",
     "bayer_gbrg8": "COLOR_BayerGR2RGB", "bayer_grbg8": "COLOR_BayerGB2RGB",
@@ -30,13 +37,59 @@ _BAYER = {  # ROS names the pattern from the top-left pixel; OpenCV from the sec
 ENCODINGS = {
     "rgb8": (3, 1), "bgr8": (3, 1), "rgba8": (4, 1), "bgra8": (4, 1), "mono8": (1, 1), "8uc1": (1, 1),
     "mono16": (1, 2), "16uc1": (1, 2), "rgb16": (3, 2), "bgr16": (3, 2), **{name: (1, 1) for name in _BAYER},
+    **{name: (2, 1) for name in _YUV422},
 }
 
 
+class BadMessage(CameraError):
+    """A message of the topic that holds no usable frame (damaged, empty, 0 x 0): a replay may skip it.
+
+    Attributes
+    ----------
+    reason : str
+        What is wrong with it.
+    index : int or None
+        The message's place among the topic's messages, from 0 (set by :meth:`BagCamera.read`).
+    bag_time : float or None
+        Its bag time, seconds since the epoch (set likewise).
+    """
+
+    def __init__(self, message: str, *, reason: str | None = None, **kwargs):
+        super().__init__(message, **kwargs)
+        self.reason = message if reason is None else reason
+        self.index = self.bag_time = None
+
+
 def is_bag(source: str) -> bool:
-    """Whether a camera source names a recorded bag rather than a device, video file or stream."""
+    """Whether a camera source names a recorded bag rather than a device, video file or stream: a bag
+    file, or any folder (a ROS 2 bag folder, or one a killed recorder left without its ``metadata.yaml``)."""
     path = Path(source)
-    return path.suffix.lower() in BAG_SUFFIXES or (path / "metadata.yaml").is_file()
+    return path.suffix.lower() in BAG_SUFFIXES or path.is_dir()
+
+
+def bag_paths(source: str) -> tuple[list[Path], str]:
+    """What to read of a bag source, and a note on how it was read (empty when as named).
+
+    A ROS 2 bag folder is read through its ``metadata.yaml``; a folder without one, as a
+    recorder killed before writing it leaves, through the ``.mcap`` or ``.db3`` storage
+    files in it.
+
+    Raises
+    ------
+    CameraError
+        No such file or folder, or a folder with neither ``metadata.yaml`` nor storage files.
+    """
+    path = Path(source)
+    where = display_path(path)
+    if not path.exists():
+        raise CameraError(f"{where}: no such bag file or folder")
+    if not path.is_dir() or (path / "metadata.yaml").is_file():
+        return [path], ""
+    storage = sorted(p for p in path.iterdir() if p.suffix.lower() in (".mcap", ".db3"))
+    if not storage:
+        held = "empty" if not any(path.iterdir()) else "neither metadata.yaml nor a .mcap or .db3 file in it"
+        raise CameraError(f"{where}: not a bag folder ({held})")
+    return storage, f"{where} has no metadata.yaml (a recording cut short?): reading {', '.join(p.name for p in storage)}"
 
 
 class BagCamera:
@@ -66,13 +119,12 @@ class BagCamera:
             ) from None
         self.source = source
         where = display_path(Path(source))
-        if not Path(source).exists():
-            raise CameraError(f"{where}: no such bag file or folder")
+        paths, self.note = bag_paths(source)
         try:
-            self._reader = AnyReader([Path(source)])
+            self._reader = AnyReader(paths)
             self._reader.open()
-        except Exception as exc:  # rosbags raises its own errors, and struct/zip errors for torn files
-            raise CameraError(f"{where}: not a readable bag ({' '.join(str(exc).split()) or type(exc).__name__})") from None
+        except Exception as exc:  # rosbags raises its own errors, and Python's own for torn or foreign bytes
+            raise CameraError(f"{where}: not a readable bag ({_why_unreadable(exc, paths)})") from None
         counts = {}
         for connection in self._reader.connections:
             counts.setdefault(connection.topic, [connection.msgtype, 0])[1] += connection.msgcount
@@ -101,27 +153,45 @@ class BagCamera:
 
         Raises
         ------
+        BadMessage
+            A message that holds no usable frame (damaged or empty data), naming it; the
+            next call reads the message after it.
         CameraError
-            A message that cannot be read or decoded (a truncated bag, an unsupported
-            encoding), naming the frame, the topic and the bag.
+            A bag that cannot be read on (a torn file) or an encoding the camera does not
+            decode, naming the frame, the topic and the bag.
         """
-        where = f"{display_path(Path(self.source))}: {self.topic}, message {self._index}"
+        index = self._index
+        where = f"{display_path(Path(self.source))}: {self.topic}, message {index}"
         try:
             connection, stamp, data = next(self._messages)
         except StopIteration:
             return None
         except Exception as exc:
             raise CameraError(f"{where}: cannot be read ({' '.join(str(exc).split()) or type(exc).__name__})") from None
-        try:
-            message = self._reader.deserialize(data, connection.msgtype)
-        except Exception as exc:
-            raise CameraError(f"{where}: not a {connection.msgtype} ({exc})") from None
-        image = decode(message, connection.msgtype, where)
         self._index += 1
+        try:
+            try:
+                message = self._reader.deserialize(data, connection.msgtype)
+            except Exception as exc:  # rosbags' own errors for a message it cannot parse
+                reason = f"not a {connection.msgtype} ({' '.join(str(exc).split()) or type(exc).__name__})"
+                raise BadMessage(f"{where}: {reason}", reason=reason) from None
+            image = decode(message, connection.msgtype, where)
+        except BadMessage as exc:
+            exc.index, exc.bag_time = index, stamp / 1e9
+            raise
         return Frame(image, time.monotonic(), stamp / 1e9)
 
     def close(self) -> None:
         self._reader.close()
+
+
+def _why_unreadable(exc: Exception, paths: list[Path]) -> str:
+    """Why rosbags could not open a bag, in words: its own message, or what the bytes are when Python's
+    errors speak (``ord() expected a character`` for an 8-byte file says nothing to a user)."""
+    if type(exc).__module__.startswith("rosbags"):
+        return " ".join(str(exc).split()) or type(exc).__name__
+    size = sum(p.stat().st_size for p in paths if p.is_file())
+    return f"{size:,} bytes that are not a ROS 1 bag, a ROS 2 bag or an MCAP or SQLite storage file"
 
 
 def decode(message, msgtype: str, where: str) -> np.ndarray:
@@ -129,16 +199,19 @@ def decode(message, msgtype: str, where: str) -> np.ndarray:
 
     Raises
     ------
+    BadMessage
+        Damaged data: a compressed image that does not decode, an image of 0 x 0 pixels,
+        data that does not fit the message's size; naming ``where``.
     CameraError
-        An unsupported encoding or compression, or data that does not fit the message's
-        size, naming ``where``.
+        An encoding the camera does not decode, naming ``where``.
     """
     import cv2
 
     if msgtype == COMPRESSED:
-        image = cv2.imdecode(np.frombuffer(bytes(message.data), np.uint8), cv2.IMREAD_UNCHANGED)
-        if image is None:
-            raise CameraError(f"{where}: format {message.format!r}: expected a JPEG or PNG image")
+        data = np.frombuffer(bytes(message.data), np.uint8)
+        image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+        if image is None or image.size == 0:
+            _damaged(where, f"format {message.format!r}: {data.size} bytes that do not decode as a JPEG or PNG image")
         channels = 1 if image.ndim == 2 else image.shape[2]
         return _to_rgb8(image, "mono" if channels == 1 else "bgr")
     encoding = message.encoding.lower()
@@ -148,16 +221,25 @@ def decode(message, msgtype: str, where: str) -> np.ndarray:
     dtype = np.dtype(np.uint8 if size == 1 else (">u2" if message.is_bigendian else "<u2"))
     rows, cols, step = message.height, message.width, message.step
     data = np.frombuffer(bytes(message.data), np.uint8)
+    if rows == 0 or cols == 0:
+        _damaged(where, f"a {rows} x {cols} image: no pixels")
+    if encoding in _YUV422 and cols % 2:
+        _damaged(where, f"{encoding} of {cols} columns: expected an even number (two pixels share their colour)")
     if step < cols * channels * size or data.size < rows * step:
-        raise CameraError(
-            f"{where}: {data.size} bytes for {rows} x {cols} {encoding} rows of {step}: expected at least {rows * step}"
-        )
+        _damaged(where, f"{data.size} bytes for {rows} x {cols} {encoding} rows of {step}: expected at least {rows * step}")
     image = data[: rows * step].reshape(rows, step)[:, : cols * channels * size].copy().view(dtype)
     image = image.reshape(rows, cols, channels).squeeze(axis=2) if channels == 1 else image.reshape(rows, cols, channels)
     if encoding in _BAYER:
         return np.ascontiguousarray(cv2.cvtColor(image, getattr(cv2, _BAYER[encoding])))
+    if encoding in _YUV422:
+        return np.ascontiguousarray(cv2.cvtColor(image, getattr(cv2, _YUV422[encoding])))
     order = "bgr" if encoding.startswith("bgr") else "rgb" if channels > 1 else "mono"
     return _to_rgb8(image, order)
+
+
+def _damaged(where: str, reason: str):
+    """Raise the :class:`BadMessage` of a message at ``where`` whose data is damaged."""
+    raise BadMessage(f"{where}: {reason}", reason=reason)
 
 
 def _to_rgb8(image: np.ndarray, order: str) -> np.ndarray:

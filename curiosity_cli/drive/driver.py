@@ -75,6 +75,10 @@ class Outputs:
     png_every: int
 
 
+#: A run folder's log, one JSON record per line: a folder holding one is a run's.
+RUN_LOG = "log.jsonl"
+
+
 def prepare_folder(folder: Path, config: ExperimentConfig, seed: int) -> None:
     """Write the resolved config and the run's provenance into ``folder``."""
     import yaml
@@ -98,6 +102,7 @@ class Outcome:
     frames: int
     detail: str
     stop_acked: bool | None  # None without a robot (or a simulated one in this process)
+    skipped: int = 0  # a replay's messages that held no usable frame (a ``skipped`` record each)
 
 
 def _rounded(array, places: int = 3) -> list:
@@ -113,6 +118,7 @@ def run(
     *,
     max_frames: int | None,
     stop: StopRequest,
+    strict: bool = False,
     on_frame=lambda frame_number, decision: None,
 ) -> Outcome:
     """Drive until the camera ends, ``max_frames``, ESTOP or a stop request.
@@ -130,6 +136,10 @@ def run(
     log : JsonLines
     max_frames : int or None
     stop : StopRequest
+    strict : bool
+        Stop at a replay's first message that holds no usable frame
+        (:class:`~curiosity_cli.drive.bags.BadMessage`) instead of skipping it with a
+        ``skipped`` record (its message index, bag time and reason).
     on_frame : callable
         Called after each frame with its number and :class:`Decision` (progress output).
 
@@ -138,11 +148,16 @@ def run(
     LinkError
         The link was lost (STOP was attempted).
     CuriosityError
-        A camera that fails, an output that cannot be written.
+        A camera that fails, an output that cannot be written; a replay whose every
+        message was skipped.
     """
+    from curiosity_cli.drive.bags import BadMessage
+    from curiosity_cli.drive.camera import CameraError
+
     video = VideoSink(outputs.video, pipeline.config.drive.video_fps) if outputs.video else None
     pending: dict | None = None
-    frames = 0
+    frames = skipped = 0
+    first_bad = None
     outcome = None
     error = None
     try:
@@ -156,8 +171,18 @@ def run(
                 break
             if robot is not None and robot.error:
                 raise LinkError(f"{robot.error}; STOP attempted")
-            got = camera.read()
+            try:
+                got = camera.read()
+            except BadMessage as bad:
+                if strict:
+                    raise
+                log.write("skipped", message=bad.index, bag_time=bad.bag_time, reason=bad.reason)
+                first_bad = first_bad or bad
+                skipped += 1
+                continue
             if got is None:
+                if frames == 0 and skipped:  # nothing replayed is no result, not a quiet one
+                    raise CameraError(f"every one of the {skipped} messages held no usable frame; the first: {first_bad}")
                 outcome = Outcome("end of video", frames, "end of the video", None)
                 break
             image, captured, recorded = got
@@ -214,13 +239,14 @@ def run(
             outcome=None if outcome is None else outcome.reason,
             error=error,
             frames=frames,
+            skipped=skipped,
             stop_acked=stop_acked,
             **({} if stats is None else {
                 "sent": stats.sent, "resent": stats.resent, "acked": stats.acked, "naks": stats.naks,
                 "refused_lines": stats.refused_lines, "states": stats.states,
             }),
         )
-    return Outcome(outcome.reason, outcome.frames, outcome.detail, stop_acked)
+    return Outcome(outcome.reason, outcome.frames, outcome.detail, stop_acked, skipped)
 
 
 def _flush(row: dict | None, robot, log: JsonLines) -> None:

@@ -16,15 +16,17 @@ they run, so a robot is stopped before the program ends: call them from the main
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 from collections.abc import Callable
+from datetime import datetime
 from pathlib import Path
 
 from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.data import MapData
 from curiosity_cli.drive import camera as cameras
-from curiosity_cli.drive.driver import Outcome, Outputs, StopRequest, prepare_folder, run, stopping_on_signals
+from curiosity_cli.drive.driver import RUN_LOG, Outcome, Outputs, StopRequest, prepare_folder, run, stopping_on_signals
 from curiosity_cli.drive.jsonlines import JsonLines
 from curiosity_cli.drive.link import LinkTiming, RobotLink
 from curiosity_cli.drive.pipeline import CuriosityPipeline, warm_up
@@ -54,11 +56,110 @@ def open_camera(camera: str, topic: str | None = None):
     return cameras.OpenCVCamera(camera)
 
 
-def default_run_folder() -> Path:
-    """``results/drive/<date-time>``: a new folder for each run started without ``--out``."""
-    from datetime import datetime
+def check_run_folder(out: Path | None, *, force: bool = False) -> None:
+    """Refuse ``out`` as a run's folder when it holds anything: an earlier run's files would mix with the new ones.
 
-    return DEFAULT_RESULTS / "drive" / datetime.now().strftime("%Y%m%d-%H%M%S")
+    With ``force``, a folder that holds an earlier run (its :data:`RUN_LOG`) may be
+    replaced; a folder of anything else never is. None (a new folder) is always fine.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``out``, what it holds, and what to do.
+    """
+    if out is None or not Path(out).exists():
+        return
+    out = Path(out)
+    if not out.is_dir():
+        raise ParameterError(f"out: {display_path(out)} is a file; give a new or empty folder for the run", parameter="out")
+    held = sorted(p.name for p in out.iterdir())
+    if not held:
+        return
+    if (out / RUN_LOG).is_file():
+        if force:
+            return
+        raise ParameterError(
+            f"out: {display_path(out)} holds an earlier run ({RUN_LOG} and {len(held) - 1} more); give a new folder, "
+            "or --force to replace that run", parameter="out",
+        )
+    raise ParameterError(
+        f"out: {display_path(out)} is not empty ({', '.join(held[:3])}{', ...' if len(held) > 3 else ''}) and holds no "
+        "run; give a new or empty folder for the run", parameter="out",
+    )
+
+
+def claim_run_folder(out: Path | None, *, force: bool = False) -> Path:
+    """Make the run's folder, empty, and return it: ``out``, or a new ``results/drive/<date-time>``.
+
+    Runs started in the same second without ``out`` each get their own folder
+    (``<date-time>-2``, ``-3``, ...): a folder is made here, atomically, never taken when it
+    exists. ``out`` is checked as :func:`check_run_folder`; with ``force``, the earlier run
+    in it is removed first.
+    """
+    import shutil
+
+    if out is not None:
+        check_run_folder(out, force=force)
+        out = Path(out)
+        if (out / RUN_LOG).is_file():  # force, checked above
+            shutil.rmtree(out)
+        out.mkdir(parents=True, exist_ok=True)
+        return out
+    base = DEFAULT_RESULTS / "drive" / datetime.now().strftime("%Y%m%d-%H%M%S")
+    base.parent.mkdir(parents=True, exist_ok=True)
+    for n in range(1, 10_000):
+        folder = base if n == 1 else base.with_name(f"{base.name}-{n}")
+        try:
+            folder.mkdir()
+            return folder
+        except FileExistsError:
+            continue
+    raise CuriosityError(f"{display_path(base)}: 10,000 runs started this second; give --out")
+
+
+def redraw_timeline(folder: Path) -> list[Path]:
+    """Draw a replay's surprise timeline again from its run folder's log (``curiosity drive --timeline``).
+
+    The bag and topic come from the log's ``start`` record; the bag must still be where it was.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+
+    Raises
+    ------
+    CuriosityError
+        No log in ``folder``, a log that is not a replay's, or a bag that cannot be read.
+    """
+    import json
+
+    log = Path(folder) / RUN_LOG
+    try:
+        first = log.read_text().split("\n", 1)[0]
+        start = json.loads(first)
+    except FileNotFoundError:
+        raise CuriosityError(f"{display_path(log)}: not found; give a run folder of `curiosity drive`") from None
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise CuriosityError(f"{display_path(log)}: its first line is not a JSON record ({exc})") from None
+    if not isinstance(start, dict) or start.get("event") != "start" or not start.get("topic"):
+        raise CuriosityError(f"{display_path(log)}: not the log of a replayed bag (no start record with a bag's topic)")
+    from curiosity_cli.drive.timeline import surprise_series
+
+    frames = surprise_series(log)["frame"].size
+    return _draw_timeline(Path(folder), start["camera"], start["topic"], f"{frames} frames")
+
+
+def _draw_timeline(out: Path, bag: str, topic: str, what: str) -> list[Path]:
+    """A replay's surprise timeline (:mod:`~curiosity_cli.drive.timeline`), its frames read from the bag again."""
+    from curiosity_cli.drive.bags import BagCamera
+    from curiosity_cli.drive.timeline import write_timeline
+
+    again = BagCamera(bag, topic)
+    try:
+        return write_timeline(out, again, f"{Path(bag).name}: {topic}, {what}")
+    finally:
+        again.close()
 
 
 def _body(sim_map: MapData, start: tuple[float, float], heading_deg: float, config: ExperimentConfig) -> Body:
@@ -80,6 +181,8 @@ def drive_session(
     start: tuple[float, float] | None = None,
     heading_deg: float = 0.0,
     out: Path | None = None,
+    force: bool = False,
+    strict: bool = False,
     video_out: Path | None = None,
     png_every: int = 0,
     max_frames: int | None = None,
@@ -115,7 +218,13 @@ def drive_session(
         That robot's start heading, degrees clockwise from the map's +col axis.
     out : Path, optional
         The run folder (``log.jsonl``, ``config.yaml``, ``provenance.yaml``,
-        ``frames/``); default :func:`default_run_folder`.
+        ``frames/``), new or empty; default a new ``results/drive/<date-time>``
+        (:func:`claim_run_folder`).
+    force : bool
+        Replace the earlier run in ``out`` (never a folder of anything else).
+    strict : bool
+        Stop a replay at its first message that holds no usable frame, instead of
+        skipping it (:func:`~curiosity_cli.drive.driver.run`).
     video_out : Path, optional
         The annotated video (``.mp4``, ``.avi`` or ``.mkv``).
     png_every : int
@@ -145,7 +254,7 @@ def drive_session(
     ------
     ParameterError
         ``camera="sim"`` without ``sim_map`` or the other way round; a dry run on
-        ``sim_map`` without ``start``.
+        ``sim_map`` without ``start``; an ``out`` that is not new or empty (:func:`check_run_folder`).
     LinkError
         The robot cannot be reached, or the link was lost (STOP was attempted).
     CuriosityError
@@ -157,14 +266,17 @@ def drive_session(
     lockstep = port is None and sim_map is not None
     if lockstep and start is None:
         raise ParameterError("start: a dry run on a simulated map needs the robot's start (row, col)")
-    out = default_run_folder() if out is None else out
+    check_run_folder(out, force=force)  # before the camera and the model: a folder in use is the only message
     with stopping_on_signals(StopRequest()) as stop:
         source = None if camera == "sim" else open_camera(camera, topic)
+        if getattr(source, "note", ""):  # a bag read otherwise than named (a recording cut short)
+            on_status(source.note)
         on_status("loading the vocabularies and the topic model's kernels")
         pipeline = CuriosityPipeline(config, seed)
         warm_up(config)
+        out = claim_run_folder(out, force=force)
         prepare_folder(out, config, seed)
-        log = JsonLines(out / "log.jsonl")
+        log = JsonLines(out / RUN_LOG)
         map_name = None if sim_map is None else sim_map.config.name
         log.write(
             "start", seed=seed, camera=camera, topic=getattr(source, "topic", None), sim_map=map_name, serial=port,
@@ -189,16 +301,11 @@ def drive_session(
                 frames = source.messages if max_frames is None else min(max_frames, source.messages)
                 on_replay(f"replaying {source.topic}", frames)
             outputs = Outputs(out, video_out, png_every)
-            outcome = run(pipeline, source, robot, outputs, log, max_frames=max_frames, stop=stop, on_frame=on_frame)
+            outcome = run(
+                pipeline, source, robot, outputs, log, max_frames=max_frames, stop=stop, strict=strict, on_frame=on_frame
+            )
             if hasattr(source, "messages"):
-                from curiosity_cli.drive.bags import BagCamera
-                from curiosity_cli.drive.timeline import write_timeline
-
-                again = BagCamera(camera, source.topic)
-                try:
-                    write_timeline(out, again, f"{Path(camera).name}: {source.topic}, {outcome.frames} frames")
-                finally:
-                    again.close()
+                _draw_timeline(out, camera, source.topic, f"{outcome.frames} frames")
         except BaseException as exc:
             if not log.ended:
                 # run() closes both and logs its end itself; this covers a failure before its loop
@@ -207,9 +314,13 @@ def drive_session(
                 if robot is not None:
                     robot.close()
                 log.write("end", outcome=None, error=" ".join(str(exc).split()) or type(exc).__name__, frames=0)
-                if isinstance(exc, CuriosityError):  # the folder stays, as a log of the attempt: say where
-                    kept = f"{exc.args[0]}; the session's log is kept in {display_path(out / 'log.jsonl')}"
-                    raise type(exc)(kept, parameter=exc.parameter, rerun=exc.rerun) from None
+            elif isinstance(exc, CuriosityError) and hasattr(source, "messages"):
+                # a replay that stopped: the timeline of what it replayed; the error it stopped on is the message
+                with contextlib.suppress(CuriosityError, OSError):
+                    _draw_timeline(out, camera, source.topic, "stopped early")
+            if isinstance(exc, CuriosityError):  # the folder stays, as a log of the attempt: say where
+                kept = f"{exc.args[0]}; the session's log is kept in {display_path(out / RUN_LOG)}"
+                raise type(exc)(kept, parameter=exc.parameter, rerun=exc.rerun) from None
             raise
         finally:
             log.close()

@@ -91,15 +91,22 @@ def write_timeline(folder: Path, camera, title: str, count: int = SURPRISING) ->
     """
     import cv2
 
-    series = surprise_series(folder / "log.jsonl")
+    from curiosity_cli.drive.bags import BadMessage
+    from curiosity_cli.drive.driver import RUN_LOG
+
+    series = surprise_series(folder / RUN_LOG)
     if series["frame"].size == 0:
         return []
     chosen = most_surprising(series["perplexity"], count)
     wanted = {int(series["frame"][i]): i for i in chosen}
     thumbnails, written = {}, []
     (folder / "surprising").mkdir(exist_ok=True)
-    for number in range(max(wanted) + 1):
-        frame = camera.read()
+    number = 0
+    while number <= max(wanted):
+        try:
+            frame = camera.read()
+        except BadMessage:
+            continue  # the replay skipped it too: frame numbers count the frames it replayed
         if frame is None:
             break
         if number in wanted:
@@ -109,6 +116,7 @@ def write_timeline(folder: Path, camera, title: str, count: int = SURPRISING) ->
                 if not cv2.imwrite(str(tmp), frame.image[:, :, ::-1]):
                     raise OSError(f"{path}: OpenCV could not write the PNG")
             written.append(path)
+        number += 1
     fig = timeline_figure(series, thumbnails, title)
     for suffix in (".png", ".pdf"):
         path = folder / f"timeline{suffix}"

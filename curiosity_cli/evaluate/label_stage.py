@@ -460,133 +460,135 @@ def label_experiment(
     from curiosity_cli.topics.chains import LANES, block_chains
     from curiosity_cli.topics.devices import resolve_device
     from curiosity_cli.explore.runs import RunError
+    from curiosity_cli.experiment.lock import working_in
     from curiosity_cli.words.store import load_store
 
-    started = time.perf_counter()
-    device = resolve_device(config.label.device)  # before any work: a missing GPU is the only message
-    computing = Workers.shared(workers, backend, scheduler, jobs)
-    folder = Path(folder)
-    layout = ExperimentFolder(folder)
-    record_label_settings(folder, config)
-    for written in (layout.labels, layout.batches):  # what a killed label was writing
-        remove_leftovers(written)
-    stores = prepare_stores(config, cache_dir)
-    by_name = {info.name: info for info in stores.values()}
-    experiment = Experiment(folder, config, {name: info.facts for name, info in by_name.items()})
-    # the runs of the grid the config holds, as they sit: a run folder outside it (a config narrowed since) is not labelled
-    folders = [layout.run(r.dataset, r.weight_function, r.restart) for r in experiment.planned()]
-    runs = [p for p in folders if (p / "run.json").is_file()]
-    left_out = [unexplored(p, layout) for p in folders if p not in runs]
-    if not runs:
-        raise LabelError(
-            f"{display_path(layout.runs)}: none of the runs of the grid of {display_path(layout.config)} is explored "
-            f"({first_of(left_out)}); {RERUN} makes them", rerun="explore", force=False,
-        )
-    finished, problems = _runs_as_configured(experiment, runs)
-
-    with computing as workers:
-        batch_recipes = {info.name: experiment.batch_recipe(info.name) for info in stores.values()}
-        batch_files = {info.name: layout.batch(info.name) for info in stores.values()}
-        stale = [
-            info for info in stores.values()
-            if force or not batch_is_current(batch_files[info.name], batch_recipes[info.name])
-        ]
-        skipped, to_label, recipes, relabelled = 0, {}, {}, []
-        for run in finished:
-            info = by_name[run.meta["dataset"]]
-            recipe = experiment.label_recipe(run.meta)
-            path = layout.label_file(info.name, run.meta["weight_function"], run.meta["restart"])
-            change = None if force else label_changes(path, recipe)
-            if not force and change is None:
-                skipped += 1
-                continue
-            if change not in (None, NOT_LABELLED):
-                relabelled.append(f"{display_path(path)}: {change}")
-            try:
-                to_label.setdefault(info.name, []).append(RunInputs.of(run, (info.vocabulary_size, config.model.topics)))
-                recipes[run.folder] = recipe
-            except RunError as exc:
-                problems.append(str(exc))
-        if relabelled:
-            note(f"labelling {len(relabelled)} runs again whose label files were made otherwise, e.g. {relabelled[0]}")
-        todo = len(runs) - skipped
-        inputs = {
-            info.name: MapInputs(
-                info.name, entry, str(info.path), str(batch_files[info.name]), batch_recipes[info.name].digest
+    with working_in(folder, "label"):
+        started = time.perf_counter()
+        device = resolve_device(config.label.device)  # before any work: a missing GPU is the only message
+        computing = Workers.shared(workers, backend, scheduler, jobs)
+        folder = Path(folder)
+        layout = ExperimentFolder(folder)
+        record_label_settings(folder, config)
+        for written in (layout.labels, layout.batches):  # what a killed label was writing
+            remove_leftovers(written)
+        stores = prepare_stores(config, cache_dir)
+        by_name = {info.name: info for info in stores.values()}
+        experiment = Experiment(folder, config, {name: info.facts for name, info in by_name.items()})
+        # the runs of the grid the config holds, as they sit: a run folder outside it (a config narrowed since) is not labelled
+        folders = [layout.run(r.dataset, r.weight_function, r.restart) for r in experiment.planned()]
+        runs = [p for p in folders if (p / "run.json").is_file()]
+        left_out = [unexplored(p, layout) for p in folders if p not in runs]
+        if not runs:
+            raise LabelError(
+                f"{display_path(layout.runs)}: none of the runs of the grid of {display_path(layout.config)} is explored "
+                f"({first_of(left_out)}); {RERUN} makes them", rerun="explore", force=False,
             )
-            for entry, info in stores.items()
-        }
-        blocks = []  # LabelTask: runs labelled in lock-step
-        counts = {name: [1 + is_checked(config, run.meta["restart"]) for run in map_runs] for name, map_runs in to_label.items()}
-        most = chains_per_block if device == "cpu" else block_chains(device)
-        words = [sum(by_name[name].word_counts.values()) for name in counts]
-        plan = plan_blocks(
-            list(counts.values()), workers.jobs if device == "cpu" else 1, lanes=LANES, most=most, words=words
-        )
-        for (name, map_runs), map_blocks in zip(to_label.items(), plan):
-            for block in map_blocks:
-                blocks.append(LabelTask([map_runs[i] for i in block], inputs[name], device))
-        # beside the blocks where every task gets a worker at once, so no block waits for a worker a batch
-        # reference holds (loky only: a Dask worker cannot see the file it waits for); else before them
-        beside = bool(stale) and not workers.ships and len(stale) + len(blocks) <= workers.jobs
-        tasks = []
-        if beside:
-            threads = max(1, (cores() - len(blocks)) // len(stale))
-            tasks = [BatchTask(info, threads) for info in stale]
-        else:
-            batch_problems = compute_batch_references(config, stale, batch_files, batch_recipes, workers, on_stage, on_done)
-            problems += batch_problems
-            failed_maps = {info.name for info in stale if info.name not in batch_files}
-            for task in [task for task in blocks if task.inputs.name in failed_maps]:
-                blocks.remove(task)  # its runs are not labelled: counted as failed, named in problems
-        tasks += blocks
-        shipped = {}  # loky workers read the maps' files themselves
-        if workers.ships:  # before the stage starts: an unusable cluster is the only message
-            for name, map_inputs in {task.inputs.name: task.inputs for task in blocks}.items():
-                store = workers.ship_file(map_inputs.store_path, load_store)
-                with open_npz(Path(map_inputs.batch_path)) as npz:
-                    batch = npz["labels"]
-                shipped[name] = workers.ship(
-                    partial(map_arrays, topics=config.model.topics), store, *_map_references(map_inputs.entry), batch,
-                    key=f"map-{name}",
+        finished, problems = _runs_as_configured(experiment, runs)
+
+        with computing as workers:
+            batch_recipes = {info.name: experiment.batch_recipe(info.name) for info in stores.values()}
+            batch_files = {info.name: layout.batch(info.name) for info in stores.values()}
+            stale = [
+                info for info in stores.values()
+                if force or not batch_is_current(batch_files[info.name], batch_recipes[info.name])
+            ]
+            skipped, to_label, recipes, relabelled = 0, {}, {}, []
+            for run in finished:
+                info = by_name[run.meta["dataset"]]
+                recipe = experiment.label_recipe(run.meta)
+                path = layout.label_file(info.name, run.meta["weight_function"], run.meta["restart"])
+                change = None if force else label_changes(path, recipe)
+                if not force and change is None:
+                    skipped += 1
+                    continue
+                if change not in (None, NOT_LABELLED):
+                    relabelled.append(f"{display_path(path)}: {change}")
+                try:
+                    to_label.setdefault(info.name, []).append(RunInputs.of(run, (info.vocabulary_size, config.model.topics)))
+                    recipes[run.folder] = recipe
+                except RunError as exc:
+                    problems.append(str(exc))
+            if relabelled:
+                note(f"labelling {len(relabelled)} runs again whose label files were made otherwise, e.g. {relabelled[0]}")
+            todo = len(runs) - skipped
+            inputs = {
+                info.name: MapInputs(
+                    info.name, entry, str(info.path), str(batch_files[info.name]), batch_recipes[info.name].digest
                 )
-        if on_stage is not None:
-            what = "labelling runs" + (" on the GPU" if device == "cuda" else "")
+                for entry, info in stores.items()
+            }
+            blocks = []  # LabelTask: runs labelled in lock-step
+            counts = {name: [1 + is_checked(config, run.meta["restart"]) for run in map_runs] for name, map_runs in to_label.items()}
+            most = chains_per_block if device == "cpu" else block_chains(device)
+            words = [sum(by_name[name].word_counts.values()) for name in counts]
+            plan = plan_blocks(
+                list(counts.values()), workers.jobs if device == "cpu" else 1, lanes=LANES, most=most, words=words
+            )
+            for (name, map_runs), map_blocks in zip(to_label.items(), plan):
+                for block in map_blocks:
+                    blocks.append(LabelTask([map_runs[i] for i in block], inputs[name], device))
+            # beside the blocks where every task gets a worker at once, so no block waits for a worker a batch
+            # reference holds (loky only: a Dask worker cannot see the file it waits for); else before them
+            beside = bool(stale) and not workers.ships and len(stale) + len(blocks) <= workers.jobs
+            tasks = []
             if beside:
-                what += " beside the batch reference" + ("s of " if len(stale) > 1 else " of ") + ", ".join(i.name for i in stale)
-            on_stage(what, sum(len(task.runs) for task in blocks) + len(stale) * beside)
-        labelled, reused = 0, len(stores) - len(stale)
-        computed = workers.compute(
-            _stage_task, tasks, args=lambda task: (config, shipped.get(task.inputs.name) if isinstance(task, LabelTask) else None),
-            threads=1, key=lambda task: task.key,
-        )
-        with computed as results:
-            for task, outcome in results:
-                if isinstance(task, BatchTask):
-                    if isinstance(outcome, str):  # its map's blocks would wait for it: stop them all
-                        problems.append(f"the batch reference of {task.info.name}: {outcome}; labelling stopped there")
-                        break
-                    write_batch(batch_files[task.info.name], batch_recipes[task.info.name], *outcome)
-                elif isinstance(outcome, str):
-                    problems += ["{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome
-                                 for run in task.runs]
-                else:
-                    for run, (arrays, examples, meta) in zip(task.runs, outcome):
-                        write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
-                        labelled += 1
-                if on_done is not None:
-                    for _ in range(1 if isinstance(task, BatchTask) else len(task.runs)):
-                        on_done()
-    if problems or left_out:
-        failed = todo - labelled + len(left_out)
-        raise LabelError(
-            f"{failed} of {todo + len(left_out)} runs could not be labelled (the others are written): "
-            + "; ".join([*problems, *left_out])
-        )
-    return {
-        "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": time.perf_counter() - started,
-        "relabelled": relabelled,
-    }
+                threads = max(1, (cores() - len(blocks)) // len(stale))
+                tasks = [BatchTask(info, threads) for info in stale]
+            else:
+                batch_problems = compute_batch_references(config, stale, batch_files, batch_recipes, workers, on_stage, on_done)
+                problems += batch_problems
+                failed_maps = {info.name for info in stale if info.name not in batch_files}
+                for task in [task for task in blocks if task.inputs.name in failed_maps]:
+                    blocks.remove(task)  # its runs are not labelled: counted as failed, named in problems
+            tasks += blocks
+            shipped = {}  # loky workers read the maps' files themselves
+            if workers.ships:  # before the stage starts: an unusable cluster is the only message
+                for name, map_inputs in {task.inputs.name: task.inputs for task in blocks}.items():
+                    store = workers.ship_file(map_inputs.store_path, load_store)
+                    with open_npz(Path(map_inputs.batch_path)) as npz:
+                        batch = npz["labels"]
+                    shipped[name] = workers.ship(
+                        partial(map_arrays, topics=config.model.topics), store, *_map_references(map_inputs.entry), batch,
+                        key=f"map-{name}",
+                    )
+            if on_stage is not None:
+                what = "labelling runs" + (" on the GPU" if device == "cuda" else "")
+                if beside:
+                    what += " beside the batch reference" + ("s of " if len(stale) > 1 else " of ") + ", ".join(i.name for i in stale)
+                on_stage(what, sum(len(task.runs) for task in blocks) + len(stale) * beside)
+            labelled, reused = 0, len(stores) - len(stale)
+            computed = workers.compute(
+                _stage_task, tasks, args=lambda task: (config, shipped.get(task.inputs.name) if isinstance(task, LabelTask) else None),
+                threads=1, key=lambda task: task.key,
+            )
+            with computed as results:
+                for task, outcome in results:
+                    if isinstance(task, BatchTask):
+                        if isinstance(outcome, str):  # its map's blocks would wait for it: stop them all
+                            problems.append(f"the batch reference of {task.info.name}: {outcome}; labelling stopped there")
+                            break
+                        write_batch(batch_files[task.info.name], batch_recipes[task.info.name], *outcome)
+                    elif isinstance(outcome, str):
+                        problems += ["{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome
+                                     for run in task.runs]
+                    else:
+                        for run, (arrays, examples, meta) in zip(task.runs, outcome):
+                            write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
+                            labelled += 1
+                    if on_done is not None:
+                        for _ in range(1 if isinstance(task, BatchTask) else len(task.runs)):
+                            on_done()
+        if problems or left_out:
+            failed = todo - labelled + len(left_out)
+            raise LabelError(
+                f"{failed} of {todo + len(left_out)} runs could not be labelled (the others are written): "
+                + "; ".join([*problems, *left_out])
+            )
+        return {
+            "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": time.perf_counter() - started,
+            "relabelled": relabelled,
+        }
 
 
 def unexplored(run: Path, layout: ExperimentFolder) -> str:

@@ -704,49 +704,52 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
     """
     import pandas as pd
 
-    experiment = Experiment.open(folder)
-    layout = experiment.folder
-    inputs = experiment.inputs()  # before reading: a file changed meanwhile makes the record stale, never wrong
-    found = label_rows(experiment)
-    if found.left_out and not partial:
-        raise IncompleteLabelsError(found.left_out)
-    skipped = [*found.notes, *found.left_out]
-    if not found.mi:
-        raise EvaluationError(f"{display_path(layout.labels)}: every label file was left out: " + "; ".join(skipped))
-    from curiosity_cli.evaluate.steering import STEERING_COLUMNS
+    from curiosity_cli.experiment.lock import working_in
 
-    mi = pd.DataFrame(found.mi).sort_values(_KEYS, ignore_index=True)
-    steering = pd.DataFrame(found.steering, columns=list(STEERING_COLUMNS)).sort_values(_KEYS, ignore_index=True)
-    class_columns = [*_KEYS, "class_id", "class_name", "pixels", "found", "first_step", "topic", "recall"]
-    classes = pd.DataFrame(found.classes, columns=class_columns).sort_values([*_KEYS, "class_id"], ignore_index=True)
-    summary = summarise(mi)
-    classes_summary = summarise_classes(mi)
-    tests = paired_tests(mi)
-    effects = paired_effects(mi, tests)
-    maps = read_maps(folder)
-    top = with_power(headline(summary, tests, experiment.paper_maps(), effects), mi)
-    revisits = summarise_revisits(mi)
-    convergence = label_convergence(mi)
-    tables = {
-        "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
-        "effects": effects, "headline": top, "convergence": convergence, "revisits": revisits, "steering": steering,
-    }
-    # every file is written whole before any replaces its old self, and tables.json
-    # records each one's digest: a failure (a full disk) leaves the old set or a mix that
-    # plot refuses, never a mix taken as one set
-    with contextlib.ExitStack() as stack:
-        written = {}  # each file's name in the folder, and the temporary file that will replace it
+    with working_in(folder, "evaluate"):
+        experiment = Experiment.open(folder)
+        layout = experiment.folder
+        inputs = experiment.inputs()  # before reading: a file changed meanwhile makes the record stale, never wrong
+        found = label_rows(experiment)
+        if found.left_out and not partial:
+            raise IncompleteLabelsError(found.left_out)
+        skipped = [*found.notes, *found.left_out]
+        if not found.mi:
+            raise EvaluationError(f"{display_path(layout.labels)}: every label file was left out: " + "; ".join(skipped))
+        from curiosity_cli.evaluate.steering import STEERING_COLUMNS
 
-        def temporary(path: Path) -> Path:
-            tmp = written[str(path.relative_to(layout.root))] = stack.enter_context(atomic_path(path))
-            return tmp
+        mi = pd.DataFrame(found.mi).sort_values(_KEYS, ignore_index=True)
+        steering = pd.DataFrame(found.steering, columns=list(STEERING_COLUMNS)).sort_values(_KEYS, ignore_index=True)
+        class_columns = [*_KEYS, "class_id", "class_name", "pixels", "found", "first_step", "topic", "recall"]
+        classes = pd.DataFrame(found.classes, columns=class_columns).sort_values([*_KEYS, "class_id"], ignore_index=True)
+        summary = summarise(mi)
+        classes_summary = summarise_classes(mi)
+        tests = paired_tests(mi)
+        effects = paired_effects(mi, tests)
+        maps = read_maps(folder)
+        top = with_power(headline(summary, tests, experiment.paper_maps(), effects), mi)
+        revisits = summarise_revisits(mi)
+        convergence = label_convergence(mi)
+        tables = {
+            "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
+            "effects": effects, "headline": top, "convergence": convergence, "revisits": revisits, "steering": steering,
+        }
+        # every file is written whole before any replaces its old self, and tables.json
+        # records each one's digest: a failure (a full disk) leaves the old set or a mix that
+        # plot refuses, never a mix taken as one set
+        with contextlib.ExitStack() as stack:
+            written = {}  # each file's name in the folder, and the temporary file that will replace it
 
-        for name, table in tables.items():
-            table.to_csv(temporary(layout.table(name)), index=False)
-        mi.to_parquet(temporary(layout.table("mi", ".parquet")), index=False)
-        temporary(layout.skipped).write_text(json.dumps(skipped, indent=2) + "\n")
-        record = experiment.record_tables(written, inputs)
-        temporary(layout.tables_record).write_text(record)
-    return Evaluation(
-        mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits, steering
-    )
+            def temporary(path: Path) -> Path:
+                tmp = written[str(path.relative_to(layout.root))] = stack.enter_context(atomic_path(path))
+                return tmp
+
+            for name, table in tables.items():
+                table.to_csv(temporary(layout.table(name)), index=False)
+            mi.to_parquet(temporary(layout.table("mi", ".parquet")), index=False)
+            temporary(layout.skipped).write_text(json.dumps(skipped, indent=2) + "\n")
+            record = experiment.record_tables(written, inputs)
+            temporary(layout.tables_record).write_text(record)
+        return Evaluation(
+            mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits, steering
+        )

@@ -88,6 +88,11 @@ class ExperimentFolder:
         return self.root / "skipped.json"
 
     @property
+    def lock(self) -> Path:
+        """``.lock``: which process works in the folder (:mod:`~curiosity_cli.experiment.lock`)."""
+        return self.root / ".lock"
+
+    @property
     def tables_record(self) -> Path:
         """``tables.json``: what ``evaluate``'s tables are and were made from (:class:`~curiosity_cli.experiment.experiment.Experiment`)."""
         return self.root / "tables.json"

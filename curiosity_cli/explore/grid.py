@@ -44,6 +44,7 @@ from curiosity_cli.config import ExperimentConfig, saved_yaml
 from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.experiment.lock import working_in
 from curiosity_cli.experiment.maps import StoreInfo, prepare_stores
 from curiosity_cli.experiment.recipes import RECIPE_KEY, Recipe, first_of
 from curiosity_cli.experiment.saved_config import check_saved_config
@@ -209,36 +210,37 @@ def run_grid(
             rerun="explore",
         )
     _write_experiment_files(folder, config, tasks, by_name)
-    remove_partial_runs(folder)
+    with working_in(folder, "explore"):  # from here it removes and writes runs
+        remove_partial_runs(folder)
 
-    if on_prepared is not None:
-        on_prepared(len(todo), len(tasks) - len(todo))
-    failed, fallbacks, written = [], 0, 0
-    with computing as workers:
-        shipped = {}  # loky workers load the stores from the cache themselves
-        if workers.ships:
-            shipped = {path: workers.ship_file(path, load_store) for path in sorted({t.store_path for t in todo})}
-        computed = workers.compute(
-            compute_run, todo, args=lambda task: (config, shipped.get(task.store_path)),
-            key=lambda task: f"explore-{task.dataset}/{task.weight_function}/restart-{task.restart:03d}",
-        )
-        with computed as results:
-            for task, outcome in results:
-                size = 0
-                if isinstance(outcome, str):
-                    failed.append(f"{task.dataset} / {task.weight_function} / restart {task.restart}: {outcome}")
-                else:
-                    exploration, seconds = outcome
-                    size = _write(folder, task, exploration, seconds, recipes[task], config, by_name[task.dataset])
-                    fallbacks += int(exploration.fallback.sum())
-                    written += size
-                if on_run is not None:
-                    on_run(task, size)
-    summary = GridSummary(folder, len(todo) - len(failed), len(tasks) - len(todo), failed, fallbacks, written,
-                          time.perf_counter() - started)
-    if failed:
-        raise GridError(f"{len(failed)} of {len(todo)} runs failed (the others are written): " + "; ".join(failed))
-    return summary
+        if on_prepared is not None:
+            on_prepared(len(todo), len(tasks) - len(todo))
+        failed, fallbacks, written = [], 0, 0
+        with computing as workers:
+            shipped = {}  # loky workers load the stores from the cache themselves
+            if workers.ships:
+                shipped = {path: workers.ship_file(path, load_store) for path in sorted({t.store_path for t in todo})}
+            computed = workers.compute(
+                compute_run, todo, args=lambda task: (config, shipped.get(task.store_path)),
+                key=lambda task: f"explore-{task.dataset}/{task.weight_function}/restart-{task.restart:03d}",
+            )
+            with computed as results:
+                for task, outcome in results:
+                    size = 0
+                    if isinstance(outcome, str):
+                        failed.append(f"{task.dataset} / {task.weight_function} / restart {task.restart}: {outcome}")
+                    else:
+                        exploration, seconds = outcome
+                        size = _write(folder, task, exploration, seconds, recipes[task], config, by_name[task.dataset])
+                        fallbacks += int(exploration.fallback.sum())
+                        written += size
+                    if on_run is not None:
+                        on_run(task, size)
+        summary = GridSummary(folder, len(todo) - len(failed), len(tasks) - len(todo), failed, fallbacks, written,
+                              time.perf_counter() - started)
+        if failed:
+            raise GridError(f"{len(failed)} of {len(todo)} runs failed (the others are written): " + "; ".join(failed))
+        return summary
 
 
 @lru_cache(maxsize=4)

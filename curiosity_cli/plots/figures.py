@@ -94,6 +94,32 @@ class WrittenFigures(list):
         self.skipped = list(skipped)
 
 
+def _check_runs(experiment: Experiment) -> None:
+    """Refuse the figures of runs whose files are not as explore wrote them (each ``run.json`` records their sizes
+    and digests, the check every stage that reads runs makes): the tables were made from them.
+
+    Raises
+    ------
+    PlotError
+        The first such file, and what is wrong with it.
+    """
+    import json
+
+    from curiosity_cli.experiment.wholeness import FILES_KEY, changed
+
+    for planned in experiment.planned():
+        folder = experiment.folder.run(planned.dataset, planned.weight_function, planned.restart)
+        try:
+            meta = json.loads((folder / "run.json").read_text())
+        except (OSError, ValueError):
+            continue  # a run.json that is gone or changed makes the tables stale, which check_tables says
+        recorded = meta.get(FILES_KEY, {}) if isinstance(meta, dict) else {}
+        if (change := changed(folder, recorded)) is not None:
+            raise PlotError(
+                f"{display_path(change[0])}: {change[1]}; {RERUN} redoes the run", rerun="explore", force=False
+            )
+
+
 def write_figures(experiment_dir: Path) -> WrittenFigures:
     """Write every figure the experiment folder has the inputs for.
 
@@ -112,9 +138,12 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
     Raises
     ------
     PlotError
-        No such folder, or ``mi.csv`` missing or malformed.
+        No such folder, ``mi.csv`` missing or malformed, or a run of the grid whose files
+        are not as its ``run.json`` records them (the check every stage makes of the runs it reads).
     ConfigError
         No ``config.yaml``, or one that does not validate.
+    FolderInUseError
+        Another process works in the folder (:mod:`~curiosity_cli.experiment.lock`).
     StaleTablesError
         The tables are not one complete set made from the experiment's files and maps as
         they are now (:meth:`~curiosity_cli.experiment.experiment.Experiment.check_tables`).
@@ -127,72 +156,76 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
         raise PlotError(
             f"{display_path(experiment_dir)}: no such experiment folder; {RERUN} makes it", rerun="explore", force=False
         )
-    mi = read_table(layout.table("mi"), MI_COLUMNS)
-    if mi.empty:
-        raise PlotError(f"{display_path(layout.table('mi'))}: no rows; {RERUN} makes it", rerun="evaluate", force=False)
-    experiment = Experiment.open(experiment_dir)
-    experiment.check_tables()
-    out = layout.figures
-    written = WrittenFigures()
-    notes = written.skipped
-    maps = load_maps(experiment.config, notes)
-    order = list(maps) + [d for d in dict.fromkeys(mi["dataset"].astype(str)) if d not in maps]
+    from curiosity_cli.experiment.lock import working_in
 
-    summary_path = layout.table("summary")
-    try:
-        summary = read_table(summary_path, SUMMARY_COLUMNS)
-        for column in ("path_length", "n", "mean", "std", "ci_low", "ci_high"):
-            summary[column] = pd.to_numeric(summary[column], errors="coerce")  # a stray text cell: NaN, not a crash
-        summary = summary.dropna(subset=["path_length"])
-    except PlotError as exc:
-        notes.append(f"no MI figures: {exc}")
-        summary = None
-    with figure_style():
-        if summary is not None:
-            for against, stem in (("human", "mi-vs-length-human"), ("batch", "mi-vs-length-batch")):
-                fig = mi_figure(summary, against, order)
-                if fig is None:
-                    notes.append(f"{stem}: {summary_path.name} has no MI against {against} labels (no map has them)")
-                else:
-                    written += save_figure(fig, out / stem)
+    with working_in(experiment_dir, "plot"):
+        mi = read_table(layout.table("mi"), MI_COLUMNS)
+        if mi.empty:
+            raise PlotError(f"{display_path(layout.table('mi'))}: no rows; {RERUN} makes it", rerun="evaluate", force=False)
+        experiment = Experiment.open(experiment_dir)
+        experiment.check_tables()
+        _check_runs(experiment)
+        out = layout.figures
+        written = WrittenFigures()
+        notes = written.skipped
+        maps = load_maps(experiment.config, notes)
+        order = list(maps) + [d for d in dict.fromkeys(mi["dataset"].astype(str)) if d not in maps]
 
-        if "distinct_cells" in mi:
-            written += save_figure(distinct_figure(mi, order), out / "mi-vs-distinct")
-        else:
-            notes.append("mi-vs-distinct: mi.csv has no distinct_cells column (evaluate the experiment again)")
+        summary_path = layout.table("summary")
+        try:
+            summary = read_table(summary_path, SUMMARY_COLUMNS)
+            for column in ("path_length", "n", "mean", "std", "ci_low", "ci_high"):
+                summary[column] = pd.to_numeric(summary[column], errors="coerce")  # a stray text cell: NaN, not a crash
+            summary = summary.dropna(subset=["path_length"])
+        except PlotError as exc:
+            notes.append(f"no MI figures: {exc}")
+            summary = None
+        with figure_style():
+            if summary is not None:
+                for against, stem in (("human", "mi-vs-length-human"), ("batch", "mi-vs-length-batch")):
+                    fig = mi_figure(summary, against, order)
+                    if fig is None:
+                        notes.append(f"{stem}: {summary_path.name} has no MI against {against} labels (no map has them)")
+                    else:
+                        written += save_figure(fig, out / stem)
 
-        # the runs of the config's grid: a narrowed config's other runs are not drawn
-        grid = {(r.dataset, r.weight_function, r.restart) for r in experiment.planned()}
-        traces = {}
-        for name, m in maps.items():
-            batch_file = layout.batch(name)
-            z_b = read_label_map(batch_file, m.image.shape[:2], notes)
-            trace = read_log_likelihood(batch_file, notes) if batch_file.is_file() else None
-            if trace is not None:
-                traces[name] = trace
-            examples = _chosen_examples(
-                [e for e in find_examples(experiment_dir, name) if (name, e.weight_function, e.restart) in grid]
-            )
-            z_ps = [(e, z) for e in examples if (z := read_label_map(e.path, m.image.shape[:2], notes)) is not None]
-
-            if z_ps:
-                example, z_p = z_ps[-1]
-                path = read_path(experiment_dir, name, example.weight_function, example.restart, notes)
-                if path is not None:
-                    written += save_figure(path_figure(m, path, example, z_p, z_b), out / f"path-{name}")
-            elif not examples:
-                notes.append(f"path-{name}: no example path labelling under labels/{name}/examples/ (label the experiment)")
-            if z_b is None and not z_ps:
-                notes.append(f"labelings-{name}: neither a batch nor a path labelling to draw")
+            if "distinct_cells" in mi:
+                written += save_figure(distinct_figure(mi, order), out / "mi-vs-distinct")
             else:
-                written += save_figure(labelings_figure(m, z_b, z_ps), out / f"labelings-{name}")
+                notes.append("mi-vs-distinct: mi.csv has no distinct_cells column (evaluate the experiment again)")
 
-        if traces:
-            written += save_figure(convergence_figure(traces), out / "batch-convergence")
-        else:
-            notes.append("batch-convergence: no batch log-likelihood trace under batch/ (label the experiment)")
-    written.skipped[:] = list(dict.fromkeys(notes))  # a corrupt file is named once, not once per figure
-    return written
+            # the runs of the config's grid: a narrowed config's other runs are not drawn
+            grid = {(r.dataset, r.weight_function, r.restart) for r in experiment.planned()}
+            traces = {}
+            for name, m in maps.items():
+                batch_file = layout.batch(name)
+                z_b = read_label_map(batch_file, m.image.shape[:2], notes)
+                trace = read_log_likelihood(batch_file, notes) if batch_file.is_file() else None
+                if trace is not None:
+                    traces[name] = trace
+                examples = _chosen_examples(
+                    [e for e in find_examples(experiment_dir, name) if (name, e.weight_function, e.restart) in grid]
+                )
+                z_ps = [(e, z) for e in examples if (z := read_label_map(e.path, m.image.shape[:2], notes)) is not None]
+
+                if z_ps:
+                    example, z_p = z_ps[-1]
+                    path = read_path(experiment_dir, name, example.weight_function, example.restart, notes)
+                    if path is not None:
+                        written += save_figure(path_figure(m, path, example, z_p, z_b), out / f"path-{name}")
+                elif not examples:
+                    notes.append(f"path-{name}: no example path labelling under labels/{name}/examples/ (label the experiment)")
+                if z_b is None and not z_ps:
+                    notes.append(f"labelings-{name}: neither a batch nor a path labelling to draw")
+                else:
+                    written += save_figure(labelings_figure(m, z_b, z_ps), out / f"labelings-{name}")
+
+            if traces:
+                written += save_figure(convergence_figure(traces), out / "batch-convergence")
+            else:
+                notes.append("batch-convergence: no batch log-likelihood trace under batch/ (label the experiment)")
+        written.skipped[:] = list(dict.fromkeys(notes))  # a corrupt file is named once, not once per figure
+        return written
 
 
 # --------------------------------------------------------------------------- the figures

@@ -3,6 +3,7 @@ ROS 2 MCAP), frames cut from an embedded map, replayed through ``curiosity drive
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -59,8 +60,9 @@ def _image(types, frame: np.ndarray, encoding: str, stamp: int):
     )
 
 
-def write_bag(path: Path, kind: str, topics: dict[str, str], frames: list[np.ndarray]) -> Path:
-    """A bag of ``kind`` (``ros1``, ``sqlite3``, ``mcap``) with each topic's frames in its encoding."""
+def write_bag(path: Path, kind: str, topics: dict[str, str], frames: list[np.ndarray], damage=None) -> Path:
+    """A bag of ``kind`` (``ros1``, ``sqlite3``, ``mcap``) with each topic's frames in its encoding; ``damage``
+    maps a message's index to a function that makes it a damaged message."""
     store = get_typestore(Stores.ROS1_NOETIC if kind == "ros1" else Stores.ROS2_HUMBLE)
     writer = Writer1(path) if kind == "ros1" else Writer2(
         path, version=9, storage_plugin=StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
@@ -72,7 +74,10 @@ def write_bag(path: Path, kind: str, topics: dict[str, str], frames: list[np.nda
             connection = writer.add_connection(topic, msgtype, typestore=store)
             for i, frame in enumerate(frames):
                 stamp = START + i * PERIOD
-                writer.write(connection, stamp, serialize(_image(store.types, frame, encoding, stamp), msgtype))
+                message = _image(store.types, frame, encoding, stamp)
+                if damage and i in damage:
+                    message = damage[i](message)
+                writer.write(connection, stamp, serialize(message, msgtype))
     return path
 
 
@@ -147,7 +152,7 @@ def test_a_bayer_frame_is_demosaiced_in_rosbag_naming():
         ("missing", "no such bag file or folder"),
         ("not-a-bag", "not a readable bag"),
         ("truncated", "mission.bag"),
-        ("encoding", "encoding 'yuv422': expected one of rgb8"),
+        ("encoding", "encoding '32fc1': expected one of rgb8"),
     ],
 )
 def test_bad_bags_are_one_error_line(tmp_path, frames, case, says):
@@ -165,7 +170,7 @@ def test_bad_bags_are_one_error_line(tmp_path, frames, case, says):
         bag = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "rgb8"}, frames)
         bag.write_bytes(bag.read_bytes()[: bag.stat().st_size * 2 // 3])
     else:  # the frames' bytes, labelled with an encoding the camera does not decode
-        bag = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "yuv422"}, frames)
+        bag = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "32fc1"}, frames)
     result = replay(bag, tmp_path / "run", *extra)
     assert result.exit_code == 1, result.output
     assert "Traceback" not in result.output
@@ -243,3 +248,148 @@ def test_without_rosbags_the_error_names_the_extra(tmp_path, frames, monkeypatch
     monkeypatch.setitem(sys.modules, "rosbags.highlevel", None)  # as if the extra were not installed
     with pytest.raises(CameraError, match=r"reading a bag needs rosbags: pip install 'curiosity\[bags\]'"):
         BagCamera(str(bag))
+
+
+def test_a_replay_into_a_folder_in_use_is_refused_and_force_replaces_only_an_earlier_run(tmp_path, frames):
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
+    run = tmp_path / "run"
+    assert replay(bag, run).exit_code == 0
+    log = (run / "log.jsonl").read_bytes()
+    again = replay(bag, run, "--max-frames", "2")
+    assert again.exit_code == 1 and "Traceback" not in again.stderr
+    assert again.stderr.strip().splitlines()[-1].startswith(f"Error: --out: {run} holds an earlier run (log.jsonl and ")
+    assert (run / "log.jsonl").read_bytes() == log  # untouched
+
+    replaced = replay(bag, run, "--max-frames", "2", "--force")
+    assert replaced.exit_code == 0, replaced.output
+    assert len(frame_records(run)) == 2  # the new run only, not mixed with the old one
+    assert {int(p.stem.split("-")[1]) for p in (run / "surprising").glob("frame-*.png")} <= {0, 1}
+
+    other = tmp_path / "notes"
+    other.mkdir()
+    (other / "mine.txt").write_text("not a run")
+    for extra in ((), ("--force",)):
+        refused = replay(bag, other, *extra)
+        assert refused.exit_code == 1 and "is not empty (mine.txt) and holds no run" in refused.stderr
+    assert (other / "mine.txt").read_text() == "not a run"
+
+
+def test_runs_started_in_the_same_second_get_folders_of_their_own(tmp_path, monkeypatch):
+    from datetime import datetime
+
+    from curiosity_cli.drive import session
+
+    class Frozen(datetime):
+        @classmethod
+        def now(cls, tz=None):
+            return datetime(2026, 11, 26, 23, 0, 0)
+
+    monkeypatch.setattr(session, "DEFAULT_RESULTS", tmp_path)
+    monkeypatch.setattr(session, "datetime", Frozen)
+    folders = [session.claim_run_folder(None) for _ in range(3)]
+    assert [f.name for f in folders] == ["20261126-230000", "20261126-230000-2", "20261126-230000-3"]
+    assert all(f.is_dir() and not any(f.iterdir()) for f in folders)
+
+
+EMPTY = np.zeros(0, np.uint8)
+DAMAGES = {
+    "empty-jpeg": ("png", lambda m: dataclasses.replace(m, format="jpeg", data=EMPTY), "0 bytes that do not decode"),
+    "corrupt-jpeg": ("png", lambda m: dataclasses.replace(m, format="jpeg", data=np.arange(64, dtype=np.uint8)),
+                     "64 bytes that do not decode"),
+    "zero-by-zero": ("rgb8", lambda m: dataclasses.replace(m, height=0, width=0, step=0, data=EMPTY), "a 0 x 0 image"),
+    "cut-rows": ("rgb8", lambda m: dataclasses.replace(m, data=m.data[: len(m.data) // 2]), "rows of 480: expected at least"),
+}
+
+
+@pytest.mark.parametrize("case", list(DAMAGES))
+def test_a_damaged_message_is_skipped_logged_and_counted(tmp_path, frames, case):
+    encoding, damage, says = DAMAGES[case]
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": encoding}, frames, {1: damage})
+    result = replay(bag, tmp_path / "run")
+    assert result.exit_code == 0, result.output
+    assert "drove 3 frames: end of the video; 1 damaged messages skipped" in result.stdout
+    records = [json.loads(line) for line in (tmp_path / "run" / "log.jsonl").read_text().splitlines()]
+    (skipped,) = [r for r in records if r["event"] == "skipped"]
+    assert skipped["message"] == 1 and skipped["bag_time"] == pytest.approx((START + PERIOD) / 1e9)
+    assert says in skipped["reason"]
+    assert [r["bag_time"] for r in frame_records(tmp_path / "run")] == pytest.approx(
+        [(START + i * PERIOD) / 1e9 for i in (0, 2, 3)]
+    )
+    assert records[-1]["event"] == "end" and records[-1]["skipped"] == 1
+    replayed = [frames[i] for i in (0, 2, 3)]  # frame n of the run is the n-th good message
+    thumbnails = sorted((tmp_path / "run" / "surprising").glob("frame-*.png"))
+    assert thumbnails
+    for path in thumbnails:  # PNG and rgb8 frames are lossless
+        np.testing.assert_array_equal(cv2.imread(str(path))[:, :, ::-1], replayed[int(path.stem.split("-")[1])])
+
+
+def test_strict_stops_at_a_damaged_message_and_still_draws_what_it_replayed(tmp_path, frames):
+    encoding, damage, says = DAMAGES["zero-by-zero"]
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": encoding}, frames, {2: damage})
+    result = replay(bag, tmp_path / "run", "--strict")
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    (line,) = [line for line in result.stderr.splitlines() if line.startswith("Error: ")]
+    assert "/camera/image_raw, message 2: a 0 x 0 image" in line
+    assert line.endswith(f"the session's log is kept in {tmp_path / 'run' / 'log.jsonl'}")
+    assert len(frame_records(tmp_path / "run")) == 2 and (tmp_path / "run" / "timeline.png").is_file()
+
+
+def test_a_bag_whose_every_message_is_damaged_is_an_error_not_an_empty_replay(tmp_path, frames):
+    _, damage, _ = DAMAGES["empty-jpeg"]
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "png"}, frames, dict.fromkeys(range(FRAMES), damage))
+    result = replay(bag, tmp_path / "run")
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert "every one of the 4 messages held no usable frame; the first: " in result.stderr
+
+
+@pytest.mark.parametrize("encoding, order", [("yuv422", "uyvy"), ("uyvy", "uyvy"), ("yuv422_yuy2", "yuyv"), ("yuyv", "yuyv")])
+def test_yuv_422_frames_decode(encoding, order):
+    from types import SimpleNamespace
+
+    rows, cols = 4, 6
+    y, u, v = 120, 90, 200  # one colour everywhere
+    pair = [u, y, v, y] if order == "uyvy" else [y, u, y, v]
+    data = np.array(pair * (rows * cols // 2), np.uint8)
+    message = SimpleNamespace(encoding=encoding, height=rows, width=cols, step=cols * 2, is_bigendian=0, data=data)
+    image = decode(message, "sensor_msgs/msg/Image", "here")
+    # ITU-R BT.601, video range (Y 16..235), as camera drivers send 4:2:2
+    luma = 1.164 * (y - 16)
+    expected = np.array([luma + 1.596 * (v - 128), luma - 0.813 * (v - 128) - 0.391 * (u - 128), luma + 2.018 * (u - 128)])
+    assert image.shape == (rows, cols, 3) and image.dtype == np.uint8
+    assert np.abs(image - expected).max() <= 2
+    odd = SimpleNamespace(encoding=encoding, height=1, width=3, step=6, is_bigendian=0, data=np.zeros(6, np.uint8))
+    with pytest.raises(CameraError, match="expected an even number"):
+        decode(odd, "sensor_msgs/msg/Image", "here")
+
+
+@pytest.mark.parametrize("kind, storage", [("mcap", ".mcap"), ("sqlite3", ".db3")])
+def test_a_bag_folder_without_its_metadata_is_read_through_its_storage_file(tmp_path, frames, kind, storage):
+    bag = write_bag(tmp_path / "mission", kind, {"/camera/image_raw": "rgb8"}, frames)
+    (bag / "metadata.yaml").unlink()  # what a recorder killed before it wrote it leaves
+    result = replay(bag, tmp_path / "run")
+    assert result.exit_code == 0, result.output
+    (said,) = [line for line in result.stderr.splitlines() if "has no metadata.yaml" in line]
+    assert said.endswith(f"mission has no metadata.yaml (a recording cut short?): reading {next(bag.glob('*' + storage)).name}")
+    assert len(frame_records(tmp_path / "run")) == FRAMES
+
+
+def test_an_empty_folder_and_a_tiny_file_are_named_as_what_they_are(tmp_path):
+    (tmp_path / "empty").mkdir()
+    result = replay(tmp_path / "empty", tmp_path / "run")
+    assert result.exit_code == 1 and "empty: not a bag folder (empty)" in result.stderr
+    (tmp_path / "tiny.mcap").write_bytes(b"\x89MCAP0\r\n")
+    result = replay(tmp_path / "tiny.mcap", tmp_path / "run2")
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    (line,) = [line for line in result.stderr.splitlines() if line.startswith("Error: ")]
+    assert "tiny.mcap: not a readable bag (" in line and "ord()" not in line and "expected a character" not in line
+
+
+def test_a_timeline_is_drawn_again_from_a_run_folder(tmp_path, frames):
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
+    assert replay(bag, tmp_path / "run").exit_code == 0
+    (tmp_path / "run" / "timeline.png").unlink()
+    result = runner.invoke(app, ["drive", "--timeline", str(tmp_path / "run")])
+    assert result.exit_code == 0, result.output
+    assert f"wrote {tmp_path / 'run' / 'timeline.png'}" in result.stdout and (tmp_path / "run" / "timeline.png").is_file()
+    missing = runner.invoke(app, ["drive", "--timeline", str(tmp_path / "nothing")])
+    assert missing.exit_code == 1 and "log.jsonl: not found; give a run folder of `curiosity drive`" in missing.stderr

@@ -102,7 +102,8 @@ def test_a_robot_that_disconnects_mid_run_is_a_clean_error_after_stop_was_attemp
     stdout, stderr = process.communicate(timeout=RUN_SECONDS)
     result = subprocess.CompletedProcess(process.args, process.returncode, stdout, stderr)
     line = one_line_error(result)
-    assert line.startswith("Error: the robot disconnected (") and line.endswith("; STOP attempted")
+    assert line.startswith("Error: the robot disconnected (")
+    assert line.endswith(f"; STOP attempted; the session's log is kept in {out / 'log.jsonl'}")  # every failed run says where
     events = read_log(out)
     lost = [e for e in events if e["event"] == "link-lost"]
     assert len(lost) == 1 and "stop" in lost[0]
@@ -182,5 +183,8 @@ def test_a_robot_that_falls_silent_after_hello_loses_the_link(tmp_path, warm_ker
         result = drive(tmp_path / "run", "--serial", robot.port, *SIM)
     finally:
         robot.close()
-    assert one_line_error(result) == "Error: no ACK for PING 1 after 4 transmissions 300 ms apart: link lost; STOP attempted"
+    assert one_line_error(result) == (
+        "Error: no ACK for PING 1 after 4 transmissions 300 ms apart: link lost; STOP attempted; "
+        f"the session's log is kept in {tmp_path / 'run' / 'log.jsonl'}"
+    )
     assert isinstance(robot.frames()[-1], Stop)

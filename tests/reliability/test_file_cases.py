@@ -151,6 +151,12 @@ ERRORS = [
         lambda work: (work / RUN / "run.json").unlink(), allowed=(EXPERIMENT,),
     ),
     ErrorCase(
+        # plot reads the runs' paths: it checks them as label and evaluate do, though its tables are current
+        "truncated-checkpoints-at-plot", ["plot", EXPERIMENT],
+        (f"{RUN}/checkpoints.npz", "bytes, but", "were written", "`curiosity explore` redoes the run"),
+        lambda work: _truncate(work / RUN / "checkpoints.npz"),
+    ),
+    ErrorCase(
         "missing-batch-at-evaluate", ["evaluate", EXPERIMENT], (BATCH, "not found", "curiosity label"),
         lambda work: (work / BATCH).unlink(),
     ),
