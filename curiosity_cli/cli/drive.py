@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 from pathlib import Path
 
 import typer
@@ -37,6 +38,13 @@ def _parse_start(text: str | None, map_shape: tuple[int, int]) -> tuple[float, f
     return row, col
 
 
+class Clock(str, enum.Enum):
+    """The clock of a replay's timeline (``curiosity_cli.drive.timeline.CLOCKS``)."""
+
+    bag = "bag"
+    header = "header"
+
+
 @app.command("drive")
 def drive(
     serial: str = typer.Option(None, "--serial", metavar="PORT", help="Serial device or pyserial URL of the robot; default the config's drive.port."),
@@ -53,6 +61,7 @@ def drive(
     out: Path = typer.Option(None, "--out", help="Run folder (log.jsonl, config, provenance, frames/), new or empty; default a new results/drive/<date-time>."),
     force: bool = typer.Option(False, "--force", help="With --out: replace the earlier run in that folder."),
     timeline: Path = typer.Option(None, "--timeline", metavar="RUN_FOLDER", help="Instead of driving, draw a replay's surprise timeline again from its run folder's log.jsonl (the bag must still be where it was)."),
+    clock: Clock = typer.Option(Clock.bag, "--clock", help="A replay's timeline against the bag's record times (bag) or the messages' header stamps (header); both are logged."),
     strict: bool = typer.Option(False, "--strict", help="Stop a replay at its first message that holds no usable frame (damaged or empty), instead of skipping it with a `skipped` record in the log."),
     video_out: Path = typer.Option(None, "--video-out", help="Write the annotated video here (.mp4, .avi or .mkv)."),
     png_every: int = typer.Option(0, "--png-every", min=0, metavar="N", help="Write an annotated PNG every N frames into <out>/frames/."),
@@ -73,7 +82,7 @@ def drive(
     if timeline is not None:
         from curiosity_cli.drive.session import redraw_timeline
 
-        for path in redraw_timeline(timeline):
+        for path in redraw_timeline(timeline, clock.value):
             typer.echo(f"wrote {display_path(path)}")
         return
     if dry_run and serial is not None:
@@ -119,7 +128,7 @@ def drive(
         outcome, folder = drive_session(
             resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic,
             port=None if dry_run else port, baud=baud, sim_map=map_data, start=start_at, heading_deg=heading_deg or 0.0,
-            out=out, force=force, strict=strict, video_out=video_out, png_every=png_every, max_frames=max_frames,
+            out=out, force=force, strict=strict, clock=clock.value, video_out=video_out, png_every=png_every, max_frames=max_frames,
             on_status=lambda line: typer.echo(line, err=True), on_frame=progress, on_replay=bar.stage,
         )
     stopped = {True: "; STOP acknowledged", False: "; STOP sent, not acknowledged", None: ""}[outcome.stop_acked]

@@ -179,7 +179,9 @@ class BagCamera:
         except BadMessage as exc:
             exc.index, exc.bag_time = index, stamp / 1e9
             raise
-        return Frame(image, time.monotonic(), stamp / 1e9)
+        header = getattr(getattr(message, "header", None), "stamp", None)
+        header = None if header is None else header.sec + header.nanosec / 1e9
+        return Frame(image, time.monotonic(), stamp / 1e9, header)
 
     def close(self) -> None:
         self._reader.close()

@@ -33,12 +33,15 @@ class Frame(NamedTuple):
         The ``time.monotonic()`` at which it was captured (or read): the start of the
         frame-to-command latency.
     recorded : float or None
-        A recorded frame's time, seconds since the epoch (a bag's); None for a live one.
+        A recorded frame's time, seconds since the epoch (a bag's record time); None for a live one.
+    header : float or None
+        A recorded image message's own header stamp, seconds since the epoch; None without one.
     """
 
     image: np.ndarray
     captured: float
     recorded: float | None = None
+    header: float | None = None
 
 
 class OpenCVCamera:

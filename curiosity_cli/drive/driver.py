@@ -185,7 +185,7 @@ def run(
                     raise CameraError(f"every one of the {skipped} messages held no usable frame; the first: {first_bad}")
                 outcome = Outcome("end of video", frames, "end of the video", None)
                 break
-            image, captured, recorded = got
+            image, captured, recorded, header = got
             state = robot.state() if robot is not None else None
             decision = pipeline.process(image)
             command = decision.command
@@ -195,6 +195,7 @@ def run(
             pending = {
                 "frame": frames,
                 **({} if recorded is None else {"bag_time": recorded}),
+                **({} if header is None else {"header_time": header}),
                 "latency_ms": round(latency * 1000, 2),
                 "seconds": {k: round(v, 5) for k, v in decision.seconds.items()},
                 "words": decision.words,

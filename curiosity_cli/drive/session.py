@@ -117,10 +117,11 @@ def claim_run_folder(out: Path | None, *, force: bool = False) -> Path:
     raise CuriosityError(f"{display_path(base)}: 10,000 runs started this second; give --out")
 
 
-def redraw_timeline(folder: Path) -> list[Path]:
+def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
     """Draw a replay's surprise timeline again from its run folder's log (``curiosity drive --timeline``).
 
     The bag and topic come from the log's ``start`` record; the bag must still be where it was.
+    ``clock``: ``bag`` or ``header`` (:func:`~curiosity_cli.drive.timeline.surprise_series`).
 
     Returns
     -------
@@ -147,17 +148,17 @@ def redraw_timeline(folder: Path) -> list[Path]:
     from curiosity_cli.drive.timeline import surprise_series
 
     frames = surprise_series(log)["frame"].size
-    return _draw_timeline(Path(folder), start["camera"], start["topic"], f"{frames} frames")
+    return _draw_timeline(Path(folder), start["camera"], start["topic"], f"{frames} frames", clock)
 
 
-def _draw_timeline(out: Path, bag: str, topic: str, what: str) -> list[Path]:
+def _draw_timeline(out: Path, bag: str, topic: str, what: str, clock: str = "bag") -> list[Path]:
     """A replay's surprise timeline (:mod:`~curiosity_cli.drive.timeline`), its frames read from the bag again."""
     from curiosity_cli.drive.bags import BagCamera
     from curiosity_cli.drive.timeline import write_timeline
 
     again = BagCamera(bag, topic)
     try:
-        return write_timeline(out, again, f"{Path(bag).name}: {topic}, {what}")
+        return write_timeline(out, again, f"{Path(bag).name}: {topic}, {what}", clock=clock)
     finally:
         again.close()
 
@@ -183,6 +184,7 @@ def drive_session(
     out: Path | None = None,
     force: bool = False,
     strict: bool = False,
+    clock: str = "bag",
     video_out: Path | None = None,
     png_every: int = 0,
     max_frames: int | None = None,
@@ -225,6 +227,9 @@ def drive_session(
     strict : bool
         Stop a replay at its first message that holds no usable frame, instead of
         skipping it (:func:`~curiosity_cli.drive.driver.run`).
+    clock : {"bag", "header"}
+        A replay's timeline against the bag's record times or the messages' header
+        stamps (both are logged).
     video_out : Path, optional
         The annotated video (``.mp4``, ``.avi`` or ``.mkv``).
     png_every : int
@@ -305,7 +310,7 @@ def drive_session(
                 pipeline, source, robot, outputs, log, max_frames=max_frames, stop=stop, strict=strict, on_frame=on_frame
             )
             if hasattr(source, "messages"):
-                _draw_timeline(out, camera, source.topic, f"{outcome.frames} frames")
+                _draw_timeline(out, camera, source.topic, f"{outcome.frames} frames", clock)
         except BaseException as exc:
             if not log.ended:
                 # run() closes both and logs its end itself; this covers a failure before its loop
@@ -317,7 +322,7 @@ def drive_session(
             elif isinstance(exc, CuriosityError) and hasattr(source, "messages"):
                 # a replay that stopped: the timeline of what it replayed; the error it stopped on is the message
                 with contextlib.suppress(CuriosityError, OSError):
-                    _draw_timeline(out, camera, source.topic, "stopped early")
+                    _draw_timeline(out, camera, source.topic, "stopped early", clock)
             if isinstance(exc, CuriosityError):  # the folder stays, as a log of the attempt: say where
                 kept = f"{exc.args[0]}; the session's log is kept in {display_path(out / RUN_LOG)}"
                 raise type(exc)(kept, parameter=exc.parameter, rerun=exc.rerun) from None

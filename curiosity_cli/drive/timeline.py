@@ -1,10 +1,12 @@
 """The surprise timeline of a replayed mission: what a scientist skims after a dive.
 
 :func:`write_timeline` reads a replay's ``log.jsonl`` and draws ``timeline.png`` (and
-``.pdf``): each frame's topic perplexity (the mean over its image cells, the paper's
-surprise, section 5.2) and the decayed curiosity score that steered (the highest cell's)
-against bag time, with thumbnails of the most surprising frames above their peaks. Those
-frames are written whole as ``surprising/frame-NNNNNN.png``.
+``.pdf``): two panels against time, each frame's topic perplexity (the mean over its image
+cells, the paper's surprise, section 5.2) and the decayed curiosity score that steered (the
+highest cell's), different quantities on axes of their own, under a strip of the most
+surprising frames, each linked to its peak. The time is the bag's record time, or the
+messages' header stamps (``clock``); the axis names the clock and the mission's start
+(UTC). Those frames are written whole as ``surprising/frame-NNNNNN.png``.
 """
 
 from __future__ import annotations
@@ -20,14 +22,41 @@ from curiosity_cli.files import atomic_path
 SURPRISING = 6
 
 
-def surprise_series(log: Path) -> dict[str, np.ndarray]:
-    """Per frame of a replay's log: ``frame``, ``time`` (bag seconds), ``perplexity`` (cell mean), ``score`` (cell max)."""
+#: The clocks a replay's timeline can run on, by name: the log key of each frame's time.
+CLOCKS = {"bag": "bag_time", "header": "header_time"}
+#: Each clock in words, for the axis.
+CLOCK_WORDS = {"bag": "bag time", "header": "header stamps"}
+
+
+def surprise_series(log: Path, clock: str = "bag") -> dict:
+    """Per frame of a replay's log: ``frame``, ``time`` (seconds since the epoch on ``clock``), ``perplexity`` (cell
+    mean), ``score`` (cell max); and ``clock``, the clock used.
+
+    ``bag``: the bag's record times; ``header``: the messages' header stamps. A bag whose
+    record times are all equal (a recorder that stamped a batch at once) falls back to
+    header stamps, and ``fell_back`` says so.
+
+    Raises
+    ------
+    CuriosityError
+        ``header`` for a log whose frames have no header stamps.
+    """
+    from curiosity_cli.errors import CuriosityError
+    from curiosity_cli.files import display_path
+
     records = [r for r in map(json.loads, Path(log).read_text().splitlines()) if r.get("event") == "frame" and "bag_time" in r]
+    headers = all(CLOCKS["header"] in r for r in records)
+    if clock == "header" and not headers:
+        raise CuriosityError(f"{display_path(Path(log))}: its frames have no header stamps; use the bag's clock")
+    fell_back = clock == "bag" and len(records) > 1 and headers and len({r["bag_time"] for r in records}) == 1
+    used = "header" if fell_back else clock
     return {
         "frame": np.array([r["frame"] for r in records], np.int64),
-        "time": np.array([r["bag_time"] for r in records], np.float64),
+        "time": np.array([r[CLOCKS[used]] for r in records], np.float64),
         "perplexity": np.array([np.mean(r["perplexity"]) for r in records], np.float64),
         "score": np.array([np.max(r["scores"]) for r in records], np.float64),
+        "clock": used,
+        "fell_back": fell_back,
     }
 
 
@@ -43,36 +72,46 @@ def most_surprising(perplexity: np.ndarray, count: int = SURPRISING) -> list[int
     return sorted(chosen)
 
 
-def timeline_figure(series: dict[str, np.ndarray], thumbnails: dict[int, np.ndarray], title: str):
-    """The figure: perplexity and score against seconds since the first frame, thumbnails above their peaks."""
+def timeline_figure(series: dict, thumbnails: dict[int, np.ndarray], title: str):
+    """The figure: a strip of the most surprising frames over two panels, each frame's topic perplexity (the cell mean)
+    and its curiosity score (decayed, the highest cell), against seconds since the first frame on the series' clock,
+    whose absolute start (UTC) the axis names; each thumbnail linked to its peak."""
+    from datetime import datetime, timezone
+
     import matplotlib
 
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
     from matplotlib.offsetbox import AnnotationBbox, OffsetImage
+    from matplotlib.patches import ConnectionPatch
 
     seconds = series["time"] - series["time"][0]
-    fig = Figure(figsize=(10, 4.2), layout="constrained")
-    ax = fig.add_subplot()
-    ax.plot(seconds, series["perplexity"], color="tab:blue", lw=1.2, label="topic perplexity (mean over the frame's cells)")
-    ax.plot(seconds, series["score"], color="tab:orange", lw=1.2, label="curiosity score (decayed, highest cell)")
-    ax.set_xlabel("bag time (s since the first frame)")
-    ax.set_ylabel("perplexity")
-    ax.set_title(title, fontsize=10)
-    top = max(series["perplexity"].max(), series["score"].max())
-    ax.set_ylim(top=top * 1.6)  # room above the curves for the thumbnails
+    fig = Figure(figsize=(10, 5.6), layout="constrained")
+    strip, surprise, score = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [1.1, 2, 1.4]})
+    fig.suptitle(title, fontsize=10)
+    surprise.plot(seconds, series["perplexity"], color="tab:blue", lw=1.2)
+    surprise.set_ylabel("topic perplexity\n(mean of the frame's cells)", fontsize=9)
+    score.plot(seconds, series["score"], color="tab:orange", lw=1.2)
+    score.set_ylabel("curiosity score\n(decayed, highest cell)", fontsize=9)
+    start = datetime.fromtimestamp(series["time"][0], timezone.utc).strftime("%Y-%m-%d %H:%M:%S.%f")[:-3]
+    fell_back = " (the record times are all equal)" if series.get("fell_back") else ""
+    score.set_xlabel(f"{CLOCK_WORDS[series['clock']]}{fell_back}: seconds since the first frame, {start} UTC")
+    strip.set_ylim(0, 1)
+    strip.set_yticks([])
+    strip.tick_params(axis="x", bottom=False)
+    for side in ("left", "right", "top", "bottom"):
+        strip.spines[side].set_visible(False)
     for index, image in thumbnails.items():
-        zoom = 42 / max(image.shape[:2])  # about 42 points across
-        box = AnnotationBbox(
-            OffsetImage(image, zoom=zoom), (seconds[index], series["perplexity"][index]), xybox=(0, 34),
-            xycoords="data", boxcoords="offset points", pad=0.15, arrowprops={"arrowstyle": "-", "lw": 0.6},
-        )
-        ax.add_artist(box)
-    ax.legend(loc="lower right", fontsize=8)
+        x, y = seconds[index], series["perplexity"][index]
+        zoom = 48 / max(image.shape[:2])  # about 48 points across
+        strip.add_artist(AnnotationBbox(OffsetImage(image, zoom=zoom), (x, 0.5), xycoords="data", frameon=True, pad=0.15))
+        surprise.plot([x], [y], "o", ms=4, color="tab:red")
+        fig.add_artist(ConnectionPatch((x, 0.0), (x, y), coordsA=strip.transData, coordsB=surprise.transData,
+                                       color="tab:red", lw=0.6, alpha=0.7))
     return fig
 
 
-def write_timeline(folder: Path, camera, title: str, count: int = SURPRISING) -> list[Path]:
+def write_timeline(folder: Path, camera, title: str, count: int = SURPRISING, clock: str = "bag") -> list[Path]:
     """Write ``folder/timeline.png`` and ``.pdf`` from ``folder/log.jsonl``, and the most surprising frames as PNGs.
 
     Parameters
@@ -83,6 +122,10 @@ def write_timeline(folder: Path, camera, title: str, count: int = SURPRISING) ->
         A fresh :class:`~curiosity_cli.drive.bags.BagCamera` on the same topic: the chosen
         frames are read from it again (the run kept no frames in memory).
     title : str
+    count : int
+        The most surprising frames shown.
+    clock : {"bag", "header"}
+        The time axis (:func:`surprise_series`); a fall-back to header stamps is noted on stderr.
 
     Returns
     -------
@@ -94,9 +137,13 @@ def write_timeline(folder: Path, camera, title: str, count: int = SURPRISING) ->
     from curiosity_cli.drive.bags import BadMessage
     from curiosity_cli.drive.driver import RUN_LOG
 
-    series = surprise_series(folder / RUN_LOG)
+    series = surprise_series(folder / RUN_LOG, clock)
     if series["frame"].size == 0:
         return []
+    if series["fell_back"]:
+        from curiosity_cli.files import note
+
+        note(f"{folder / RUN_LOG}: every frame has the same bag time; the timeline runs on the messages' header stamps")
     chosen = most_surprising(series["perplexity"], count)
     wanted = {int(series["frame"][i]): i for i in chosen}
     thumbnails, written = {}, []

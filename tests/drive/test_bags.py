@@ -228,8 +228,12 @@ def test_a_replay_draws_its_surprise_timeline_with_the_most_surprising_frames(tm
         number = int(path.stem.split("-")[1])
         np.testing.assert_array_equal(cv2.imread(str(path))[:, :, ::-1], frames[number])
     assert series["time"].tolist() == pytest.approx([(START + i * PERIOD) / 1e9 for i in range(FRAMES)])
-    (ax,) = timeline_figure(series, {0: frames[0]}, "mission").axes
-    assert ax.get_xlabel() == "bag time (s since the first frame)" and ax.get_ylabel() == "perplexity"
+    assert series["clock"] == "bag" and not series["fell_back"]
+    strip, surprise, score = timeline_figure(series, {0: frames[0]}, "mission").axes
+    # two quantities on panels of their own, no legend over the data, the clock and the mission's start in UTC
+    assert surprise.get_ylabel().startswith("topic perplexity") and score.get_ylabel().startswith("curiosity score")
+    assert score.get_xlabel() == "bag time: seconds since the first frame, 2023-11-14 22:13:20.000 UTC"
+    assert surprise.get_legend() is None and score.get_legend() is None and len(strip.artists) == 1
 
 
 def test_the_most_surprising_frames_are_peaks_apart():
@@ -393,3 +397,23 @@ def test_a_timeline_is_drawn_again_from_a_run_folder(tmp_path, frames):
     assert f"wrote {tmp_path / 'run' / 'timeline.png'}" in result.stdout and (tmp_path / "run" / "timeline.png").is_file()
     missing = runner.invoke(app, ["drive", "--timeline", str(tmp_path / "nothing")])
     assert missing.exit_code == 1 and "log.jsonl: not found; give a run folder of `curiosity drive`" in missing.stderr
+
+
+def test_header_stamps_are_logged_and_a_bag_of_equal_record_times_falls_back_to_them(tmp_path, frames):
+    from curiosity_cli.drive.timeline import surprise_series
+
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
+    assert replay(bag, tmp_path / "run", "--clock", "header").exit_code == 0
+    records = frame_records(tmp_path / "run")
+    assert [r["header_time"] for r in records] == pytest.approx([(START + i * PERIOD) / 1e9 for i in range(FRAMES)])
+    assert surprise_series(tmp_path / "run" / "log.jsonl", "header")["clock"] == "header"
+
+    # a recorder that wrote every message at one record time: the timeline runs on the header stamps, and says so
+    log = tmp_path / "run" / "log.jsonl"
+    lines = [json.loads(line) for line in log.read_text().splitlines()]
+    log.write_text("".join(json.dumps({**r, "bag_time": START / 1e9} if r["event"] == "frame" else r) + "\n" for r in lines))
+    series = surprise_series(log)
+    assert series["clock"] == "header" and series["fell_back"]
+    assert series["time"].tolist() == pytest.approx([(START + i * PERIOD) / 1e9 for i in range(FRAMES)])
+    result = runner.invoke(app, ["drive", "--timeline", str(tmp_path / "run")])
+    assert result.exit_code == 0 and "every frame has the same bag time" in result.stderr
