@@ -456,7 +456,7 @@ def label_experiment(
         reached or has unusable workers.
     """
     from curiosity_cli.experiment.maps import prepare_stores
-    from curiosity_cli.experiment.workers import Workers, cores, plan_blocks
+    from curiosity_cli.experiment.workers import Workers, plan_blocks
     from curiosity_cli.topics.chains import LANES, block_chains
     from curiosity_cli.topics.devices import resolve_device
     from curiosity_cli.explore.runs import RunError
@@ -533,7 +533,7 @@ def label_experiment(
             beside = bool(stale) and not workers.ships and len(stale) + len(blocks) <= workers.jobs
             tasks = []
             if beside:
-                threads = max(1, (cores() - len(blocks)) // len(stale))
+                threads = max(1, (workers.jobs - len(blocks)) // len(stale))  # the job slots the blocks leave
                 tasks = [BatchTask(info, threads) for info in stale]
             else:
                 batch_problems = compute_batch_references(config, stale, batch_files, batch_recipes, workers, on_stage, on_done)
