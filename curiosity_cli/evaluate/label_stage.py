@@ -454,6 +454,8 @@ def label_experiment(
     ParameterError, BackendError
         As :class:`~curiosity_cli.experiment.workers.Workers`; and a Dask scheduler that cannot be
         reached or has unusable workers.
+    FolderInUseError
+        Another process works in the folder (:mod:`~curiosity_cli.experiment.lock`).
     """
     from curiosity_cli.experiment.maps import prepare_stores
     from curiosity_cli.experiment.workers import Workers, plan_blocks

@@ -701,6 +701,8 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
     EvaluationError
         No usable label files, or labels or runs made otherwise than the experiment
         makes them now.
+    FolderInUseError
+        Another process works in the folder (:mod:`~curiosity_cli.experiment.lock`).
     """
     import pandas as pd
 

@@ -179,6 +179,8 @@ def run_grid(
         or numba than this process.
     GridError
         After the whole grid, if some runs raised or kept killing their Dask workers: each named, with its error.
+    FolderInUseError
+        Another process works in the experiment folder (:mod:`~curiosity_cli.experiment.lock`).
     """
     from curiosity_cli.explore.runs import finished_meta, remove_partial_runs
     from curiosity_cli.words.store import load_store
