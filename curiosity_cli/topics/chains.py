@@ -152,7 +152,7 @@ class FrozenChains:
         engine = _CudaEngine if device == "cuda" else _CpuEngine
         self._engine = engine(self._order, self._colour_starts, self._cell_first, self._cell_count, self._words,
                               self._table, self._alpha, self._beta)
-        self._counts = None  # (V, K, R) int32 frozen word-topic counts
+        self._totals = None  # (K, R held) int64: each chain's frozen words per topic (its counts are the engine's)
         self._keys = None  # (R padded,) uint64
         self._n = 0  # real chains
         self._sweeps = 0
@@ -213,7 +213,7 @@ class FrozenChains:
             raise ParameterError(f"chains: expected a non-empty list of chains in 0..{self.n_chains - 1}")
         self._n = index.size
         index = np.array(_padded(list(index), _held(index.size)), np.int64)
-        self._counts = np.ascontiguousarray(self._counts[:, :, index])
+        self._totals = self._totals[:, index]
         self._keys = self._keys[index]
         self._engine.keep(index, self._keys)
 
@@ -244,7 +244,7 @@ class FrozenChains:
         topic: :meth:`~curiosity_cli.topics.model.TopicModel.ml_topics` of each chain.
         """
         self._started("ml_topics")
-        norm = 1.0 / (self._counts.sum(axis=0, dtype=np.int64) + self._v * self._beta)  # (K, R)
+        norm = 1.0 / (self._totals + self._v * self._beta)  # (K, R)
         return self._engine.ml_topics(norm)[:, : self._n]
 
     def _set_phis(self, phis: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -261,8 +261,8 @@ class FrozenChains:
             if phi.size and (phi.min() < 0 or phi.sum(axis=0, dtype=np.int64).max() > np.iinfo(np.int32).max):
                 raise ParameterError(f"phis: chain {r}'s counts must be >= 0 and each topic's total fit in int32")
             counts[:, :, r] = phi
-        self._counts = counts
-        return counts, (1.0 / (counts.sum(axis=0, dtype=np.int64) + self._v * self._beta)).astype(np.float32)
+        self._totals = counts.sum(axis=0, dtype=np.int64)
+        return counts, (1.0 / (self._totals + self._v * self._beta)).astype(np.float32)
 
     def _started(self, name: str) -> None:
         if self._keys is None:
