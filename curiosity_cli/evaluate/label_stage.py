@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import json
 import time
+from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache, partial
@@ -88,6 +89,8 @@ SECOND_PREFIX = f"{SECOND_START}_"
 #: Chains labelled in lock-step in one task: past 16 they gained no more on the 2-core
 #: AVX2 machine (``scripts/bench_label.py``), and smaller blocks share out better.
 CHAINS_PER_BLOCK = 16
+#: Threads writing label files and example maps in this process.
+WRITERS = 4
 
 
 class LabelError(CuriosityError):
@@ -564,7 +567,10 @@ def label_experiment(
                 _stage_task, tasks, args=lambda task: (config, shipped.get(task.inputs.name) if isinstance(task, LabelTask) else None),
                 threads=1, key=lambda task: task.key,
             )
-            with computed as results:
+            # the files are written by threads (zlib and SHA-256 let go of the GIL) while results arrive:
+            # a GPU's block returns a whole map's runs at once
+            with computed as results, ThreadPoolExecutor(WRITERS) as writers:
+                writes = []
                 for task, outcome in results:
                     if isinstance(task, BatchTask):
                         if isinstance(outcome, str):  # its map's blocks would wait for it: stop them all
@@ -575,12 +581,16 @@ def label_experiment(
                         problems += ["{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome
                                      for run in task.runs]
                     else:
-                        for run, (arrays, examples, meta) in zip(task.runs, outcome):
-                            write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
-                            labelled += 1
+                        writes += [
+                            writers.submit(write_labels, folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
+                            for run, (arrays, examples, meta) in zip(task.runs, outcome)
+                        ]
                     if on_done is not None:
                         for _ in range(1 if isinstance(task, BatchTask) else len(task.runs)):
                             on_done()
+                for write in writes:
+                    write.result()  # a file that could not be written stops the stage, as it did
+                    labelled += 1
         if problems or left_out:
             failed = todo - labelled + len(left_out)
             raise LabelError(

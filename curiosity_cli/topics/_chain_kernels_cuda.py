@@ -112,7 +112,7 @@ def _weight(phiw, w, k, r, count, alpha):
     return fmul(phiw[w, k, r], fadd(np.float32(count), alpha))
 
 
-@cuda.jit
+@cuda.jit(cache=True)
 def sweep_colour_kernel(colour_cells, n_chains, cell_first, cell_count, words, topics, phiw, ncz, ng, table, alpha, keys,
                         counter):
     """Resample every word of every chain in the cells of one colour (``colour_cells``): one thread per (cell, chain).
@@ -167,7 +167,7 @@ def sweep_colour_kernel(colour_cells, n_chains, cell_first, cell_count, words, t
                     cuda.atomic.add(ng, (d, k, r), change)
 
 
-@cuda.jit
+@cuda.jit(cache=True)
 def ml_kernel(n_chains, cell_first, cell_count, words, counts, beta, norm, ng, alpha, out):
     """``ml_chains_kernel`` over every cell in index order: one thread per (cell, chain), ``out`` (N, R) int16.
 
@@ -195,7 +195,7 @@ def ml_kernel(n_chains, cell_first, cell_count, words, counts, beta, norm, ng, a
         out[i, r] = best_k
 
 
-@cuda.jit
+@cuda.jit(cache=True)
 def phiw_kernel(counts, beta, inv, phiw):
     """eq. 5's fixed factors, as numpy computes them for the CPU: ``phiw = (float32(counts) + beta) * inv[k, r]``
     in float32, one thread per element of the (V, K, R) arrays."""
@@ -209,7 +209,7 @@ def phiw_kernel(counts, beta, inv, phiw):
     phiw[w, k, r] = fmul(fadd(np.float32(counts[w, k, r]), beta), inv[k, r])
 
 
-@cuda.jit
+@cuda.jit(cache=True)
 def start_uniform_kernel(n_chains, n_topics, cell_first, cell_count, topics, ncz, keys):
     """``start_chain_kernel``'s uniform start of every chain, one thread per (cell, chain), cells in index order:
     cell ``c`` draws its words' topics from stream ``(c, c)`` and counts them in ``ncz`` (zero before);
@@ -228,7 +228,7 @@ def start_uniform_kernel(n_chains, n_topics, cell_first, cell_count, topics, ncz
         ncz[cell, k, r] += 1
 
 
-@cuda.jit
+@cuda.jit(cache=True)
 def neighbour_sums_kernel(n_chains, ncz, table, ng):
     """``ng[c] = ncz[c] + the sum of ncz over c's neighbours``, one thread per (cell, chain): the sums the CPU
     builds word by word, the same integers."""
@@ -246,7 +246,7 @@ def neighbour_sums_kernel(n_chains, ncz, table, ng):
         ng[cell, k, r] = total
 
 
-@cuda.jit
+@cuda.jit(cache=True)
 def put_columns_kernel(columns, source, target):
     """``target[:, columns[p]] = source[:, p]`` for (rows, R) ``target`` and (rows, P) ``source``, a thread per element of ``source``."""
     t = cuda.grid(1)
