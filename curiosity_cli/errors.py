@@ -67,3 +67,24 @@ class DatasetError(CuriosityError):
 
 class ParameterError(CuriosityError, ValueError):
     """A function argument out of its range: a user's mistake at the CLI, a ValueError to code."""
+
+
+class UsageError(ParameterError):
+    """Arguments that do not go together, or a value in a form its argument does not take.
+
+    The command line reports it as a usage error (exit code 2) on the option that gave
+    ``parameter``. The message begins ``parameter: ``; it may name other arguments in
+    backquotes (`` `backend` ``), which the command line writes as their options.
+    """
+
+    def __init__(self, message: str, *, parameter: str):
+        if not message.startswith(f"{parameter}: "):
+            raise ValueError(f"the message must begin with {parameter + ': '!r}: {message!r}")
+        super().__init__(message, parameter=parameter)
+
+    def detail(self, options: dict[str, str]) -> str:
+        """The message after ``parameter: ``, each `` `name` `` written ``options[name]`` where it has one."""
+        import re
+
+        text = self.render()[len(self.parameter) + 2 :]
+        return re.sub(r"`([a-z_]+)`", lambda m: options.get(m.group(1), m.group(0)), text)

@@ -30,15 +30,15 @@ def reproduce(
     """Run the whole pipeline for ``config`` and return the path of its ``REPORT.md``.
 
     ``backend`` and ``scheduler`` say where the exploration runs and the labelling go
-    (see :class:`~curiosity_cli.experiment.workers.Workers`); both stages share the workers, so
+    (see :class:`~curiosity_cli.workers.Workers`); both stages share the workers, so
     ``backend="dask"`` without a scheduler starts one local cluster, not two.
     ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
     of it done, for a progress display.
     """
-    from curiosity_cli.evaluate.label_stage import label_experiment
+    from curiosity_cli.label.stage import label_experiment
     from curiosity_cli.evaluate.report import write_report
     from curiosity_cli.evaluate.tables import evaluate_experiment
-    from curiosity_cli.experiment.workers import Workers
+    from curiosity_cli.workers import Workers
     from curiosity_cli.explore.grid import run_grid
     from curiosity_cli.plots.figures import write_figures
     from curiosity_cli.yamlfile import read_yaml

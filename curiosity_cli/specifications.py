@@ -60,7 +60,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from curiosity_cli.config import OVERRIDES, SPECIFICATIONS_KEY, config_file
+from curiosity_cli.config import SPECIFICATIONS_KEY, config_file
+from curiosity_cli.schema import OVERRIDES
 from curiosity_cli.errors import ConfigError
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.sweep import overlap, value_text

@@ -70,17 +70,17 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 from pathlib import Path
 
-from curiosity_cli.config import OVERRIDES, ExperimentConfig, config_file, load_config
+from curiosity_cli.config import ExperimentConfig, config_file, load_config
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.paths import DEFAULT_RESULTS
+from curiosity_cli.schema import MAX_NAME, OVERRIDES
 
 if TYPE_CHECKING:
     from curiosity_cli.specifications import Specification
 
 _SAFE = re.compile(r"[^A-Za-z0-9_.-]+")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
-_MAX_NAME = 120
 _OPENING, _CLOSING = "[{", "]}"
 
 
@@ -384,8 +384,8 @@ def combination_name(overrides: Iterable[str]) -> str:
     """
     overrides = list(overrides)
     name = "_".join(_part(*text.split("=", 1)) for text in overrides)
-    if len(name) > _MAX_NAME:
-        name = f"{name[:_MAX_NAME - 9].rstrip('-_.')}-{_digest(json.dumps(overrides), 8)}"
+    if len(name) > MAX_NAME:
+        name = f"{name[:MAX_NAME - 9].rstrip('-_.')}-{_digest(json.dumps(overrides), 8)}"
     return name
 
 

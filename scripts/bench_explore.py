@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.config import CONFIG_DIR, load_config
-from curiosity_cli.data import load_map
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.explore.walker import explore
 from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS
 from curiosity_cli.topics.model import TopicModel

@@ -30,8 +30,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from curiosity_cli.config import CONFIG_DIR, dataset_names, load_words_config
-from curiosity_cli.data import load_map
+from curiosity_cli.config import CONFIG_DIR, load_words_config
+from curiosity_cli.maps.datasets import dataset_names
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.words.extract import extract_words
 from curiosity_cli.words.kinds import OrbSettings, orb_features
 from curiosity_cli.words.filterbank import mr8_responses, normalise_responses

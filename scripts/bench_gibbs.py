@@ -143,7 +143,7 @@ def _rss_mb() -> float:
 
 
 def _ours(spec: dict, words: np.ndarray, cell_start: np.ndarray, rows: int, cols: int, vocabulary_size: int) -> tuple:
-    from curiosity_cli.cell_grid import SquareGrid
+    from curiosity_cli.maps.cell_grid import SquareGrid
     from curiosity_cli.topics.model import TopicModel
 
     def build(rows, cols, cell_start, seed):
@@ -254,7 +254,7 @@ def prepare_corpora(names: list[str], quick: bool, seed: int, folder: Path) -> d
             words, cell_start, shape = corpus.words, corpus.cell_start, (grid, grid, SYNTHETIC["vocabulary_size"])
         else:
             from curiosity_cli.config import CONFIG_DIR, load_words_config
-            from curiosity_cli.data import load_map
+            from curiosity_cli.maps.map_data import load_map
             from curiosity_cli.paths import DEFAULT_CACHE
             from curiosity_cli.words.extract import extract_words
 

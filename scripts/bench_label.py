@@ -30,8 +30,8 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 from curiosity_cli.config import CONFIG_DIR, load_config
-from curiosity_cli.data import load_map
-from curiosity_cli.evaluate.label_sampling import map_chains, whole_map_model
+from curiosity_cli.maps.map_data import load_map
+from curiosity_cli.label.sampling import map_chains, whole_map_model
 from curiosity_cli.explore.walker import explore
 from curiosity_cli.words.extract import extract_words
 

@@ -26,7 +26,7 @@ import time
 
 from bench_label import setup  # the same maps and Φ_p as the CPU benchmark (this script's folder is on the path)
 
-from curiosity_cli.evaluate.label_sampling import map_chains
+from curiosity_cli.label.sampling import map_chains
 from curiosity_cli.topics.devices import cuda_missing
 
 CHAINS = (16, 64, 256)

@@ -37,11 +37,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from curiosity_cli.config import CONFIG_DIR, dataset_path, load_config, load_dataset_config
-from curiosity_cli.data import load_map
+from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.maps.datasets import dataset_path, load_dataset_config
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.evaluate.information import contingency
 from curiosity_cli.topics.devices import resolve_device
-from curiosity_cli.evaluate.label_sampling import batch_labels, label_paths, pixel_labels, whole_map_model
+from curiosity_cli.label.sampling import batch_labels, label_paths, pixel_labels, whole_map_model
 from curiosity_cli.explore.walker import explore
 from curiosity_cli.words.extract import extract_words
 

@@ -38,7 +38,7 @@ import time
 from pathlib import Path
 
 from curiosity_cli.config import CONFIG_DIR, load_config
-from curiosity_cli.evaluate.label_stage import label_experiment
+from curiosity_cli.label.stage import label_experiment
 from curiosity_cli.explore.grid import run_grid
 from curiosity_cli.paths import DEFAULT_CACHE
 

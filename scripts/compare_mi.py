@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from curiosity_cli.evaluate.tables import CONVERGENCE_TOLERANCE, within_noise
+from curiosity_cli.evaluate.statistics import CONVERGENCE_TOLERANCE, within_noise
 from curiosity_cli.experiment.layout import ExperimentFolder
 
 RUN = ["dataset", "weight_function", "restart", "path_length"]

@@ -44,7 +44,7 @@ def explore(out: Path, args) -> Path:
         f"explore.weight_functions={WEIGHTS}", "name=device-compare", f"label.sweeps={args.sweeps}",
         f"label.warm_sweeps={args.warm_sweeps}", f"label.batch_sweeps={args.batch_sweeps}",
     ]
-    return api.explore("quick", overrides=overrides, results_dir=out, jobs=args.jobs)
+    return api.explore("quick", overrides=overrides, results_dir=out, jobs=args.jobs).folder
 
 
 def label_files(folder: Path) -> list[Path]:
@@ -84,12 +84,12 @@ def compare_files(a: Path, b: Path) -> list[str]:
 
 def diagnose(folder: Path, args) -> None:
     """Step 3 (module docstring): where the CPU's and the GPU's sweeps part."""
-    from curiosity_cli.evaluate.label_sampling import map_chains
+    from curiosity_cli.label.sampling import map_chains
     from curiosity_cli.experiment.saved_config import load_saved_config
     from curiosity_cli.explore.runs import read_run
     from curiosity_cli.explore.walker import SparseCounts
     from curiosity_cli.words.extract import extract_words
-    from curiosity_cli.data import load_map
+    from curiosity_cli.maps.map_data import load_map
 
     config = load_saved_config(folder)
     store = extract_words(load_map(args.map), config.words).store

@@ -46,7 +46,7 @@ from pathlib import Path
 
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import display_path
-from curiosity_cli.sources import sources_dir
+from curiosity_cli.maps.sources import sources_dir
 
 from embedded_maps.map_files import compare_maps, write_map
 from embedded_maps.seeding import MAP_NAMES

@@ -23,8 +23,8 @@ import time
 import numpy as np
 
 from curiosity_cli.config import CONFIG_DIR, load_config
-from curiosity_cli.data import load_map
-from curiosity_cli.evaluate.label_sampling import whole_map_model
+from curiosity_cli.maps.map_data import load_map
+from curiosity_cli.label.sampling import whole_map_model
 from curiosity_cli.words.extract import extract_words
 
 TOPICS = (8, 16, 32, 64, 128)

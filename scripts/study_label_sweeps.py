@@ -39,11 +39,11 @@ import numpy as np
 import pandas as pd
 
 from curiosity_cli.config import CONFIG_DIR, load_config
-from curiosity_cli.data import load_map
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.evaluate.information import contingency, mutual_information
-from curiosity_cli.evaluate.label_sampling import label_paths, map_chains, pixel_labels
-from curiosity_cli.evaluate.label_stage import path_seed
-from curiosity_cli.evaluate.tables import CONVERGENCE_TOLERANCE, within_noise
+from curiosity_cli.label.sampling import label_paths, map_chains, pixel_labels
+from curiosity_cli.label.sampling import path_seed
+from curiosity_cli.evaluate.statistics import CONVERGENCE_TOLERANCE, within_noise
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.explore.runs import read_run
 from curiosity_cli.paths import DEFAULT_CACHE

@@ -84,6 +84,27 @@ def grid_yaml(own_map: Path, folder: Path) -> Path:
     return path
 
 
+def tiny_yaml(own_map: Path, folder: Path) -> Path:
+    """A tiny experiment a user would write: the own_map fixture in 8 px cells (12 x 16),
+    2 weight functions x 2 restarts x 80 steps (the headline's length), few samples and sweeps."""
+    edit_yaml(own_map, cell_width=8)
+    text = {
+        "base": str(CONFIG_DIR / "paper.yaml"),
+        "name": "tiny",
+        "seed": 0,
+        "datasets": [str(own_map)],
+        "model": {"topics": 4},
+        "explore": {
+            "weight_functions": ["random-walk", "topic-perplexity"], "restarts": 2, "path_length": 80,
+            "checkpoints": [80], "samples_per_step": 1000,
+        },
+        "label": {"sweeps": 2, "warm_sweeps": 1, "batch_sweeps": 4},
+    }
+    path = folder / "tiny.yaml"
+    path.write_text(yaml.safe_dump(text, sort_keys=False))
+    return path
+
+
 def edit_yaml(path: Path, **changes) -> Path:
     """Rewrite keys of a YAML file in place (a value of ... deletes the key)."""
     data = yaml.safe_load(path.read_text())

@@ -9,16 +9,16 @@ import yaml
 
 from curiosity_cli.config import (
     CONFIG_DIR,
+    COVERAGE_READINGS,
     SHIPPED_VOCABULARIES,
     ExperimentConfig,
-    dataset_names,
     load_config,
-    load_dataset_config,
     saved_yaml,
     shipped_configs,
     to_yaml,
 )
 from curiosity_cli.errors import ConfigError
+from curiosity_cli.maps.datasets import dataset_names, load_dataset_config
 
 EXPERIMENTS = sorted(p for p in CONFIG_DIR.glob("*.yaml") if p.name != "paper.yaml")
 
@@ -399,7 +399,7 @@ def test_the_converged_schedule_sets_its_two_label_keys_and_refuses_a_clash():
         (
             "explore:\n  min_d2: 0.5\n",
             "exp.yaml: explore.min_d2: got 0.5 without explore.coverage; the reading of eq. 8 is now named there "
-            "(one of literal, clamp, others): add explore.coverage: clamp",
+            f"(one of {', '.join(COVERAGE_READINGS)}): add explore.coverage: clamp",
         ),
     ],
 )
@@ -409,11 +409,11 @@ def test_bad_readings_of_eq_8_are_refused_naming_the_key(tmp_path, text, message
     assert message in str(info.value) and "\n" not in str(info.value)
 
 
-def test_each_reading_is_one_value_and_the_floor_counts_only_for_the_clamp():
-    for reading in ("literal", "clamp", "others"):
-        config = load_config(CONFIG_DIR / "quick.yaml", [f"explore.coverage={reading}"])
-        assert config.explore.coverage == reading and config.explore.min_d2 == 0.25
-        assert ("min_d2" in config.explore.run_settings()) == (reading == "clamp")
+def test_each_reading_is_one_value_and_the_floor_counts_only_where_the_reading_reads_it():
+    for reading in COVERAGE_READINGS.values():
+        config = load_config(CONFIG_DIR / "quick.yaml", [f"explore.coverage={reading.name}"])
+        assert config.explore.coverage == reading.name and config.explore.min_d2 == 0.25
+        assert ("min_d2" in config.explore.run_settings()) == reading.reads_min_d2
     clamp = load_config(CONFIG_DIR / "quick.yaml", ["explore.coverage=clamp", "explore.min_d2=0.5"])
     assert clamp.explore.run_settings()["min_d2"] == 0.5
     # a floor on the command line without a reading is the old syntax: refused, naming the option

@@ -1,14 +1,17 @@
 """Data flows one way: no module imports a later stage of the pipeline (read with ``ast``, nothing imported).
 
-The stages in order are ``words``, ``topics``, ``explore``, ``evaluate``, ``plots``: a
-stage may import the bottom layer, itself and the stages before it. ``experiment`` (the
-experiment folder as a unit: its layout, recipes, files and maps' facts) sits between
-``topics`` and ``explore``: the stages that read and write experiment folders ask it,
-and it asks ``words`` how a map's word store is named. ``drive`` may import ``words``,
-``topics`` and ``experiment`` (provenance); no stage imports ``drive``. The bottom layer (the top-level
-modules: config, errors, files, data ...) imports no stage at all, and nothing below the
-command line imports ``cli``. Imports inside functions and under ``TYPE_CHECKING`` count
-as much as those at the top of a module.
+The stages in order are ``maps``, ``words``, ``topics``, ``experiment``, ``explore``,
+``label``, ``evaluate``, ``plots``: a stage may import the bottom layer, ``config``,
+itself and the stages before it. ``experiment`` (the experiment folder as a unit: its
+layout, recipes, files and maps' facts) sits between ``topics`` and ``explore``: the
+stages that read and write experiment folders ask it, and it asks ``words`` how a map's
+word store is named. ``config`` (the experiment settings) sits between ``maps`` and
+``words``: it checks the maps a config names against the map registry, and every stage
+after reads its settings. ``drive`` may import ``maps``, ``words``, ``topics`` and
+``experiment`` (provenance); no stage imports ``drive``. The bottom layer (the top-level
+modules: errors, files, paths, schema, workers ...) imports no stage and not ``config``,
+and nothing below the command line imports ``cli``. Imports inside functions and under
+``TYPE_CHECKING`` count as much as those at the top of a module.
 """
 
 from __future__ import annotations
@@ -19,11 +22,12 @@ from pathlib import Path
 import curiosity_cli
 
 PACKAGE = Path(curiosity_cli.__file__).parent
-STAGES = ("words", "topics", "experiment", "explore", "evaluate", "plots")
+STAGES = ("maps", "words", "topics", "experiment", "explore", "label", "evaluate", "plots")
 
 #: What each room of the package may import besides the bottom layer and itself.
-ALLOWED = {stage: set(STAGES[:i]) for i, stage in enumerate(STAGES)}
-ALLOWED["drive"] = {"words", "topics", "experiment"}
+ALLOWED = {stage: set(STAGES[:i]) | ({"config"} if i else set()) for i, stage in enumerate(STAGES)}
+ALLOWED["config"] = {"maps"}
+ALLOWED["drive"] = {"maps", "config", "words", "topics", "experiment"}
 
 #: Modules that put several stages together, and why; they may import any stage.
 ORCHESTRATORS = {
@@ -78,7 +82,7 @@ def violations(package: Path = PACKAGE) -> list[str]:
         allowed = ALLOWED.get(own, set()) | {own}
         for name, line in imported_modules(path, module):
             target = room(name)
-            if target in (*STAGES, "drive", "cli", "__main__") and target not in allowed:
+            if target in (*STAGES, "config", "drive", "cli", "__main__") and target not in allowed:
                 found.append(f"{path.relative_to(package.parent)}:{line}: imports {name}")
     return found
 
@@ -102,8 +106,19 @@ def test_the_check_sees_imports_inside_functions_relative_ones_and_the_bottom_la
     (fake / "files.py").write_text("import curiosity_cli.drive.link\nfrom curiosity_cli import errors\n")
     (fake / "topics" / "__init__.py").write_text("")
     (fake / "topics" / "model.py").write_text("from ..evaluate import tables\nfrom . import neighbours\nfrom ..words import store\n")
+    (fake / "maps").mkdir()
+    (fake / "maps" / "__init__.py").write_text("")
+    (fake / "maps" / "datasets.py").write_text("from curiosity_cli import schema\nfrom curiosity_cli.config import load_config\n")
+    (fake / "paths.py").write_text("from curiosity_cli.config import CONFIG_DIR\n")
+    (fake / "workers.py").write_text("from curiosity_cli.maps import datasets\n")  # config may import maps; the bottom may not
+    (fake / "config.py").write_text(
+        "from curiosity_cli.maps.datasets import dataset_path\ndef load():\n    from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS\n"
+    )
     assert violations(fake) == [
-        "curiosity_cli/config.py:2: imports curiosity_cli.explore.weights.WEIGHT_FUNCTIONS",
+        "curiosity_cli/config.py:3: imports curiosity_cli.explore.weights.WEIGHT_FUNCTIONS",
         "curiosity_cli/files.py:1: imports curiosity_cli.drive.link",
+        "curiosity_cli/maps/datasets.py:2: imports curiosity_cli.config.load_config",
+        "curiosity_cli/paths.py:1: imports curiosity_cli.config.CONFIG_DIR",
         "curiosity_cli/topics/model.py:1: imports curiosity_cli.evaluate.tables",
+        "curiosity_cli/workers.py:1: imports curiosity_cli.maps.datasets",
     ]

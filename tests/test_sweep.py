@@ -7,7 +7,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 import yaml
-from small_maps import edit_yaml
+from small_maps import tiny_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
@@ -24,27 +24,6 @@ from curiosity_cli.sweep import (
 )
 
 runner = CliRunner()
-
-
-def tiny_yaml(own_map: Path, folder: Path) -> Path:
-    """A tiny experiment a user would write: the own_map fixture in 8 px cells (12 x 16),
-    2 weight functions x 2 restarts x 80 steps (the headline's length), few samples and sweeps."""
-    edit_yaml(own_map, cell_width=8)
-    text = {
-        "base": str(CONFIG_DIR / "paper.yaml"),
-        "name": "tiny",
-        "seed": 0,
-        "datasets": [str(own_map)],
-        "model": {"topics": 4},
-        "explore": {
-            "weight_functions": ["random-walk", "topic-perplexity"], "restarts": 2, "path_length": 80,
-            "checkpoints": [80], "samples_per_step": 1000,
-        },
-        "label": {"sweeps": 2, "warm_sweeps": 1, "batch_sweeps": 4},
-    }
-    path = folder / "tiny.yaml"
-    path.write_text(yaml.safe_dump(text, sort_keys=False))
-    return path
 
 
 def sweep(config: Path, results: Path, *options: str):

@@ -1,17 +1,22 @@
-"""The ``curiosity`` command line: thin commands over the library.
+"""The ``curiosity`` command line: thin commands over :mod:`curiosity_cli.api`.
 
-Every command module registers itself on :data:`app`. A library :class:`CuriosityError`
-becomes ``Error: …`` on stderr and exit code 1; usage mistakes exit 2 (click's own).
+Every command module registers itself on :data:`app`; a command parses its options, calls
+the API function of the same name and reports what it returns. A library
+:class:`CuriosityError` becomes ``Error: …`` on stderr and exit code 1; usage mistakes
+exit 2 (click's own, and a :class:`UsageError` of the API, :func:`usage_errors`).
 Heavy libraries are imported inside commands so ``curiosity --help`` stays instant.
 """
 
 from __future__ import annotations
 
+import functools
+import inspect
+
 import typer
 from typer.core import TyperGroup
 
 from curiosity_cli import __version__
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import CuriosityError, UsageError
 
 
 class _ErrorMappingGroup(TyperGroup):
@@ -67,6 +72,25 @@ def _options(command):
         yield from _options(sub)
 
 
+def usage_errors(command):
+    """``command`` with the API's :class:`UsageError` reported as click's usage error (exit code 2) on the
+    option that gave its parameter, other arguments it names written as their options."""
+
+    flags = {
+        name: param.default.param_decls[0] for name, param in inspect.signature(command).parameters.items()
+        if isinstance(param.default, typer.models.OptionInfo) and param.default.param_decls
+    }
+
+    @functools.wraps(command)
+    def reporting(*args, **kwargs):
+        try:
+            return command(*args, **kwargs)
+        except UsageError as exc:
+            raise typer.BadParameter(exc.detail(flags), param_hint=flags.get(exc.parameter, exc.parameter)) from None
+
+    return reporting
+
+
 app = typer.Typer(
     cls=_ErrorMappingGroup,
     help="Curiosity-driven exploration experiments (Girdhar & Dudek) on map mosaics, "
@@ -93,7 +117,7 @@ def _root(
 
 
 # Registration order is the order `--help` lists the commands: the pipeline's order.
-from curiosity_cli.cli import datasets, vocab, extract, explore, label, plot, reproduce, drive, config_cmd  # noqa: E402,F401
+from curiosity_cli.cli import datasets, vocab, extract, explore, label, evaluate, plot, reproduce, drive, config_cmd  # noqa: E402,F401
 
 
 def main() -> None:

@@ -7,34 +7,21 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app
+from curiosity_cli.cli import app, usage_errors
 from curiosity_cli.cli.progress import StagedProgress
 
 _CONFIG_HELP = "Experiment config whose model, words and drive sections (and seed) to use: a YAML file or a shipped config's name."
 _START_HELP = "Start position ROW,COL in map pixels; default the map's centre."
 
 
-def _finite(value: float | None) -> float | None:
-    """A float option's value, refused unless finite: ``nan`` and ``inf`` parse as floats but steer nowhere."""
-    import math
-
-    if value is not None and not math.isfinite(value):
-        raise typer.BadParameter(f"got {value}, expected a finite number")
-    return value
-
-
-def _parse_start(text: str | None, map_shape: tuple[int, int]) -> tuple[float, float]:
-    """``--start ROW,COL`` as (row, col) in map pixels, the map's centre without it; a usage error unless inside the map."""
+def _parse_start(text: str | None) -> tuple[float, float] | None:
+    """``--start ROW,COL`` as (row, col) in map pixels; None without it."""
     if text is None:
-        return map_shape[0] / 2, map_shape[1] / 2
+        return None
     try:
         row, col = (float(part) for part in text.split(","))
     except ValueError:
         raise typer.BadParameter(f"got {text!r}, expected ROW,COL in map pixels, e.g. 1250,1250", param_hint="--start") from None
-    if not (0 <= row <= map_shape[0] and 0 <= col <= map_shape[1]):
-        raise typer.BadParameter(
-            f"got {text!r}, expected a point inside the map ({map_shape[0]} x {map_shape[1]} px)", param_hint="--start"
-        )
     return row, col
 
 
@@ -46,6 +33,7 @@ class Clock(str, enum.Enum):
 
 
 @app.command("drive")
+@usage_errors
 def drive(
     serial: str = typer.Option(None, "--serial", metavar="PORT", help="Serial device or pyserial URL of the robot; default the config's drive.port."),
     baud: int = typer.Option(None, "--baud", min=1, help="Serial speed; default the config's drive.baud (115200)."),
@@ -54,7 +42,7 @@ def drive(
     topic: str = typer.Option(None, "--topic", help="With a bag: its image topic; may be left out when it has one."),
     sim_map: str = typer.Option(None, "--sim-map", help="With --camera sim: the map the simulated robot is on (name or dataset YAML)."),
     start: str = typer.Option(None, "--start", metavar="ROW,COL", help="With --dry-run --camera sim: start position ROW,COL in map pixels; default the map's centre."),
-    heading_deg: float = typer.Option(None, "--heading-deg", callback=_finite, help="With --dry-run --camera sim: start heading, degrees clockwise from the map's +col axis (default 0)."),
+    heading_deg: float = typer.Option(None, "--heading-deg", help="With --dry-run --camera sim: start heading, degrees clockwise from the map's +col axis (default 0)."),
     config: Path = typer.Option("paper-grid", "--config", help=_CONFIG_HELP),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a config key, e.g. --set drive.gamma=0.5."),
     seed: int = typer.Option(None, "--seed", min=0, help="Seed of the topic models; default the config's seed."),
@@ -73,44 +61,15 @@ def drive(
 
     Protocol: curiosity_cli/drive/PROTOCOL.md. Ctrl-C sends STOP, then exits with 130.
     """
-    from curiosity_cli.config import load_config
+    from curiosity_cli import api
     from curiosity_cli.drive.bags import is_bag
     from curiosity_cli.drive.driver import RUN_LOG
-    from curiosity_cli.drive.session import drive_session
     from curiosity_cli.files import display_path
 
     if timeline is not None:
-        from curiosity_cli.drive.session import redraw_timeline
-
-        for path in redraw_timeline(timeline, clock.value):
+        for path in api.redraw_timeline(timeline, clock.value):
             typer.echo(f"wrote {display_path(path)}")
         return
-    if dry_run and serial is not None:
-        raise typer.BadParameter("--dry-run sends nothing; leave out --serial", param_hint="--dry-run")
-    if (camera == "sim") != (sim_map is not None):
-        raise typer.BadParameter("--camera sim and --sim-map go together", param_hint="--sim-map")
-    if (start is not None or heading_deg is not None) and not (dry_run and camera == "sim"):
-        raise typer.BadParameter(
-            "only a dry run simulates the robot here; give the start to `curiosity simrobot`",
-            param_hint="--start" if start is not None else "--heading-deg",
-        )
-    resolved = load_config(config, overrides)
-    port = serial or resolved.drive.port
-    if not dry_run and port is None:
-        raise typer.BadParameter("give the robot's port with --serial (or drive.port in the config), or --dry-run", param_hint="--serial")
-    map_data, start_at = None, None
-    if sim_map is not None:
-        from curiosity_cli.data import load_map
-
-        map_data = load_map(sim_map)
-        if dry_run:
-            if resolved.drive.sim_frame_interval <= 0:
-                raise typer.BadParameter(
-                    "a dry run with --camera sim needs drive.sim_frame_interval > 0 (the simulated time per frame)",
-                    param_hint="--set",
-                )
-            start_at = _parse_start(start, map_data.image.shape[:2])
-
     bar = StagedProgress()
     replay = is_bag(camera)
 
@@ -125,10 +84,10 @@ def drive(
             )
 
     with bar:
-        outcome, folder = drive_session(
-            resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic,
-            port=None if dry_run else port, baud=baud, sim_map=map_data, start=start_at, heading_deg=heading_deg or 0.0,
-            out=out, force=force, strict=strict, clock=clock.value, video_out=video_out, png_every=png_every, max_frames=max_frames,
+        outcome, folder = api.drive(
+            serial=serial, baud=baud, dry_run=dry_run, camera=camera, topic=topic, sim_map=sim_map,
+            start=_parse_start(start), heading_deg=heading_deg, config=config, overrides=overrides, seed=seed, out=out,
+            force=force, clock=clock.value, strict=strict, video_out=video_out, png_every=png_every, max_frames=max_frames,
             on_status=lambda line: typer.echo(line, err=True), on_frame=progress, on_replay=bar.stage,
         )
     stopped = {True: "; STOP acknowledged", False: "; STOP sent, not acknowledged", None: ""}[outcome.stop_acked]
@@ -145,13 +104,14 @@ _SIGNAL_EXIT = {"SIGINT": 130, "SIGTERM": 143}
 
 
 @app.command("simrobot")
+@usage_errors
 def simrobot(
     map_name: str = typer.Option(..., "--map", help="The map the robot moves over (name or dataset YAML)."),
     start: str = typer.Option(None, "--start", metavar="ROW,COL", help=_START_HELP),
-    heading_deg: float = typer.Option(0.0, "--heading-deg", callback=_finite, help="Start heading, degrees clockwise from the map's +col axis."),
+    heading_deg: float = typer.Option(0.0, "--heading-deg", help="Start heading, degrees clockwise from the map's +col axis."),
     noise: str = typer.Option("", "--noise", metavar="KIND=RATE,...", help="Line noise on what the robot sends: garbage, checksum, truncate, drop-ack, each a rate 0..1."),
     seed: int = typer.Option(None, "--seed", min=0, help="Seed of the noise; default the config's seed."),
-    estop_after: float = typer.Option(None, "--estop-after", min=0, metavar="SECONDS", callback=_finite, help="Send ESTOP this long after the first VEL."),
+    estop_after: float = typer.Option(None, "--estop-after", min=0, metavar="SECONDS", help="Send ESTOP this long after the first VEL."),
     link: Path = typer.Option(None, "--link", help="Also make this symlink to the pseudo-terminal (a fixed name for scripts)."),
     log_file: Path = typer.Option(None, "--log", help="Write the robot's events (frames received, watchdog, noise) as JSON Lines."),
     config: Path = typer.Option("paper-grid", "--config", help=_CONFIG_HELP),
@@ -161,31 +121,22 @@ def simrobot(
 
     Prints the pseudo-terminal's path, then serves the robot side of the protocol until Ctrl-C.
     """
-    from curiosity_cli.config import load_config
-    from curiosity_cli.data import load_map
-    from curiosity_cli.drive.session import simrobot_session
-    from curiosity_cli.drive.simrobot import Noise
+    from curiosity_cli import api
     from curiosity_cli.files import display_path
 
-    resolved = load_config(config, overrides)
-    rates = Noise.parse(noise)
-    map_data = load_map(map_name)
-    shape = map_data.image.shape[:2]
-    row, col = _parse_start(start, shape)
-    mpp = resolved.drive.sim_metres_per_pixel
-
-    def ready(path: str) -> None:
+    def ready(path: str, robot) -> None:
+        shape = robot.map_data.image.shape[:2]
         typer.echo(path)
         typer.echo(
-            f"simrobot: {map_data.config.name} ({shape[0]} x {shape[1]} px at {mpp:g} m/px), start row {row:.0f} "
-            f"col {col:.0f}, heading {heading_deg:g} deg; connect with\n"
+            f"simrobot: {robot.map_data.config.name} ({shape[0]} x {shape[1]} px at {robot.metres_per_pixel:g} m/px), "
+            f"start row {robot.row:.0f} col {robot.col:.0f}, heading {robot.heading_deg:g} deg; connect with\n"
             f"  curiosity drive --serial {display_path(link) if link else path} --camera sim --sim-map {map_name}",
             err=True,
         )
 
-    stopped_by = simrobot_session(
-        resolved, map_data, start=(row, col), heading_deg=heading_deg, noise=rates,
-        seed=resolved.seed if seed is None else seed, estop_after=estop_after, link=link, log_file=log_file, on_ready=ready,
+    stopped_by = api.simrobot(
+        map_name, start=_parse_start(start), heading_deg=heading_deg, noise=noise, seed=seed, estop_after=estop_after,
+        link=link, log_file=log_file, config=config, overrides=overrides, on_ready=ready,
     )
     typer.echo(f"simrobot: stopped by {stopped_by}", err=True)
     raise typer.Exit(_SIGNAL_EXIT[stopped_by])

@@ -2,25 +2,25 @@
 
 from __future__ import annotations
 
-import dataclasses
 import enum
 from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app
+from curiosity_cli.cli import app, usage_errors
 from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 
 class Backend(str, enum.Enum):
-    """Where runs are computed (``curiosity_cli.experiment.workers.BACKENDS``)."""
+    """Where runs are computed (``curiosity_cli.workers.BACKENDS``)."""
 
     loky = "loky"
     dask = "dask"
 
 
 @app.command("explore")
+@usage_errors
 def explore(
     config: Path = typer.Argument("quick", help="Experiment YAML, or a shipped config's name (quick, paper-grid, readings)."),
     maps: list[str] = typer.Option([], "--map", help="Only this map (repeatable); default the config's datasets."),
@@ -39,45 +39,19 @@ def explore(
 
     Finished runs are kept: run the same command again to resume a stopped grid.
     """
-    from curiosity_cli.config import dataset_path, load_config
-    from curiosity_cli.errors import ConfigError
-    from curiosity_cli.explore.grid import run_grid
-    from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS
+    from curiosity_cli import api
     from curiosity_cli.files import display_path
-
-    if scheduler is not None and backend is not Backend.dask:
-        raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")
-    options = []
-    if maps:
-        try:
-            paths = [str(dataset_path(name).resolve()) for name in maps]
-        except ConfigError as exc:
-            raise typer.BadParameter(str(exc), param_hint="--map") from None
-        options.append(f"datasets={paths}")
-    if weights is not None:
-        names = [name.strip() for name in weights.split(",")]
-        for name in names:
-            if name not in WEIGHT_FUNCTIONS:
-                raise typer.BadParameter(f"got {name!r}, expected one of {', '.join(WEIGHT_FUNCTIONS)}", param_hint="--weights")
-        options.append(f"explore.weight_functions={names}")
-    if restarts is not None:
-        options.append(f"explore.restarts={restarts}")
-    resolved = load_config(config, [*overrides, *options])
-    if steps is not None:
-        kept = tuple(c for c in resolved.explore.checkpoints if c < steps) + (steps,)
-        resolved = dataclasses.replace(
-            resolved, explore=dataclasses.replace(resolved.explore, path_length=steps, checkpoints=kept)
-        )
 
     with StagedProgress() as progress:
 
-        def prepared(to_run: int, skipped: int) -> None:
-            typer.echo(f"{resolved.name}: {to_run} runs to do, {skipped} already finished", err=True)
+        def prepared(name: str, to_run: int, skipped: int) -> None:
+            typer.echo(f"{name}: {to_run} runs to do, {skipped} already finished", err=True)
             progress.stage("exploring", to_run)
 
-        summary = run_grid(
-            resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-            on_prepared=prepared, on_run=progress.advance, backend=backend.value, scheduler=scheduler,
+        summary = api.explore(
+            config, maps=maps, weights=None if weights is None else [walker.strip() for walker in weights.split(",")],
+            restarts=restarts, steps=steps, overrides=overrides, jobs=jobs, force=force, results_dir=results_dir,
+            cache_dir=cache_dir, backend=backend.value, scheduler=scheduler, on_prepared=prepared, on_run=progress.advance,
         )
     typer.echo(
         f"wrote {summary.ran} runs ({summary.bytes_written / 1e6:.1f} MB) to {display_path(summary.folder)} "

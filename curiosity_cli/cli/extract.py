@@ -6,11 +6,12 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app
+from curiosity_cli.cli import app, usage_errors
 from curiosity_cli.paths import DEFAULT_CACHE
 
 
 @app.command("extract")
+@usage_errors
 def extract(
     dataset: str = typer.Argument(..., help="A registered map name or a path to a dataset YAML."),
     config: Path = typer.Option("paper", "--config", help="Config whose `words` section to use: a YAML file or a shipped config's name."),
@@ -24,16 +25,13 @@ def extract(
     """Extract ORB and texton words (hue words optional) into a cached word store."""
     import numpy as np
 
-    from curiosity_cli.config import load_words_config
-    from curiosity_cli.data import load_map
+    from curiosity_cli import api
     from curiosity_cli.files import display_path
-    from curiosity_cli.words.extract import extract_words
 
-    if density is not None and density.suffix.lower() != ".png":
-        raise typer.BadParameter(f"got {density}, expected a path ending in .png (the figure is a PNG)", param_hint="--density")
-    words = load_words_config(config, overrides)
-    map_data = load_map(dataset)
-    result = extract_words(map_data, words, stride=stride, cell_width=cell_width, cache_dir=cache_dir, force=force)
+    result = api.extract(
+        dataset, config=config, overrides=overrides, stride=stride, cell_width=cell_width, cache_dir=cache_dir,
+        force=force, density=density,
+    )
     store = result.store
     per_cell = store.words_per_cell()
     typer.echo(f"{'reused' if result.reused else 'wrote'} {display_path(result.path)}")
@@ -48,7 +46,4 @@ def extract(
     if result.seconds:
         typer.echo("seconds: " + ", ".join(f"{k} {v:.2f}" for k, v in result.seconds.items()))
     if density is not None:
-        from curiosity_cli.plots.words import write_word_density
-
-        write_word_density(map_data, store, density)
         typer.echo(f"wrote {display_path(density)}")

@@ -6,14 +6,16 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app
+from curiosity_cli.cli import app, usage_errors
 from curiosity_cli.paths import DEFAULT_RESULTS
 
 
 @app.command("plot")
+@usage_errors
 def plot(
-    experiment_dir: Path = typer.Argument(
-        DEFAULT_RESULTS / "quick", help="Experiment folder holding mi.csv and summary.csv from `curiosity evaluate`."
+    folder: Path = typer.Argument(
+        DEFAULT_RESULTS / "quick", metavar="EXPERIMENT_DIR",
+        help="Experiment folder holding mi.csv and summary.csv from `curiosity evaluate`.",
     ),
     animate: str = typer.Option(None, "--animate", metavar="MAP/WALKER/RESTART", help="Instead of the figures, an animation of one run: its path growing over the map beside Z_p at each checkpoint, e.g. aerial-mosaic/topic-perplexity/0."),
     out: Path = typer.Option(None, "--out", help="With --animate: the .gif (or .mp4, with FFmpeg) to write; default figures/animation-MAP-WALKER-NNN.gif."),
@@ -25,24 +27,22 @@ def plot(
 
     A figure whose inputs are missing (a map without human labels, no batch labels yet) is skipped with a note on stderr.
     """
+    from curiosity_cli import api
     from curiosity_cli.files import display_path
-    from curiosity_cli.plots.figures import write_figures
 
     if animate is not None:
-        from curiosity_cli.plots.animation import animate_run
-
         parts = animate.split("/")
         if len(parts) != 3 or not parts[2].isdigit():
             raise typer.BadParameter(f"got {animate!r}, expected MAP/WALKER/RESTART, e.g. aerial-mosaic/topic-perplexity/0", param_hint="--animate")
-        path = animate_run(experiment_dir, parts[0], parts[1], int(parts[2]), out=out, cache_dir=cache_dir)
+        path = api.animate(folder, parts[0], parts[1], int(parts[2]), out=out, cache_dir=cache_dir)
         typer.echo(f"wrote {display_path(path)}")
         return
     if out is not None or cache_dir is not None:
         raise typer.BadParameter("goes with --animate", param_hint="--out" if out is not None else "--cache-dir")
-    written = write_figures(experiment_dir)
+    written = api.plot(folder)
     for note in written.skipped:
         typer.echo(f"skipped: {note}", err=True)
     for path in written:
         typer.echo(f"wrote {display_path(path)}")
     if not written:
-        typer.echo(f"no figures written to {display_path(Path(experiment_dir) / 'figures')}", err=True)
+        typer.echo(f"no figures written to {display_path(Path(folder) / 'figures')}", err=True)

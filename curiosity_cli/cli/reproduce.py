@@ -6,13 +6,14 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app
+from curiosity_cli.cli import app, usage_errors
 from curiosity_cli.cli.explore import Backend
 from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 
 @app.command("reproduce")
+@usage_errors
 def reproduce(
     config: Path = typer.Argument(None, help="Experiment YAML; default the paper's full grid, configs/paper-grid.yaml.", show_default=False),
     quick: bool = typer.Option(False, "--quick", help="Run configs/quick.yaml instead: the real Zurich map, 10 restarts, paths up to 160 steps; minutes, not the full grid."),
@@ -39,48 +40,16 @@ def reproduce(
     --sweep, or a config that declares a sweep, once per combination of values, then
     results/<experiment>-sweep/SWEEP.md.
     """
-    from curiosity_cli.config import load_config, with_converged_labels
+    from curiosity_cli import api
     from curiosity_cli.files import display_path
-    from curiosity_cli.reproduce import reproduce as run_pipeline
-    from curiosity_cli.specifications import declared_specifications
-    from curiosity_cli.sweep import declared_sweeps, merge_sweeps
 
-    if scheduler is not None and backend is not Backend.dask:
-        raise typer.BadParameter("needs --backend dask", param_hint="--scheduler")
     if quick and config is not None:
         raise typer.BadParameter(f"runs configs/quick.yaml; give it or a CONFIG ({config}), not both", param_hint="--quick")
-    if config is None:
-        config = Path("quick" if quick else "paper-grid")
-    if converged:
-        overrides = with_converged_labels(overrides)
-    sweeps = merge_sweeps(declared_sweeps(config), sweeps)
-    specifications = declared_specifications(config)
-    if sweeps or specifications:
-        _reproduce_sweep(config, overrides, sweeps, specifications, results_dir=results_dir, cache_dir=cache_dir,
-                         jobs=jobs, force=force, backend=backend.value, scheduler=scheduler)
-        return
-    resolved = load_config(config, overrides)
     with StagedProgress() as progress:
-        report = run_pipeline(
-            resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-            backend=backend.value, scheduler=scheduler, on_stage=progress.stage, on_done=progress.advance,
+        report = api.reproduce(
+            config if config is not None else ("quick" if quick else "paper-grid"), overrides=overrides, sweeps=sweeps,
+            jobs=jobs, force=force, backend=backend.value, scheduler=scheduler, results_dir=results_dir,
+            cache_dir=cache_dir, converged=converged, on_stage=progress.stage, on_done=progress.advance,
+            on_status=lambda line: typer.echo(line, err=True),
         )
-    typer.echo(f"wrote {display_path(report)}")
-
-
-def _reproduce_sweep(config: Path, overrides: list[str], sweeps: list[str], specifications, **options) -> None:
-    """``reproduce --sweep``, or of a study's specifications: check every option and combination, then run them all."""
-    from curiosity_cli.files import display_path
-    from curiosity_cli.specifications import study_size
-    from curiosity_cli.sweep import SweepSyntaxError, count, parse_sweeps, plan_sweep, run_sweep
-
-    try:
-        axes = parse_sweeps(sweeps, overrides)
-    except SweepSyntaxError as exc:
-        raise typer.BadParameter(str(exc), param_hint="--sweep") from None
-    sweep = plan_sweep(config, axes, overrides, specifications)
-    of = f" ({study_size(sweep)})" if specifications else ""
-    typer.echo(f"{count(len(sweep.combinations), 'combination')}{of}, in {display_path(sweep.folder(options['results_dir']))}", err=True)
-    with StagedProgress() as progress:
-        report = run_sweep(sweep, on_stage=progress.stage, on_done=progress.advance, **options)
     typer.echo(f"wrote {display_path(report)}")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app
+from curiosity_cli.cli import app, usage_errors
 from curiosity_cli.config import MAX_VOCABULARY
 
 vocab_app = typer.Typer(help="Learn visual vocabularies from photographs unrelated to the maps.", no_args_is_help=True)
@@ -14,6 +14,7 @@ app.add_typer(vocab_app, name="vocab")
 
 
 @vocab_app.command("build")
+@usage_errors
 def build(
     out: Path = typer.Option(Path("data/vocab"), "--out", help="Folder to write orb-N.npz and texton-N.npz to."),
     orb_words: int = typer.Option(
@@ -25,10 +26,6 @@ def build(
     seed: int = typer.Option(0, "--seed", min=0, help="Seed of the clustering."),
 ) -> None:
     """Cluster ORB descriptors (k-majority) and MR8 responses (k-means) of scikit-image's photographs."""
-    from curiosity_cli.files import display_path
-    from curiosity_cli.words.vocab import build_orb_vocabulary, build_texton_vocabulary, save_vocabulary
+    from curiosity_cli import api
 
-    for builder, size in ((build_texton_vocabulary, texton_words), (build_orb_vocabulary, orb_words)):
-        vocabulary = builder(size, seed=seed, log=typer.echo)
-        path = save_vocabulary(vocabulary, out)
-        typer.echo(f"wrote {display_path(path)} (sha256 {vocabulary.sha256[:16]}…)")
+    api.build_vocabularies(out, orb_words=orb_words, texton_words=texton_words, seed=seed, log=typer.echo)

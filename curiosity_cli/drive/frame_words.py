@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.config import DriveConfig, WordsConfig
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.words.kinds import OrbSettings, Picture, WordRecipe
@@ -93,7 +93,7 @@ class FrameWords:
         list of (n_c,) int32 ndarray
             One per image cell, row-major (``row * grid_cols + col``); the frame is cut
             into ``grid_rows x grid_cols`` cells of (near) equal size
-            (:meth:`~curiosity_cli.cell_grid.SquareGrid.cells_of_pixels`).
+            (:meth:`~curiosity_cli.maps.cell_grid.SquareGrid.cells_of_pixels`).
         """
         import cv2
 

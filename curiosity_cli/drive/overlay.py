@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.drive.controller import Command
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.errors import CuriosityError
@@ -29,7 +29,7 @@ def draw_overlay(frame: np.ndarray, scores: np.ndarray, target: tuple[int, int],
     ----------
     frame : (H, W, 3) uint8 ndarray
         RGB, any size; the grid of ``scores`` is stretched over it
-        (:meth:`~curiosity_cli.cell_grid.SquareGrid.centres`).
+        (:meth:`~curiosity_cli.maps.cell_grid.SquareGrid.centres`).
     scores : (rows, cols) float ndarray
         Curiosity scores, >= 0.
     target : (int, int)

@@ -24,7 +24,7 @@ from datetime import datetime
 from pathlib import Path
 
 from curiosity_cli.config import ExperimentConfig
-from curiosity_cli.data import MapData
+from curiosity_cli.maps.map_data import MapData
 from curiosity_cli.drive import camera as cameras
 from curiosity_cli.drive.driver import RUN_LOG, Outcome, Outputs, StopRequest, prepare_folder, run, stopping_on_signals
 from curiosity_cli.drive.jsonlines import JsonLines

@@ -79,7 +79,7 @@ class StreamModel:
         seed: int,
         vocabulary_hashes=None,
     ):
-        from curiosity_cli.cell_grid import SquareGrid
+        from curiosity_cli.maps.cell_grid import SquareGrid
         from curiosity_cli.topics import stream_neighbours
 
         self._rows = check_int("grid rows", grid[0], 1)

@@ -18,9 +18,9 @@ import numpy as np
 
 from curiosity_cli.config import ExperimentConfig, to_yaml
 from curiosity_cli.evaluate.power import POWER, TARGET_LEAD
-from curiosity_cli.evaluate.tables import (
-    ALPHA, CONFIDENCE, CONVERGENCE_TOLERANCE, HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation,
-)
+from curiosity_cli.evaluate.statistics import ALPHA
+from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation
+from curiosity_cli.evaluate.statistics import CONFIDENCE, CONVERGENCE_TOLERANCE
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT
 from curiosity_cli.explore.weights import CEILINGS, WEIGHT_FUNCTIONS
@@ -460,7 +460,7 @@ def _revisits_section(revisits, lengths: list[int], config: ExperimentConfig) ->
 def _steering_section(steering, lengths: list[int]) -> list[str]:
     """Per map and walker, the mean steering at 80 steps (or the longest length without 80),
     with what it means (:mod:`~curiosity_cli.evaluate.steering`)."""
-    from curiosity_cli.evaluate.tables import summarise_steering
+    from curiosity_cli.evaluate.statistics import summarise_steering
 
     if steering is None or steering.dropna(subset=["steering"]).empty:
         return []

@@ -9,7 +9,7 @@ Written under ``results/<experiment>/``:
   classes with pixels); ``mean_recall`` (mean per-class recall of Z_p under the best
   one-to-one topic-to-class matching, :func:`~curiosity_cli.evaluate.information.matched_recall`);
   the run's ``seed`` and ``replicate`` (the experiment's seed, whose runs are paired by
-  restart: :data:`PAIR_KEYS`); and the revisits of the path so far
+  restart: :data:`~curiosity_cli.evaluate.statistics.PAIR_KEYS`); and the revisits of the path so far
   (:mod:`~curiosity_cli.evaluate.revisits`): ``distinct_cells``, ``revisit_steps``,
   ``boxed_in_steps``. The human columns are NaN for a map without labels. A run
   labelled twice (``label.check_restarts``) has ``placed_mi_human`` and
@@ -33,8 +33,8 @@ Written under ``results/<experiment>/``:
 - ``convergence.csv``: per (dataset, path length, against), over the runs labelled
   twice: ``n``, the mean MI of each chain (``uniform``, ``placed``), their mean
   difference with its standard error, and whether it is within
-  :data:`CONVERGENCE_TOLERANCE` bits or twice its standard error (``converged``): the
-  check that Z_p has forgotten how its chain started (:func:`label_convergence`).
+  :data:`~curiosity_cli.evaluate.statistics.CONVERGENCE_TOLERANCE` bits or twice its standard error (``converged``): the
+  check that Z_p has forgotten how its chain started (:func:`~curiosity_cli.evaluate.statistics.label_convergence`).
 - ``revisits.csv``: the same as ``summary.csv`` for each revisit column (``measure``), per
   (dataset, weight function, path length).
 - ``steering.csv``: per run (``replicate`` and ``restart``) of a walker that scores its
@@ -59,7 +59,6 @@ runs left out in ``skipped.json``.
 from __future__ import annotations
 
 import contextlib
-import itertools
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -71,6 +70,10 @@ from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import first_of
+from curiosity_cli.evaluate.statistics import (
+    ALPHA, KEYS, label_convergence, paired_blocks, paired_difference, paired_tests, summarise, summarise_classes,
+    summarise_revisits, wilcoxon_p,
+)
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, open_npz
 
@@ -81,14 +84,6 @@ if TYPE_CHECKING:
 
 HEADLINE_LENGTH = 80
 HEADLINE_WEIGHT = "topic-perplexity"
-#: Significance level of "beats": a higher mean and a paired Wilcoxon p below it.
-ALPHA = 0.05
-CONFIDENCE = 0.95
-#: Bits within which two labelling chains from far-apart starts count as having met.
-CONVERGENCE_TOLERANCE = 0.01
-_KEYS = ["dataset", "weight_function", "restart", "path_length"]
-#: What pairs two walkers' runs: the same start cell and streams of one seed's experiment.
-PAIR_KEYS = ["replicate", "restart"]
 
 
 class EvaluationError(CuriosityError):
@@ -153,7 +148,7 @@ def run_rows(
     arrays : dict of str to ndarray
         ``lengths`` (n,), ``batch`` (n, K, K), optionally ``human`` (n, K, C),
         ``class_first_step`` (C,) and the second chain's ``placed_batch`` and
-        ``placed_human``, as :func:`~curiosity_cli.evaluate.label_stage.label_block` writes them.
+        ``placed_human``, as :func:`~curiosity_cli.label.stage.label_block` writes them.
     class_names : dict of int to str, optional
         The map's legend.
     steps : ((L,) int ndarray, (L,) bool ndarray), optional
@@ -170,7 +165,7 @@ def run_rows(
         mutual_information,
         normalised_mutual_information,
     )
-    from curiosity_cli.evaluate.label_stage import SECOND_PREFIX
+    from curiosity_cli.label.label_files import SECOND_PREFIX
     from curiosity_cli.evaluate.revisits import REVISIT_COLUMNS, revisit_counts
 
     human, batch = arrays.get("human"), arrays["batch"]
@@ -232,7 +227,7 @@ def label_rows(experiment: Experiment) -> LabelRows:
     CuriosityError
         A map of the config that cannot be loaded, naming it.
     """
-    from curiosity_cli.evaluate.label_stage import examples_changed, read_label_file
+    from curiosity_cli.label.label_files import examples_changed, read_label_file
     from curiosity_cli.evaluate.steering import steering_rows
     from curiosity_cli.explore.runs import RunError, read_run
 
@@ -344,182 +339,17 @@ def _in_grid(layout: ExperimentFolder, files: list[Path], planned: list[Path]) -
 def _unlabelled_runs(layout: ExperimentFolder, files: list[Path], planned: list[Path]) -> list[str]:
     """A line for each run of the grid (``planned``) that has no label file, naming the file it lacks, or the run
     folder when the run is not explored (as ``label`` names it)."""
-    from curiosity_cli.evaluate.label_stage import unexplored
+    from curiosity_cli.label.stage import unexplored
 
     lines = []
     for path in planned:
         if path not in files:
             run = layout.run(*layout.run_of_label_file(path))
-            if (run / "run.json").is_file():
+            if (run / ExperimentFolder.RUN_META).is_file():
                 lines.append(f"{display_path(path)}: not found; label the experiment to make it")
             else:
                 lines.append(unexplored(run, layout))
     return lines
-
-
-def _mean_ci(grouped) -> pd.DataFrame:
-    """``n``, ``mean``, ``std`` and the 95 % Student-t CI of the mean, per group of a grouped Series."""
-    from scipy import stats
-
-    summary = grouped.agg(n="count", mean="mean", std="std").reset_index()
-    half = stats.t.ppf(0.5 + CONFIDENCE / 2, np.maximum(summary["n"] - 1, 1)) * summary["std"].fillna(0) / np.sqrt(summary["n"])
-    summary["ci_low"] = summary["mean"] - half
-    summary["ci_high"] = summary["mean"] + half
-    return summary
-
-
-def summarise(mi):
-    """Mean, standard deviation and 95 % CI of MI per (dataset, weight function, length, against)."""
-    import pandas as pd
-
-    long = mi.melt(
-        id_vars=_KEYS, value_vars=["mi_human", "mi_batch"], var_name="against", value_name="mi",
-    ).dropna(subset=["mi"])
-    long["against"] = long["against"].str.removeprefix("mi_")
-    return pd.DataFrame(_mean_ci(long.groupby(["dataset", "weight_function", "path_length", "against"], sort=False)["mi"]))
-
-
-def summarise_classes(mi):
-    """Mean, standard deviation and 95 % CI of ``classes_found`` and ``mean_recall``
-    (``measure``) per (dataset, weight function, length), with the map's ``classes``."""
-    import pandas as pd
-
-    columns = ["dataset", "weight_function", "path_length", "measure", "classes", "n", "mean", "std", "ci_low", "ci_high"]
-    if "classes_found" not in mi:
-        return pd.DataFrame(columns=columns)
-    long = mi.melt(
-        id_vars=[*_KEYS, "classes"], value_vars=["classes_found", "mean_recall"], var_name="measure", value_name="value",
-    ).dropna(subset=["value"])
-    grouped = long.groupby(["dataset", "weight_function", "path_length", "measure", "classes"], sort=False)["value"]
-    return pd.DataFrame(_mean_ci(grouped), columns=columns)
-
-
-def summarise_revisits(mi):
-    """Mean, standard deviation and 95 % CI of each revisit column (``measure``:
-    :data:`~curiosity_cli.evaluate.revisits.REVISIT_COLUMNS`) per (dataset, weight function, length)."""
-    import pandas as pd
-
-    from curiosity_cli.evaluate.revisits import REVISIT_COLUMNS
-
-    long = mi.melt(
-        id_vars=_KEYS, value_vars=list(REVISIT_COLUMNS), var_name="measure", value_name="value",
-    ).dropna(subset=["value"])
-    grouped = long.groupby(["dataset", "weight_function", "path_length", "measure"], sort=False)["value"]
-    return pd.DataFrame(_mean_ci(grouped))
-
-
-def summarise_steering(steering):
-    """Mean, standard deviation and 95 % CI of ``steering.csv``'s ``steering`` per (dataset,
-    weight function, length) (:mod:`~curiosity_cli.evaluate.steering`)."""
-    import pandas as pd
-
-    grouped = steering.dropna(subset=["steering"]).groupby(["dataset", "weight_function", "path_length"], sort=False)
-    return pd.DataFrame(_mean_ci(grouped["steering"]))
-
-
-def within_noise(mean: float, sem: float, tolerance: float = CONVERGENCE_TOLERANCE) -> bool:
-    """Whether a mean difference in bits is within ``tolerance``, or within twice its
-    standard error over runs (not told apart from the chains' own noise)."""
-    return bool(abs(mean) < tolerance or abs(mean) < 2 * sem)
-
-
-def label_convergence(mi):
-    """The two-start check of Z_p, per (dataset, path length, against), over the runs labelled twice.
-
-    ``uniform`` and ``placed`` are the mean MI of the runs' two chains, ``difference``
-    the mean of uniform minus placed, ``sem`` its standard error (NaN for one run), and
-    ``converged`` :func:`within_noise`. Empty when no run was labelled twice.
-    """
-    import pandas as pd
-
-    columns = ["dataset", "path_length", "against", "n", "uniform", "placed", "difference", "sem", "converged"]
-    rows = []
-    for against in ("human", "batch"):
-        pairs = mi.dropna(subset=[f"mi_{against}", f"placed_mi_{against}"])
-        for (dataset, length), block in pairs.groupby(["dataset", "path_length"], sort=False):
-            diff = (block[f"mi_{against}"] - block[f"placed_mi_{against}"]).to_numpy()
-            sem = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else np.nan
-            rows.append({
-                "dataset": dataset, "path_length": int(length), "against": against, "n": int(diff.size),
-                "uniform": float(block[f"mi_{against}"].mean()), "placed": float(block[f"placed_mi_{against}"].mean()),
-                "difference": float(diff.mean()), "sem": sem, "converged": within_noise(diff.mean(), np.nan_to_num(sem)),
-            })
-    return pd.DataFrame(rows, columns=columns)
-
-
-def walkers_only(mi):
-    """The rows of walkers: ceilings (:data:`~curiosity_cli.explore.weights.CEILINGS`) left out."""
-    return mi[~mi["weight_function"].isin(CEILINGS)]
-
-
-def _paired_blocks(mi):
-    """Per (against, dataset, path length): MI of the walkers (ceilings left out), a row per restart, a column per walker."""
-    mi = walkers_only(mi)
-    for against in ("human", "batch"):
-        column = f"mi_{against}"
-        table = mi.dropna(subset=[column]).pivot_table(
-            index=["dataset", "path_length", *PAIR_KEYS], columns="weight_function", values=column
-        )
-        for (dataset, length), block in table.groupby(level=["dataset", "path_length"]):
-            yield against, dataset, length, block
-
-
-def paired_tests(mi):
-    """Wilcoxon signed-rank test between every pair of walkers, paired by restart (ceilings left out)."""
-    import pandas as pd
-    from scipy import stats
-
-    rows = []
-    for against, dataset, length, block in _paired_blocks(mi):
-        for a, b in itertools.combinations(block.columns, 2):
-            pair = block[[a, b]].dropna()
-            diff = pair[a] - pair[b]
-            if len(pair) == 0 or not diff.any():
-                p = np.nan if len(pair) == 0 else 1.0
-            else:
-                p = float(stats.wilcoxon(pair[a], pair[b]).pvalue)
-            rows.append({
-                "dataset": dataset, "path_length": length, "against": against, "a": a, "b": b,
-                "n": len(pair), "median_difference": float(diff.median()) if len(pair) else np.nan, "p_value": p,
-            })
-    return pd.DataFrame(rows, columns=["dataset", "path_length", "against", "a", "b", "n", "median_difference", "p_value"])
-
-
-def paired_difference(a: np.ndarray, b: np.ndarray, confidence: float = CONFIDENCE) -> tuple[float, float, float]:
-    """Mean of ``a - b`` and its Student-t confidence interval, as ``scipy.stats.ttest_rel(a, b)``.
-
-    Parameters
-    ----------
-    a, b : (n,) float ndarrays
-        Paired values (the same restart of two walkers).
-    confidence : float
-        Of the interval, in (0, 1).
-
-    Returns
-    -------
-    (float, float, float)
-        Mean difference, lower and upper bound. The bounds are NaN for fewer than two
-        pairs, and both the mean when every difference is the same.
-    """
-    from scipy import stats
-
-    diff = np.asarray(a, np.float64) - np.asarray(b, np.float64)
-    if diff.size == 0:
-        return np.nan, np.nan, np.nan
-    mean = float(diff.mean())
-    if diff.size < 2:
-        return mean, np.nan, np.nan
-    half = float(stats.t.ppf(0.5 + confidence / 2, diff.size - 1) * diff.std(ddof=1) / np.sqrt(diff.size))
-    return mean, mean - half, mean + half
-
-
-def _wilcoxon_p(tests, dataset: str, length: int, against: str, a: str, b: str) -> tuple[float, int]:
-    """The Wilcoxon p and pairs of ``a`` against ``b`` in ``tests`` (either order); ``(NaN, 0)`` if absent."""
-    pair = tests[
-        (tests["dataset"] == dataset) & (tests["path_length"] == length) & (tests["against"] == against)
-        & (((tests["a"] == a) & (tests["b"] == b)) | ((tests["a"] == b) & (tests["b"] == a)))
-    ]
-    return (float(pair["p_value"].iloc[0]), int(pair["n"].iloc[0])) if len(pair) else (np.nan, 0)
 
 
 def paired_effects(mi, tests=None):
@@ -527,8 +357,8 @@ def paired_effects(mi, tests=None):
 
     Per (dataset, path length, against, other walker): ``n`` pairs, the two means over
     those pairs, the mean paired difference with its 95 % Student-t CI
-    (:func:`paired_difference`) and the Wilcoxon p of the same pairs from ``tests``
-    (computed with :func:`paired_tests` when not given).
+    (:func:`~curiosity_cli.evaluate.statistics.paired_difference`) and the Wilcoxon p of the same pairs from ``tests``
+    (computed with :func:`~curiosity_cli.evaluate.statistics.paired_tests` when not given).
     """
     import pandas as pd
 
@@ -536,7 +366,7 @@ def paired_effects(mi, tests=None):
                "mean_difference", "ci_low", "ci_high", "p_value"]
     tests = paired_tests(mi) if tests is None else tests
     rows = []
-    for against, dataset, length, block in _paired_blocks(mi):
+    for against, dataset, length, block in paired_blocks(mi):
         if HEADLINE_WEIGHT not in block.columns:
             continue
         for other in block.columns.drop(HEADLINE_WEIGHT):
@@ -548,7 +378,7 @@ def paired_effects(mi, tests=None):
                 "dataset": dataset, "path_length": length, "against": against, "other": other, "n": len(pair),
                 "topic_perplexity": float(pair[HEADLINE_WEIGHT].mean()), "other_mean": float(pair[other].mean()),
                 "mean_difference": mean, "ci_low": low, "ci_high": high,
-                "p_value": _wilcoxon_p(tests, dataset, length, against, HEADLINE_WEIGHT, other)[0],
+                "p_value": wilcoxon_p(tests, dataset, length, against, HEADLINE_WEIGHT, other)[0],
             })
     return pd.DataFrame(rows, columns=columns)
 
@@ -569,7 +399,7 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
     paired Wilcoxon p of topic perplexity against that next best; the mean paired
     difference to it and its 95 % CI (from ``effects``, NaN without); ``beats_all``:
     topic perplexity's mean is above every other walker's with a paired Wilcoxon p below
-    :data:`ALPHA` against each, and ``not_beaten``: the walkers (``;``-separated) for
+    :data:`~curiosity_cli.evaluate.statistics.ALPHA` against each, and ``not_beaten``: the walkers (``;``-separated) for
     which that fails; the better ceiling, its MI and topic perplexity's share of it (no
     ceiling runs: empty and NaN); and the paper's ratio for the map the dataset stands
     in for (``stands_in_for``: dataset name to paper map name; datasets without one get
@@ -591,7 +421,7 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
         ours = walkers[HEADLINE_WEIGHT]
         others = walkers.drop(HEADLINE_WEIGHT).sort_values(ascending=False, kind="stable")
         next_best = others.index[0]
-        p_values = {o: _wilcoxon_p(tests, dataset, HEADLINE_LENGTH, against, HEADLINE_WEIGHT, o) for o in others.index}
+        p_values = {o: wilcoxon_p(tests, dataset, HEADLINE_LENGTH, against, HEADLINE_WEIGHT, o) for o in others.index}
         not_beaten = [o for o in others.index if not (ours > others[o] and p_values[o][0] < ALPHA)]
         effect = None
         if effects is not None:
@@ -629,7 +459,7 @@ def with_power(top, mi):
     from curiosity_cli.evaluate.power import TARGET_LEAD, detectable_difference, pairs_needed, ratio_interval
 
     columns = {name: [] for name in POWER_COLUMNS}
-    blocks = {(against, dataset): block for against, dataset, length, block in _paired_blocks(mi) if length == HEADLINE_LENGTH}
+    blocks = {(against, dataset): block for against, dataset, length, block in paired_blocks(mi) if length == HEADLINE_LENGTH}
     for row in top.itertuples():
         pair = blocks[(row.against, row.dataset)][[HEADLINE_WEIGHT, row.next_best]].dropna().to_numpy()
         ours, theirs = pair[:, 0], pair[:, 1]
@@ -650,8 +480,8 @@ def read_class_names(config: ExperimentConfig) -> dict[str, dict[int, str]]:
     Best effort from the datasets' YAML and legend files (no images): the names only
     label ``classes.csv`` rows.
     """
-    from curiosity_cli.config import dataset_path, load_dataset_config
-    from curiosity_cli.data import load_legend
+    from curiosity_cli.maps.datasets import dataset_path, load_dataset_config
+    from curiosity_cli.maps.map_data import load_legend
 
     names = {}
     for entry in config.datasets:
@@ -720,10 +550,10 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
             raise EvaluationError(f"{display_path(layout.labels)}: every label file was left out: " + "; ".join(skipped))
         from curiosity_cli.evaluate.steering import STEERING_COLUMNS
 
-        mi = pd.DataFrame(found.mi).sort_values(_KEYS, ignore_index=True)
-        steering = pd.DataFrame(found.steering, columns=list(STEERING_COLUMNS)).sort_values(_KEYS, ignore_index=True)
-        class_columns = [*_KEYS, "class_id", "class_name", "pixels", "found", "first_step", "topic", "recall"]
-        classes = pd.DataFrame(found.classes, columns=class_columns).sort_values([*_KEYS, "class_id"], ignore_index=True)
+        mi = pd.DataFrame(found.mi).sort_values(KEYS, ignore_index=True)
+        steering = pd.DataFrame(found.steering, columns=list(STEERING_COLUMNS)).sort_values(KEYS, ignore_index=True)
+        class_columns = [*KEYS, "class_id", "class_name", "pixels", "found", "first_step", "topic", "recall"]
+        classes = pd.DataFrame(found.classes, columns=class_columns).sort_values([*KEYS, "class_id"], ignore_index=True)
         summary = summarise(mi)
         classes_summary = summarise_classes(mi)
         tests = paired_tests(mi)

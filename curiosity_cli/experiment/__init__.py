@@ -1,5 +1,5 @@
 """The experiment folder as a unit: its layout, the saved config's rules, the recipes its
-files are made from, their sizes and digests, its maps' facts, where its tasks run and the
+files are made from, their sizes and digests, its maps' facts, one process at a time in it, and the
 provenance of its results. Every stage that reads or writes an experiment folder asks
 :class:`~curiosity_cli.experiment.experiment.Experiment`.
 

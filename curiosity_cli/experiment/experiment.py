@@ -134,7 +134,8 @@ class Experiment:
         layout = self.folder
         root = layout.root
         files = [layout.config, layout.maps_csv]
-        files += [run / name for run in layout.run_folders() for name in ("run.json", "path.csv", "candidates.csv")]
+        run_files = (layout.RUN_META, layout.RUN_PATH, layout.RUN_CANDIDATES)
+        files += [run / name for run in layout.run_folders() for name in run_files]
         files += layout.label_files() + sorted(layout.labels.glob("*/examples/*.npz")) + sorted(layout.batches.glob("*.npz"))
         names = [str(path.relative_to(root)) for path in files if path.is_file()]
         return {

@@ -7,6 +7,7 @@ are the models)::
     results/<experiment>/
         config.yaml  provenance.yaml  runs.csv  maps.csv          (explore)
         runs/<map>/<walker>/restart-NNN/                          (explore, one run)
+            run.json  path.csv  candidates.csv  checkpoints.npz
         batch/<map>.npz                                           (label, Z_b)
         labels/<map>/<walker>/restart-NNN.npz                     (label, Z_p tables)
         labels/<map>/examples/<walker>-restart-NNN-<length>.npz   (label, Z_p maps)
@@ -47,6 +48,16 @@ class ExperimentFolder:
     """
 
     root: Path
+
+    # the files of a run folder (:meth:`run`), named here once for every stage that reads them
+    #: A run's record: what it was, its recipe, and the size and digest of its other files.
+    RUN_META = "run.json"
+    #: A run's steps, one row per step.
+    RUN_PATH = "path.csv"
+    #: The neighbours a run's walker scored, one row per neighbour.
+    RUN_CANDIDATES = "candidates.csv"
+    #: A run's path and its word-topic counts at each checkpoint length.
+    RUN_CHECKPOINTS = "checkpoints.npz"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "root", Path(self.root))

@@ -15,13 +15,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.config import ExperimentConfig, WordsConfig
 from curiosity_cli.errors import ConfigError
 from curiosity_cli.files import check_inside, display_path
 
 if TYPE_CHECKING:
-    from curiosity_cli.data import MapData
+    from curiosity_cli.maps.map_data import MapData
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,7 @@ class MapFacts:
     shape : (int, int)
         The image's rows and columns of pixels.
     labels_digest : str or None
-        Of the human labels (:attr:`curiosity_cli.data.MapData.labels_digest`); None without.
+        Of the human labels (:attr:`curiosity_cli.maps.map_data.MapData.labels_digest`); None without.
     stands_in_for : str or None
         The paper's map it compares with.
     """
@@ -76,10 +76,10 @@ def map_facts(entry: str, words: WordsConfig) -> MapFacts:
     Raises
     ------
     CuriosityError
-        The map cannot be loaded (as :func:`~curiosity_cli.data.load_map`), or its
+        The map cannot be loaded (as :func:`~curiosity_cli.maps.map_data.load_map`), or its
         vocabularies cannot be read.
     """
-    from curiosity_cli.data import load_map
+    from curiosity_cli.maps.map_data import load_map
 
     return MapFacts.of(entry, load_map(entry), words)
 
@@ -107,7 +107,7 @@ def prepare_stores(config: ExperimentConfig, cache_dir: Path) -> dict[str, Store
     ConfigError
         Two entries naming maps of the same name (their runs would share folders).
     """
-    from curiosity_cli.data import load_map
+    from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.words.extract import extract_words
 
     stores = {}

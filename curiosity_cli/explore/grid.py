@@ -9,11 +9,11 @@ Design, in the order a grid runs:
 - **Seeds.** Each run draws from ``SeedSequence((seed, crc32(map), crc32(weight
   function), restart))``: the same numbers whatever ``jobs`` is and in whatever order
   runs finish.
-- **Parallel.** Runs are tasks of :class:`~curiosity_cli.experiment.workers.Workers`: joblib's
+- **Parallel.** Runs are tasks of :class:`~curiosity_cli.workers.Workers`: joblib's
   ``loky`` processes by default, where a worker loads the map's word store from the cache
   once and keeps it, and each worker's numba threads are capped so the workers together
   use the cores once.
-- **Or on a Dask cluster** (``backend="dask"``, :mod:`curiosity_cli.experiment.workers`): each
+- **Or on a Dask cluster** (``backend="dask"``, :mod:`curiosity_cli.workers`): each
   map's store file goes to the cluster once and runs depend on the task that loads it;
   each run is one task, all submitted at once and collected as they finish. A run lost
   with its worker is computed again on another; a run whose workers keep dying is
@@ -48,7 +48,7 @@ from curiosity_cli.experiment.lock import working_in
 from curiosity_cli.experiment.maps import StoreInfo, prepare_stores
 from curiosity_cli.experiment.recipes import RECIPE_KEY, Recipe, first_of
 from curiosity_cli.experiment.saved_config import check_saved_config
-from curiosity_cli.experiment.workers import Workers
+from curiosity_cli.workers import Workers
 from curiosity_cli.files import atomic_path, check_inside, display_path
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS, experiment_root
 from curiosity_cli.seeds import name_key

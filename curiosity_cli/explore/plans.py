@@ -1,7 +1,7 @@
 """Planned walkers: runs whose cells are fixed when they start, not drawn step by step.
 
 A plan is a pure function ``plan(start_cell, grid, length, rng)`` returning the
-``(length,)`` row-major cells of the map's :class:`~curiosity_cli.cell_grid.SquareGrid`
+``(length,)`` row-major cells of the map's :class:`~curiosity_cli.maps.cell_grid.SquareGrid`
 the run observes, in order. Two kinds use it:
 
 - ``lawnmower``, the pre-programmed mission the paper's introduction argues against: a
@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 
 
 def lawnmower(start_cell: int, grid: SquareGrid, length: int, rng: np.random.Generator) -> np.ndarray:

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.wholeness import FILES_KEY, changed, records
@@ -47,7 +47,7 @@ _RUN_KEYS = (
 )
 _TMP_MARK = ".tmp-"
 #: The files of a run besides ``run.json``, which records their sizes and digests.
-_RUN_FILES = ["path.csv", "candidates.csv", "checkpoints.npz"]
+_RUN_FILES = [ExperimentFolder.RUN_PATH, ExperimentFolder.RUN_CANDIDATES, ExperimentFolder.RUN_CHECKPOINTS]
 
 
 class RunError(CuriosityError):
@@ -103,7 +103,7 @@ def _write_files(tmp: Path, exploration: Exploration, meta: dict, grid: SquareGr
             "first_visit": e.first_visit, "words_sampled": e.words_sampled,
             "log_likelihood": e.log_likelihood, "fallback": e.fallback, "boxed_in": e.boxed_in,
         }
-    ).to_csv(tmp / "path.csv", index=False)
+    ).to_csv(tmp / ExperimentFolder.RUN_PATH, index=False)
     c_rows, c_cols = grid.row_col(e.candidate_cell)
     pd.DataFrame(
         {
@@ -111,16 +111,16 @@ def _write_files(tmp: Path, exploration: Exploration, meta: dict, grid: SquareGr
             "coverage": e.coverage, "word_perplexity": e.word_perplexity,
             "topic_perplexity": e.topic_perplexity, "weight": e.weight, "chosen": e.chosen,
         }
-    ).to_csv(tmp / "candidates.csv", index=False)
+    ).to_csv(tmp / ExperimentFolder.RUN_CANDIDATES, index=False)
     arrays = {"path": e.path.astype(np.int32), "lengths": np.array(sorted(e.checkpoints), np.int32)}
     for length, counts in e.checkpoints.items():
         arrays.update({f"{length}/words": counts.words, f"{length}/topics": counts.topics, f"{length}/counts": counts.counts})
-    np.savez_compressed(tmp / "checkpoints.npz", **arrays)
+    np.savez_compressed(tmp / ExperimentFolder.RUN_CHECKPOINTS, **arrays)
     files = records(tmp, _RUN_FILES)
     size = sum(f["size"] for f in files.values())
     meta = {"format": RUN_FORMAT, **meta, "checkpoints": sorted(e.checkpoints), "bytes": size, FILES_KEY: files}
-    (tmp / "run.json").write_text(json.dumps(meta, indent=2) + "\n")
-    size += (tmp / "run.json").stat().st_size
+    (tmp / ExperimentFolder.RUN_META).write_text(json.dumps(meta, indent=2) + "\n")
+    size += (tmp / ExperimentFolder.RUN_META).stat().st_size
     return size
 
 
@@ -149,7 +149,7 @@ class Run:
                 f"it has {', '.join(map(str, self.meta['checkpoints']))}"
             )
         words, topics, counts = _load_arrays(
-            self.folder / "checkpoints.npz", [f"{length}/words", f"{length}/topics", f"{length}/counts"]
+            self.folder / ExperimentFolder.RUN_CHECKPOINTS, [f"{length}/words", f"{length}/topics", f"{length}/counts"]
         )
         return SparseCounts(words, topics, counts, (self.meta["vocabulary_size"], self.meta["n_topics"])).dense()
 
@@ -164,7 +164,7 @@ class Run:
         """
         import pandas as pd
 
-        csv = self.folder / "path.csv"
+        csv = self.folder / ExperimentFolder.RUN_PATH
         try:
             column = pd.read_csv(csv, usecols=["boxed_in"])["boxed_in"]
         except FileNotFoundError:
@@ -192,7 +192,7 @@ class Run:
         """
         import pandas as pd
 
-        csv = self.folder / "candidates.csv"
+        csv = self.folder / ExperimentFolder.RUN_CANDIDATES
         try:
             table = pd.read_csv(csv, usecols=["step", "coverage", "weight"])
         except FileNotFoundError:
@@ -212,7 +212,7 @@ def finished_meta(folder: Path) -> dict | None:
     ``checkpoints.npz``, or a file that is not as it was written, with a note on stderr,
     so that the grid redoes just that run.
     """
-    if not (Path(folder) / "run.json").is_file():
+    if not (Path(folder) / ExperimentFolder.RUN_META).is_file():
         return None
     try:
         return _read(Path(folder)).meta
@@ -239,9 +239,9 @@ def read_run(folder: Path) -> Run:
 
 def _read(folder: Path) -> Run:
     """:func:`read_run` without the advice: the error names the file and what is wrong with it."""
-    meta = _read_meta(folder / "run.json")
-    (path,) = _load_arrays(folder / "checkpoints.npz", ["path"])
-    _check_steps(folder / "path.csv", path.size)
+    meta = _read_meta(folder / ExperimentFolder.RUN_META)
+    (path,) = _load_arrays(folder / ExperimentFolder.RUN_CHECKPOINTS, ["path"])
+    _check_steps(folder / ExperimentFolder.RUN_PATH, path.size)
     # runs written before their files were recorded have no FILES_KEY; their checks end above
     if (change := changed(folder, meta.get(FILES_KEY, {}))) is not None:
         raise RunError(f"{display_path(change[0])}: {change[1]}")

@@ -10,7 +10,7 @@ Each step ``t`` (0-based) of a run of ``path_length`` steps, with the walker in 
    budget when ``explore.step_seconds`` is set. The fixed budget stands in for the
    paper's 200 ms per step, so results do not depend on how fast the machine is.
 3. **Score** the in-bounds candidates (the cell's row of the grid's neighbour table,
-   :meth:`~curiosity_cli.cell_grid.SquareGrid.neighbour_table`: up, down, left, right,
+   :meth:`~curiosity_cli.maps.cell_grid.SquareGrid.neighbour_table`: up, down, left, right,
    and with ``explore.candidates`` 8 the diagonals, those that exist) with the run's
    weight function (:mod:`curiosity_cli.explore.weights`), under the run's reading of
    eq. 8; topic perplexity (eq. 12) under the readings ``explore.candidate_context``,
@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from curiosity_cli.config import ExploreConfig, ModelConfig
+from curiosity_cli.config import COVERAGE_READINGS, ExploreConfig, ModelConfig
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, Plan, coverage_potential
 from curiosity_cli.topics.map_model import map_topic_model
@@ -272,7 +272,8 @@ def explore(
             ]),
         )
         boxed_in[step] = bool(np.all(visits[cells] > 0))
-        if boxed_in[step] and settings.coverage == "literal":
+        # every candidate's potential is then ∞, leaving nothing to weigh: eq. 8's limit is their own visit counts
+        if boxed_in[step] and COVERAGE_READINGS[settings.coverage].infinite_when_visited:
             candidates = dataclasses.replace(candidates, coverage=visits[cells].astype(np.float64))
         weights = _weights(walker, weight_function, candidates)
         choice, fallback[step] = draw_move(weights, rng)

@@ -52,7 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.config import COVERAGE_READINGS, WALKER_NAMES
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.explore import plans
@@ -66,7 +66,7 @@ class Candidates:
     ----------
     cells : (n,) int64 ndarray
         Row-major indices of the in-bounds neighbours: the walker's cell's row of
-        :meth:`~curiosity_cli.cell_grid.SquareGrid.neighbour_table` without its ``-1``
+        :meth:`~curiosity_cli.maps.cell_grid.SquareGrid.neighbour_table` without its ``-1``
         (up, down, left, right, and with 8 candidates the diagonals: those that exist).
     coverage : (n,) float64 ndarray
         The coverage potential ``U(g_i)`` (module docstring), > 0: infinite for a visited
@@ -121,7 +121,7 @@ class Plan:
     ----------
     cells : callable
         ``cells(start_cell, grid, length, rng)`` -> (length,) int64 ndarray of
-        row-major cells of the :class:`~curiosity_cli.cell_grid.SquareGrid` ``grid``.
+        row-major cells of the :class:`~curiosity_cli.maps.cell_grid.SquareGrid` ``grid``.
     ceiling : bool
         True for a reference that is not a path (reported apart from the walkers).
     """
@@ -143,6 +143,30 @@ WEIGHT_FUNCTIONS: dict[str, WeightFunction | Plan] = {name: globals()[name.repla
 CEILINGS: tuple[str, ...] = tuple(n for n, w in WEIGHT_FUNCTIONS.items() if isinstance(w, Plan) and w.ceiling)
 
 
+def _literal(n: np.ndarray, d2: np.ndarray, min_d2: float | None) -> np.ndarray:
+    """``n / 0 = ∞``: a visited candidate's potential is ``∞``, the others' as under ``others``."""
+    return np.where((d2 == 0).any(axis=1), np.inf, _others(n, d2, min_d2))
+
+
+def _clamp(n: np.ndarray, d2: np.ndarray, min_d2: float | None) -> np.ndarray:
+    """``d²`` clamped from below at ``min_d2``: a visited candidate's own term is ``n / min_d2``."""
+    return (n / np.maximum(d2, min_d2)).sum(axis=1)
+
+
+def _others(n: np.ndarray, d2: np.ndarray, min_d2: float | None) -> np.ndarray:
+    """A candidate's own visits left out of its sum."""
+    own = d2 == 0
+    return (np.where(own, 0.0, n) / np.where(own, 1, d2)).sum(axis=1)
+
+
+#: How :func:`coverage_potential` computes each reading of :data:`curiosity_cli.config.COVERAGE_READINGS`,
+#: by its name: ``f(n, d2, min_d2)`` of the visit counts ``n_j`` as a (1, m) row and the candidates'
+#: (k, m) squared distances ``d²`` to the visited cells.
+_POTENTIALS: dict[str, Callable[[np.ndarray, np.ndarray, float | None], np.ndarray]] = {
+    "literal": _literal, "clamp": _clamp, "others": _others,
+}
+
+
 def coverage_potential(
     candidates: np.ndarray, visited: np.ndarray, visits: np.ndarray, grid: SquareGrid, reading: str,
     min_d2: float | None = None,
@@ -160,15 +184,18 @@ def coverage_potential(
     grid : SquareGrid
         The map's cells, whose distances ``d`` are.
     reading : {'literal', 'clamp', 'others'}
-        What a visited candidate's own term (``d = 0``) is (module docstring): ``∞``
-        (``U = ∞``), ``n / min_d2``, or left out.
+        A name in :data:`curiosity_cli.config.COVERAGE_READINGS`: what a visited
+        candidate's own term (``d = 0``) is (module docstring): ``∞`` (``U = ∞``),
+        ``n / min_d2``, or left out.
     min_d2 : float, optional
-        The clamp's floor on ``d²``, > 0; read by ``clamp`` only.
+        The clamp's floor on ``d²``, > 0; read by a reading whose ``reads_min_d2`` says so
+        (``clamp``) only.
 
     Returns
     -------
     (n,) float64 ndarray
-        ``∞`` for a visited candidate under ``literal``; finite otherwise.
+        ``∞`` for a visited candidate under a reading whose ``infinite_when_visited``
+        says so (``literal``); finite otherwise.
 
     Raises
     ------
@@ -177,14 +204,8 @@ def coverage_potential(
     """
     d2 = grid.squared_distances(candidates, visited)
     n = np.asarray(visits, np.float64)[None, :]
-    own = d2 == 0
-    if reading == "clamp":
-        if min_d2 is None:
-            raise ParameterError("min_d2: got None, expected the clamp's floor on d^2 (> 0)")
-        return (n / np.maximum(d2, min_d2)).sum(axis=1)
-    others = (np.where(own, 0.0, n) / np.where(own, 1, d2)).sum(axis=1)
-    if reading == "others":
-        return others
-    if reading == "literal":
-        return np.where(own.any(axis=1), np.inf, others)
-    raise ParameterError(f"reading: got {reading!r}, expected one of {', '.join(COVERAGE_READINGS)}")
+    if reading not in COVERAGE_READINGS:
+        raise ParameterError(f"reading: got {reading!r}, expected one of {', '.join(COVERAGE_READINGS)}")
+    if COVERAGE_READINGS[reading].reads_min_d2 and min_d2 is None:
+        raise ParameterError("min_d2: got None, expected the clamp's floor on d^2 (> 0)")
+    return _POTENTIALS[reading](n, d2, min_d2)

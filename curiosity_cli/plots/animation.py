@@ -27,8 +27,8 @@ class AnimationError(CuriosityError):
 
 def checkpoint_labels(experiment, run, store, shape: tuple[int, int]) -> dict[int, np.ndarray]:
     """Z_p at each of a run's checkpoints, (H, W) topic ids by path length, as ``label`` computes it."""
-    from curiosity_cli.evaluate.label_sampling import label_paths, pixel_labels
-    from curiosity_cli.evaluate.label_stage import path_seed
+    from curiosity_cli.label.sampling import label_paths, pixel_labels
+    from curiosity_cli.label.sampling import path_seed
 
     config = experiment.config
     lengths = run.meta["checkpoints"]
@@ -59,7 +59,7 @@ def animate_run(
     from matplotlib import animation
     from matplotlib.figure import Figure
 
-    from curiosity_cli.data import load_map
+    from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.experiment.experiment import Experiment
     from curiosity_cli.explore.runs import read_run
     from curiosity_cli.paths import DEFAULT_CACHE

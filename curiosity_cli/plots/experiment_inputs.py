@@ -93,7 +93,7 @@ def load_maps(config: ExperimentConfig, notes: list[str]) -> dict:
     -------
     dict of str to MapData
     """
-    from curiosity_cli.data import load_map
+    from curiosity_cli.maps.map_data import load_map
 
     maps = {}
     for entry in config.datasets:
@@ -181,7 +181,7 @@ def read_path(experiment_dir: Path, dataset: str, weight_function: str, restart:
     """
     import pandas as pd
 
-    path = ExperimentFolder(experiment_dir).run(dataset, weight_function, restart) / "path.csv"
+    path = ExperimentFolder(experiment_dir).run(dataset, weight_function, restart) / ExperimentFolder.RUN_PATH
     if not path.is_file():
         notes.append(f"{display_path(path)}: not found; no path figure (explore the experiment first)")
         return None

@@ -110,7 +110,7 @@ def _check_runs(experiment: Experiment) -> None:
     for planned in experiment.planned():
         folder = experiment.folder.run(planned.dataset, planned.weight_function, planned.restart)
         try:
-            meta = json.loads((folder / "run.json").read_text())
+            meta = json.loads((folder / ExperimentFolder.RUN_META).read_text())
         except (OSError, ValueError):
             continue  # a run.json that is gone or changed makes the tables stale, which check_tables says
         recorded = meta.get(FILES_KEY, {}) if isinstance(meta, dict) else {}

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.data import MapClass, MapData
+from curiosity_cli.maps.map_data import MapClass, MapData
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import atomic_path
 

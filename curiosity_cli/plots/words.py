@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.data import MapData
+from curiosity_cli.maps.map_data import MapData
 from curiosity_cli.files import atomic_path
 from curiosity_cli.words.store import WordStore
 

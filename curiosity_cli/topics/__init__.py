@@ -1,12 +1,13 @@
 """The ROST spatial topic model (paper section 3) and the perplexities of section 4.
 
 - :mod:`~curiosity_cli.topics.neighbours`: neighbour tables of frame streams, and their check
-  (a map's table is its grid's, :mod:`curiosity_cli.cell_grid`).
+  (a map's table is its grid's, :mod:`curiosity_cli.maps.cell_grid`).
 - :mod:`~curiosity_cli.topics.model`: :class:`TopicModel`, its Gibbs refinement
-  (batch, realtime, frozen Φ), ML topics.
+  (batch, realtime, frozen Φ), ML topics; what it accepts: :mod:`~curiosity_cli.topics.model_checks`.
 - :mod:`~curiosity_cli.topics.batch_sweeps`: a batch refinement's phases and the threads
   that sweep them (Algorithm 1).
-- :mod:`~curiosity_cli.topics.persistence`: snapshots of a model's state, and model files.
+- :mod:`~curiosity_cli.topics.persistence`: snapshots of a model's state, and model files
+  (which keep its compact state, :mod:`~curiosity_cli.topics.compact_state`).
 - :mod:`~curiosity_cli.topics.perplexity`: word and topic perplexity of a candidate cell.
 
 Numba kernels live in the private ``_*_kernels.py`` modules and are imported only when a

@@ -17,14 +17,13 @@ Layouts: word-topic counts are stored ``(V, Kp)`` (``Kp`` = K rounded up to a mu
 of 8), so one word's counts over topics are contiguous for the sampler's dense loop;
 public accessors return ``(V, K)``, topics in columns.
 
-Snapshots and files (:mod:`~curiosity_cli.topics.persistence`) read and restore the state
-through :meth:`TopicModel.full_state` and :meth:`TopicModel.compact_state` and their
-setters.
+Snapshots (:mod:`~curiosity_cli.topics.persistence`) read and restore the state through
+:meth:`TopicModel.full_state` and :meth:`TopicModel.set_full_state`; model files keep
+the compact form built on them (:mod:`~curiosity_cli.topics.compact_state`). What the
+model is given is checked by :mod:`~curiosity_cli.topics.model_checks`.
 """
 
 from __future__ import annotations
-
-from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -32,6 +31,12 @@ from curiosity_cli.checks import check_choice, check_float, check_int
 from curiosity_cli.config import EXPLORE_READINGS
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics.batch_sweeps import aligned_zeros, batch_phases, sweep_phases
+from curiosity_cli.topics.model_checks import (
+    check_frozen_counts,
+    check_model_cells,
+    check_vocabulary_hashes,
+    check_word_ids,
+)
 from curiosity_cli.topics.neighbours import check_neighbours
 
 _MIN_CAPACITY = 1024
@@ -94,7 +99,7 @@ class TopicModel:
         self._alpha = check_float("alpha", alpha, 0, low_open=True)
         self._beta = check_float("beta", beta, 0, low_open=True)
         self._seed = check_int("seed", seed, 0, 2**64 - 1)
-        self._hashes = _check_hashes(vocabulary_hashes)
+        self._hashes = check_vocabulary_hashes(vocabulary_hashes)
         self._kp = -(-self._k // 8) * 8
         self._topic_dtype = np.dtype(np.int8 if self._k <= 127 else np.int16 if self._k <= 32767 else np.int32)
         self._colours = None
@@ -116,7 +121,7 @@ class TopicModel:
         self._counter = 0
         self._frozen = frozen_counts is not None
         if self._frozen:
-            self._nwk[:, : self._k] = _check_frozen(frozen_counts, self._v, self._k)
+            self._nwk[:, : self._k] = check_frozen_counts(frozen_counts, self._v, self._k)
             self._nk[:] = self._nwk.sum(axis=0, dtype=np.int64)
         self._refresh_inverse()
 
@@ -190,7 +195,7 @@ class TopicModel:
 
     def cell_words(self, cell: int) -> np.ndarray:
         """(n,) int32 word ids of an observed cell, in the order they were added."""
-        cell = self._check_cells([cell], "cell")[0]
+        cell = check_model_cells([cell], "cell", self._cell_first)[0]
         first = self._cell_first[cell]
         return self._words[first : first + self._cell_count[cell]].copy()
 
@@ -291,7 +296,7 @@ class TopicModel:
         cell = check_int("cell", cell, 0, self.n_cells - 1)
         if self._cell_first[cell] >= 0:
             raise ParameterError(f"cell: cell {cell} is already in the model")
-        words = self._check_words(words)
+        words = check_word_ids(words, self._v)
         latest = int(self._times[self._n_observed - 1]) if self._n_observed else -1
         time = latest + 1 if time is None else check_int("time", time, max(latest, 0))
 
@@ -332,7 +337,7 @@ class TopicModel:
         cell = check_int("cell", cell, 0, self.n_cells - 1)
         if self._cell_first[cell] < 0:
             raise ParameterError(f"cell: cell {cell} is not in the model yet; add_cell adds it")
-        words = self._check_words(words)
+        words = check_word_ids(words, self._v)
         latest = int(self._times[self._n_observed - 1])
         time = latest + 1 if time is None else check_int("time", time, latest)
 
@@ -422,7 +427,7 @@ class TopicModel:
         """
         if not self._frozen:
             raise ParameterError("counts: the model's word-topic counts are not frozen; they follow its topics")
-        self._nwk[:, : self._k] = _check_frozen(counts, self._v, self._k)
+        self._nwk[:, : self._k] = check_frozen_counts(counts, self._v, self._k)
         self._nk[:] = self._nwk.sum(axis=0, dtype=np.int64)
         self._refresh_inverse()
 
@@ -439,7 +444,7 @@ class TopicModel:
         """
         from curiosity_cli.topics._gibbs_kernels import refine_cells_kernel
 
-        cells = self._check_cells(cells, "cells")
+        cells = check_model_cells(cells, "cells", self._cell_first)
         refine_cells_kernel(cells, *self._sampler_arrays(), np.uint64(self._counter), not self._frozen)
         self._counter += cells.size
         return int(self._cell_count[cells].sum())
@@ -530,13 +535,14 @@ class TopicModel:
         self._counter += 1 + int(n_picks)
         return int(done)
 
-    # ------------------------------------------------------------------ the whole state (topics/persistence.py)
+    # ------------------------------------------------------------------ the whole state (persistence.py, compact_state.py)
 
     def full_state(self) -> dict:
         """A copy of the whole mutable state in the model's own layout, random state included.
 
         What a snapshot (:func:`~curiosity_cli.topics.persistence.take_snapshot`) keeps;
-        :meth:`set_full_state` puts it back.
+        :meth:`set_full_state` puts it back. A model file's compact form is made from it
+        and put back through its setter (:mod:`~curiosity_cli.topics.compact_state`).
 
         Returns
         -------
@@ -585,86 +591,6 @@ class TopicModel:
         self._counter = counter
         self._refresh_inverse()
 
-    def compact_state(self) -> dict:
-        """The observed cells with their words and topics, random state included.
-
-        What a model file keeps (:func:`~curiosity_cli.topics.persistence.save_model`):
-        every count follows from it (and, for a frozen model, the frozen counts), and
-        :meth:`set_compact_state` recounts them.
-
-        Returns
-        -------
-        dict
-            ``order``: (n_observed,) int32, the cells in the order added; ``times``:
-            (n_observed,) int64, their times; ``sizes``: (n_observed,) int64, their word
-            counts; ``words``, ``topics``: (n_words,) int32 and :attr:`topic_dtype`, cell
-            after cell in that order; ``counter``: int, the random state.
-        """
-        order = self._order[: self._n_observed].copy()
-        return {
-            "order": order,
-            "times": self._times[: self._n_observed].copy(),
-            "sizes": self._cell_count[order],
-            "words": self._in_order(self._words, order),
-            "topics": self._in_order(self._topics, order),
-            "counter": self._counter,
-        }
-
-    def set_compact_state(self, *, order, times, sizes, words, topics, counter) -> None:
-        """Replace the observed cells, words, topics and random state by a :meth:`compact_state`.
-
-        Every count is recomputed from the topics (the frozen counts of a frozen model
-        stay). The arrays may come from a file, so they are checked first.
-
-        Raises
-        ------
-        ParameterError
-            ``counter`` is not an int >= 0.
-        ValueError
-            The arrays are not 1-D integer arrays, or disagree with each other or with
-            the model (cells, word ids or topics out of range, times decreasing).
-        """
-        counter = check_int("counter", counter, 0)
-        n = order.size
-        for name, a in (("order", order), ("times", times), ("sizes", sizes), ("words", words), ("topics", topics)):
-            if a.ndim != 1 or (a.size and not np.issubdtype(a.dtype, np.integer)):
-                raise ValueError(f"{name}: expected a 1-D integer array")
-        if times.size != n or sizes.size != n:
-            raise ValueError("order, times and sizes differ in length")
-        if n and (order.min() < 0 or order.max() >= self.n_cells or np.unique(order).size != n):
-            raise ValueError("order: cells out of range or repeated")
-        if n and (np.any(np.diff(times) < 0) or times[0] < 0):
-            raise ValueError("times: negative or decreasing")
-        if (n and sizes.min() < 0) or sizes.sum() != words.size or topics.size != words.size:
-            raise ValueError("sizes, words and topics disagree")
-        if words.size and (words.min() < 0 or words.max() >= self._v):
-            raise ValueError(f"words: ids outside 0..{self._v - 1}")
-        if topics.size and (topics.min() < 0 or topics.max() >= self._k):
-            raise ValueError(f"topics: labels outside 0..{self._k - 1}")
-
-        self._words = words.astype(np.int32)
-        self._topics = topics.astype(self._topic_dtype)
-        self._n_words = words.size
-        firsts = np.concatenate([[0], np.cumsum(sizes)[:-1]]) if n else np.zeros(0, np.int64)
-        self._cell_first[order] = firsts
-        self._cell_count[order] = sizes
-        self._order[:n] = order
-        self._times[:n] = times
-        self._n_observed = n
-        self._counter = counter
-        word_cells = np.repeat(order.astype(np.int64), sizes)
-        kp = self._kp
-        self._ncz[:] = np.bincount(word_cells * kp + self._topics, minlength=self.n_cells * kp).reshape(-1, kp)
-        self._ng[:] = self._ncz
-        for column in self._table.T:
-            present = column >= 0
-            self._ng[present] += self._ncz[column[present]]
-        if not self._frozen:
-            pairs = self._words.astype(np.int64) * kp + self._topics
-            self._nwk[:] = np.bincount(pairs, minlength=self._v * kp).reshape(-1, kp)
-            self._nk[:] = self._nwk.sum(axis=0)
-            self._refresh_inverse()
-
     # ------------------------------------------------------------------ internals
 
     def _key(self) -> np.uint64:
@@ -701,38 +627,10 @@ class TopicModel:
         topics[: self._n_words] = self._topics[: self._n_words]
         self._words, self._topics = words, topics
 
-    def _check_words(self, words) -> np.ndarray:
-        words = np.asarray(words)
-        if words.ndim != 1:
-            raise ParameterError(f"words: got shape {words.shape}, expected (n,)")
-        if words.size == 0:
-            return np.zeros(0, np.int32)
-        if words.dtype == np.bool_ or not np.issubdtype(words.dtype, np.integer):
-            raise ParameterError(f"words: got dtype {words.dtype}, expected integer word ids")
-        if words.min() < 0 or words.max() >= self._v:
-            raise ParameterError(f"words: ids must be in 0..{self._v - 1}, got {words.min()}..{words.max()}")
-        return words.astype(np.int32)
-
-    def _check_cells(self, cells, name: str) -> np.ndarray:
-        cells = np.asarray(cells)
-        if cells.ndim != 1:
-            raise ParameterError(f"{name}: got shape {cells.shape}, expected a 1-D list of cells")
-        if cells.size == 0:
-            return np.zeros(0, np.int64)
-        if cells.dtype == np.bool_ or not np.issubdtype(cells.dtype, np.integer):
-            raise ParameterError(f"{name}: got dtype {cells.dtype}, expected integer cell indices")
-        if cells.min() < 0 or cells.max() >= self.n_cells:
-            raise ParameterError(f"{name}: cells must be in 0..{self.n_cells - 1}")
-        cells = cells.astype(np.int64)
-        missing = cells[self._cell_first[cells] < 0]
-        if missing.size:
-            raise ParameterError(f"{name}: cell {missing[0]} is not in the model")
-        return cells
-
     def _cells_or_all(self, cells) -> np.ndarray:
         if cells is None:
             return self._cells_in_order()
-        return self._check_cells(cells, "cells")
+        return check_model_cells(cells, "cells", self._cell_first)
 
     def _cells_in_order(self) -> np.ndarray:
         """(n_observed,) int64: the observed cells, by cell index."""
@@ -745,27 +643,3 @@ class TopicModel:
         first, count = self._cell_first, self._cell_count
         return np.concatenate([per_word[first[c] : first[c] + count[c]] for c in cells])
 
-
-def _check_hashes(hashes):
-    if hashes is None:
-        return None
-    if isinstance(hashes, Mapping):
-        if not all(isinstance(k, str) and isinstance(v, str) for k, v in hashes.items()):
-            raise ParameterError("vocabulary_hashes: expected a mapping of str to str")
-        return dict(hashes)
-    if isinstance(hashes, Sequence) and not isinstance(hashes, str):
-        if not all(isinstance(h, str) for h in hashes):
-            raise ParameterError("vocabulary_hashes: expected a sequence of str")
-        return tuple(hashes)
-    raise ParameterError(f"vocabulary_hashes: got {type(hashes).__name__}, expected a mapping or a sequence of str")
-
-
-def _check_frozen(counts, n_words: int, n_topics: int) -> np.ndarray:
-    counts = np.asarray(counts)
-    if counts.shape != (n_words, n_topics):
-        raise ParameterError(f"frozen_counts: got shape {counts.shape}, expected (V, K) = ({n_words}, {n_topics})")
-    if counts.dtype == np.bool_ or not np.issubdtype(counts.dtype, np.integer):
-        raise ParameterError(f"frozen_counts: got dtype {counts.dtype}, expected integer counts")
-    if counts.size and (counts.min() < 0 or counts.sum(axis=0, dtype=np.int64).max() > np.iinfo(np.int32).max):
-        raise ParameterError("frozen_counts: counts must be >= 0 and each topic's total fit in int32")
-    return counts.astype(np.int32)

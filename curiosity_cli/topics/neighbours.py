@@ -3,7 +3,7 @@
 A table is an ``(n_cells, width) int32`` array: row ``c`` lists the neighbours of cell
 ``c``, one per column, ``-1`` where a neighbour does not exist (at a border). Each column
 has a fixed meaning, so a caller can read directions from it. A map's table is its
-grid's (:meth:`curiosity_cli.cell_grid.SquareGrid.neighbour_table`); a stream's adds two
+grid's (:meth:`curiosity_cli.maps.cell_grid.SquareGrid.neighbour_table`); a stream's adds two
 columns to it:
 
 ======  ==========================================================
@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.checks import check_choice, check_int
 from curiosity_cli.errors import ParameterError
 
@@ -55,7 +55,7 @@ def stream_neighbours(grid: SquareGrid, n_frames: int, *, spatial: int = 4, temp
     -------
     (n_frames * grid.n_cells, spatial + temporal) ndarray of int32
         Cell ``frame * grid.n_cells + cell``; the columns of
-        :meth:`~curiosity_cli.cell_grid.SquareGrid.neighbour_table` (if ``spatial``),
+        :meth:`~curiosity_cli.maps.cell_grid.SquareGrid.neighbour_table` (if ``spatial``),
         then previous, next (if ``temporal``); ``-1`` where the neighbour is off the grid
         or outside the stream.
     """

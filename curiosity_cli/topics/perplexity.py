@@ -16,6 +16,7 @@ import numpy as np
 from curiosity_cli.checks import check_choice, check_int
 from curiosity_cli.config import EXPLORE_READINGS
 from curiosity_cli.topics.model import TopicModel
+from curiosity_cli.topics.model_checks import check_word_ids
 
 
 def word_perplexity(model: TopicModel, words) -> float:
@@ -38,7 +39,7 @@ def word_perplexity(model: TopicModel, words) -> float:
     """
     from curiosity_cli.topics._perplexity_kernels import word_perplexity_kernel
 
-    words = model._check_words(words)
+    words = check_word_ids(words, model.vocabulary_size)
     if not words.size:
         return 1.0
     nwk, nk, _, _ = _arrays(model)
@@ -109,7 +110,7 @@ def topic_perplexity(
     """
     from curiosity_cli.topics._perplexity_kernels import topic_perplexity_kernel
 
-    words = model._check_words(words)
+    words = check_word_ids(words, model.vocabulary_size)
     cell = check_int("cell", cell, 0, model.n_cells - 1)
     own = check_choice("context", context, EXPLORE_READINGS["candidate_context"]) == "own"
     sweeps = check_int("sweeps", sweeps, 1)

@@ -4,9 +4,9 @@
   copy of a model's whole mutable state (:meth:`TopicModel.full_state
   <curiosity_cli.topics.model.TopicModel.full_state>`), to go back to it later.
 - :func:`save_model` / :func:`load_model`: a file holds the parameters, the neighbour
-  table, the observed cells with their words and topics (:meth:`TopicModel.compact_state
-  <curiosity_cli.topics.model.TopicModel.compact_state>`), the random state and, for a
-  frozen model, the frozen counts; the other counts are recomputed on load.
+  table, the observed cells with their words and topics (the compact state,
+  :func:`~curiosity_cli.topics.compact_state.compact_state`), the random state and, for
+  a frozen model, the frozen counts; the other counts are recomputed on load.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import numpy as np
 
 from curiosity_cli.errors import CuriosityError, ParameterError
 from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.topics.compact_state import compact_state, set_compact_state
 from curiosity_cli.topics.model import TopicModel
 
 MODEL_FORMAT = 1
@@ -98,7 +99,7 @@ def save_model(model: TopicModel, path: Path) -> None:
     in the order added, their times and word counts, the random state and, for a frozen
     model, the frozen counts (``frozen_counts``, (V, K)).
     """
-    state = model.compact_state()
+    state = compact_state(model)
     meta = {
         "format": MODEL_FORMAT,
         "n_topics": model.n_topics,
@@ -155,7 +156,7 @@ def load_model(path: Path) -> TopicModel:
             vocabulary_hashes=meta["vocabulary_hashes"],
             frozen_counts=frozen_counts,
         )
-        model.set_compact_state(**arrays, counter=meta["counter"])
+        set_compact_state(model, **arrays, counter=meta["counter"])
     except (KeyError, ParameterError, ValueError, TypeError) as exc:
         raise CuriosityError(f"{where}: not a valid topic model ({_one_line(exc)})") from None
     return model

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.checks import check_float, check_int
 from curiosity_cli.errors import ParameterError
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from curiosity_cli.checks import check_int
 from curiosity_cli.config import WordsConfig
-from curiosity_cli.data import MapData
+from curiosity_cli.maps.map_data import MapData
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import CorruptFileError, note
 from curiosity_cli.paths import DEFAULT_CACHE

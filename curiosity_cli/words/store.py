@@ -5,7 +5,7 @@ All word types share one id space with fixed offsets, in this order: ORB words
 With the paper's vocabularies that is ORB 0–4999, texton 5000–5999, hue 6000–6179.
 
 The cell of a word is the cell of its pixel on the map's grid
-(:class:`~curiosity_cli.cell_grid.SquareGrid`: ``(row // cell_width, col // cell_width)``,
+(:class:`~curiosity_cli.maps.cell_grid.SquareGrid`: ``(row // cell_width, col // cell_width)``,
 numbered row-major, a partial cell at the bottom or right border a cell of its own).
 Words are sorted by cell, so the words of cell ``c`` are the contiguous slice
 ``cell_start[c]:cell_start[c + 1]``.
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid, map_grid
+from curiosity_cli.maps.cell_grid import SquareGrid, map_grid
 from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.files import atomic_path, display_path, open_npz
 

@@ -29,7 +29,7 @@ def build_map(name: str, cache: Path) -> tuple[np.ndarray, np.ndarray, list[dict
     name : str
         One of `MAP_NAMES`.
     cache : Path
-        Source cache folder (see `curiosity_cli.sources.sources_dir`).
+        Source cache folder (see `curiosity_cli.maps.sources.sources_dir`).
 
     Returns
     -------

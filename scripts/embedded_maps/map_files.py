@@ -8,7 +8,7 @@ import numpy as np
 
 from curiosity_cli.errors import DatasetError
 from curiosity_cli.files import atomic_path
-from curiosity_cli.images import read_raster
+from curiosity_cli.maps.images import read_raster
 
 from .build import build_map, validate_map
 from .legend import legend_yaml

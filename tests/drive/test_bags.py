@@ -13,7 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.data import load_map
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.drive.bags import BagCamera, decode
 from curiosity_cli.drive.camera import CameraError
 

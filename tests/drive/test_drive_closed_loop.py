@@ -10,7 +10,7 @@ import numpy as np
 from conftest import RUN_SECONDS, drive_command, frame_rows, read_log, wait_for_frames
 from pty_robot import PtyRobot
 
-from curiosity_cli.data import load_map
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.drive.protocol import Ack, Hello, Stop
 from curiosity_cli.drive.simrobot import DECOY_POSITION
 

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from curiosity_cli.config import CONFIG_DIR, load_config
-from curiosity_cli.data import load_map
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.drive.camera import LockstepRobot, SimCamera
 from curiosity_cli.drive.controller import steer
 from curiosity_cli.drive.driver import Outputs, StopRequest, run

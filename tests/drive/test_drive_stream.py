@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from curiosity_cli.config import CONFIG_DIR, load_config
-from curiosity_cli.data import load_map
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.drive.frame_words import FrameWords, split_by_cell
 from curiosity_cli.drive.pipeline import CuriosityPipeline
 from curiosity_cli.drive.stream import StreamModel, window_seed

@@ -10,15 +10,9 @@ import pytest
 
 from curiosity_cli.config import LabelConfig
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.evaluate.information import (
-    cell_class_pixels,
-    classes_found,
-    classes_present,
-    first_steps,
-    matched_recall,
-    mean_recall,
-)
-from curiosity_cli.evaluate.label_stage import NOT_LABELLED, label_changes, write_labels
+from curiosity_cli.evaluate.information import classes_found, matched_recall, mean_recall
+from curiosity_cli.label.classes import cell_class_pixels, classes_present, first_steps
+from curiosity_cli.label.label_files import NOT_LABELLED, label_changes, write_labels
 from curiosity_cli.evaluate.tables import run_rows
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT, Recipe, label_recipe

@@ -15,9 +15,9 @@ from test_pipeline import small_experiment
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.evaluate.label_stage import LabelError, label_experiment
+from curiosity_cli.label.stage import LabelError, label_experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
-from curiosity_cli.experiment.workers import dask_client
+from curiosity_cli.workers import dask_client
 
 runner = CliRunner()
 

@@ -11,16 +11,8 @@ from scipy import stats
 
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.evaluate.report import verdict, write_report
-from curiosity_cli.evaluate.tables import (
-    Evaluation,
-    headline,
-    paired_difference,
-    paired_effects,
-    paired_tests,
-    summarise,
-    summarise_classes,
-    with_power,
-)
+from curiosity_cli.evaluate.statistics import paired_difference, paired_tests, summarise, summarise_classes
+from curiosity_cli.evaluate.tables import Evaluation, headline, paired_effects, with_power
 from curiosity_cli.explore.weights import CEILINGS
 
 WALKERS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity", "lawnmower")

@@ -12,7 +12,7 @@ from small_maps import grid_config, grid_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.evaluate.label_stage import LabelError, label_experiment
+from curiosity_cli.label.stage import LabelError, label_experiment
 from curiosity_cli.evaluate.tables import EvaluationError, evaluate_experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import Recipe
@@ -185,7 +185,8 @@ def test_a_corrupt_checkpoint_is_named_and_the_other_runs_are_labelled(own_map, 
 
 
 def test_the_headline_is_the_ratio_to_the_next_best_with_its_paired_p():
-    from curiosity_cli.evaluate.tables import headline, paired_tests, summarise
+    from curiosity_cli.evaluate.statistics import paired_tests, summarise
+    from curiosity_cli.evaluate.tables import headline
 
     rng = np.random.default_rng(3)
     rows = []

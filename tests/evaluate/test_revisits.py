@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from small_maps import grid_config
 
-from curiosity_cli.evaluate.label_stage import label_experiment
+from curiosity_cli.label.stage import label_experiment
 from curiosity_cli.evaluate.revisits import revisit_counts
 from curiosity_cli.evaluate.tables import evaluate_experiment
 from curiosity_cli.explore.grid import run_grid

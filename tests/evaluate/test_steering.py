@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from small_maps import grid_config
 
-from curiosity_cli.evaluate.label_stage import label_experiment
+from curiosity_cli.label.stage import label_experiment
 from curiosity_cli.evaluate.steering import STEERING_COLUMNS, step_distances, steering_at, steering_rows
 from curiosity_cli.evaluate.tables import evaluate_experiment
 from curiosity_cli.explore.grid import run_grid

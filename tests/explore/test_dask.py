@@ -22,7 +22,7 @@ from typer.testing import CliRunner
 import curiosity_cli
 from curiosity_cli.cli import app
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.experiment.workers import BackendError
+from curiosity_cli.workers import BackendError
 from curiosity_cli.explore.grid import GridError, run_grid
 
 # Registers a weight function that raises, inside a worker process (run there with exec).

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.config import COVERAGE_READINGS
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.explore.walker import draw_move, move_probabilities
 from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, coverage_potential
@@ -42,6 +43,7 @@ def test_each_reading_of_eq_8_by_hand_on_a_3_by_3_grid():
         "clamp": [3.5 + 4, 3.75, 3.5 + 4, 3.75],
         "others": [3.5, 3.75, 3.5, 3.75],
     }
+    assert list(expected) == list(COVERAGE_READINGS)  # a reading added to the table is computed by hand here too
     for reading, values in expected.items():
         got = coverage_potential(candidates, visited, visits, grid, reading, 0.25)
         np.testing.assert_allclose(got, values, rtol=1e-15, err_msg=reading)
@@ -51,6 +53,27 @@ def test_each_reading_of_eq_8_by_hand_on_a_3_by_3_grid():
             assert weights.tolist() == [0, 1 / 3.75, 0, 1 / 3.75]
         else:  # it keeps a weight: under the clamp less than an open neighbour's, here more under others
             assert weights[0] > 0 and (weights[0] < weights[1]) == (reading == "clamp")
+
+
+@pytest.mark.parametrize("reading", COVERAGE_READINGS.values(), ids=lambda reading: reading.name)
+def test_every_reading_of_the_table_is_computed_as_its_flags_say(reading):
+    # a 1 x 3 corridor after 0 -> 1, standing on 1: candidate 0 visited, 2 not; each gets 1 from cell 1 at d² 1,
+    # and 2 gets 1/4 from 0 at d² 4, while 0's own term is what the reading says
+    grid = SquareGrid(1, 3)
+    visited, visits, candidates = np.array([0, 1]), np.array([1, 1]), np.array([0, 2])
+    got = {
+        min_d2: coverage_potential(candidates, visited, visits, grid, reading.name, min_d2)
+        for min_d2 in ((0.25, 1.0) if reading.reads_min_d2 else (None, 0.25, 1.0))
+    }
+    for potential in got.values():
+        assert math.isinf(potential[0]) == reading.infinite_when_visited and potential[1] == 1.25
+    # the floor changes a visited candidate's own term exactly when the reading reads it
+    assert (got[0.25][0] != got[1.0][0]) == reading.reads_min_d2
+    if reading.reads_min_d2:
+        with pytest.raises(ParameterError, match="min_d2"):
+            coverage_potential(candidates, visited, visits, grid, reading.name)
+    else:
+        assert got[None].tolist() == got[0.25].tolist() == got[1.0].tolist()
 
 
 def test_a_boxed_in_walker_under_each_reading_by_hand():

@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from curiosity_cli.config import CONFIG_DIR, load_config, to_yaml
-from curiosity_cli.data import load_map
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.experiment.experiment import Experiment
 
 WEIGHTS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity")

@@ -9,7 +9,7 @@ from small_maps import grid_config
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
-from curiosity_cli.evaluate.label_stage import label_experiment
+from curiosity_cli.label.stage import label_experiment
 from curiosity_cli.experiment.saved_config import load_saved_config
 from curiosity_cli.explore.grid import run_grid
 
@@ -49,7 +49,7 @@ def test_animate_refuses_what_it_cannot_draw(own_map, tmp_path):
 def test_the_animated_labels_are_those_label_made(own_map, tmp_path):
     import numpy as np
 
-    from curiosity_cli.data import load_map
+    from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.experiment.experiment import Experiment
     from curiosity_cli.explore.runs import read_run
     from curiosity_cli.plots.animation import checkpoint_labels

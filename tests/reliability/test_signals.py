@@ -15,7 +15,7 @@ import pytest
 from cli_cases import assert_clean_error, run_cli
 
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.experiment.workers import ORPHAN_POLL_SECONDS, BackendError, Workers, cores
+from curiosity_cli.workers import ORPHAN_POLL_SECONDS, BackendError, Workers, cores
 
 INTERRUPTED = "Interrupted; finished work is kept, run the same command again to resume."
 #: Seconds a stopped command's workers may take to go (a loaded 2-core machine).

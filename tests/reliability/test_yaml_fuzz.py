@@ -15,7 +15,8 @@ import yaml
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from curiosity_cli.config import CONFIG_DIR, DatasetConfig, ExperimentConfig, load_config, load_dataset_config
+from curiosity_cli.config import CONFIG_DIR, ExperimentConfig, load_config
+from curiosity_cli.maps.datasets import DatasetConfig, load_dataset_config
 from curiosity_cli.errors import CuriosityError
 
 FUZZ = settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

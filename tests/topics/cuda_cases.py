@@ -13,7 +13,7 @@ import sys
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.topics.chains import FrozenChains
 
 K, V = 5, 30

@@ -8,7 +8,7 @@ from naive import (
     NaiveModel, count_topics, ml_topics_naive, neighbour_colouring_naive, start_chain_naive, sweep_chain_naive,
 )
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics._chain_kernels import neighbour_colouring
 from curiosity_cli.topics.chains import FrozenChains, sweep_order

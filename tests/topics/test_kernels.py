@@ -25,7 +25,7 @@ from naive import (
     unit64,
 )
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics import _rng
 from curiosity_cli.topics._gibbs_kernels import distance2_colouring

@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from naive import recount
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics import TopicModel, stream_neighbours, take_snapshot
 from curiosity_cli.topics._gibbs_kernels import distance2_colouring

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from naive import NaiveModel, topic_perplexity_naive, word_perplexity_naive
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics import TopicModel, take_snapshot, topic_perplexity, word_perplexity
 

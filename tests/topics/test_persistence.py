@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from test_model import assert_consistent, assert_same_state, build
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.errors import CuriosityError, ParameterError
 from curiosity_cli.topics import TopicModel, load_model, restore_snapshot, save_model, take_snapshot
 

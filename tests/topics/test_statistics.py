@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 from scipy.optimize import linear_sum_assignment
 
-from curiosity_cli.cell_grid import SquareGrid
+from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.topics.model import TopicModel
 from curiosity_cli.topics.synthetic import planted_lda, planted_map
 

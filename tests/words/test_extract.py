@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from curiosity_cli.config import CONFIG_DIR, load_words_config
-from curiosity_cli.data import load_map
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.words.extract import extract_words, store_name
 from curiosity_cli.words.store import load_store

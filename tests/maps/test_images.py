@@ -12,7 +12,7 @@ import yaml
 from small_maps import edit_yaml
 
 from curiosity_cli.config import CONFIG_DIR, load_words_config
-from curiosity_cli.data import load_map
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.errors import ConfigError, DatasetError
 from curiosity_cli.words.extract import extract_words
 

@@ -8,11 +8,12 @@ from pathlib import Path
 
 import pytest
 
-from curiosity_cli.config import CONFIG_DIR, load_dataset_config
-from curiosity_cli.data import dataset_names
+from curiosity_cli.config import CONFIG_DIR
+from curiosity_cli.maps.datasets import load_dataset_config
+from curiosity_cli.maps.map_data import dataset_names
 
 #: The repository this test checks.
-PROJECT_ROOT = Path(__file__).resolve().parents[1]
+PROJECT_ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.mark.slow

@@ -1,6 +1,6 @@
 """Datasets: the registry of map YAMLs, and loading a map's image, labels and legend.
 
-A dataset is a YAML file (schema: :class:`curiosity_cli.config.DatasetConfig`). The three
+A dataset is a YAML file (schema: :class:`curiosity_cli.maps.datasets.DatasetConfig`). The three
 embedded maps are registered in ``configs/datasets/``; a user's own map is any YAML file
 passed by path. Loading checks everything a later stage would trip over, and says what
 is wrong in one line naming the file.
@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.cell_grid import SquareGrid, map_grid
-from curiosity_cli.config import DatasetConfig, dataset_names, dataset_path, load_dataset_config
+from curiosity_cli.maps.cell_grid import SquareGrid, map_grid
+from curiosity_cli.maps.datasets import DatasetConfig, dataset_names, dataset_path, load_dataset_config
 from curiosity_cli.errors import ConfigError, DatasetError
 from curiosity_cli.files import display_path
-from curiosity_cli.images import Rendering
+from curiosity_cli.maps.images import Rendering
 from curiosity_cli.yamlfile import read_yaml
 
 _COLOUR = re.compile(r"^#[0-9a-fA-F]{6}$")
@@ -151,8 +151,8 @@ def load_map(name_or_path: str | Path, *, announce=_to_stderr) -> MapData:
         size or not single-channel, label ids missing from the legend, a cell wider than
         the image, a size other than declared, a fetch that fails.
     """
-    from curiosity_cli.fetched import ensure_fetched
-    from curiosity_cli.images import read_raster, render_rgb
+    from curiosity_cli.maps.fetched import ensure_fetched
+    from curiosity_cli.maps.images import read_raster, render_rgb
 
     yaml_path = dataset_path(name_or_path)
     config = load_dataset_config(yaml_path)

@@ -1,34 +1,17 @@
 """``curiosity label`` for a whole experiment: Z_b per map, Z_p per run and checkpoint.
 
-Written under ``results/<experiment>/``:
-
-- ``batch/<dataset>.npz``: the batch reference Z_b of a map
-  (:mod:`~curiosity_cli.evaluate.batch_references`).
-- ``labels/<dataset>/<weight function>/restart-<NNN>.npz``: for one run, per checkpoint
-  length (``lengths``), the contingency tables of Z_p against the human labels
-  (``human``, (n, K, C) int64, absent for a map without labels) and against Z_b
-  (``batch``, (n, K, K) int64), and ``meta`` (JSON). Tables rather than label maps: MI and
-  NMI follow from them exactly, in kilobytes instead of a megabyte per checkpoint. A
-  restart below ``label.check_restarts`` also has ``placed_batch`` and ``placed_human``:
-  the same tables for a second labelling chain from a placed start
-  (:meth:`~curiosity_cli.topics.chains.FrozenChains.start`), which evaluation
-  compares with the first to check that Z_p has forgotten its start. For a
-  map with human labels also ``class_first_step`` ((C,) int32): the step at which the
-  path first stood in a cell where class ``h`` covers at least ``CLASS_SHARE_PERCENT`` %
-  of the pixels, -1 if never (the classes found within ``n`` steps are those below
-  ``n``); ``meta["class_share_percent"]`` records the share. A label file is current
-  while its recipe (:meth:`~curiosity_cli.experiment.experiment.Experiment.label_recipe`: its run's and batch reference's digests, the
-  label settings, the share and the human labels) is the one they give now; the others
-  are labelled again, and how many and why is noted.
-- ``labels/<dataset>/examples/<weight function>-restart-<NNN>-<length>.npz``: the pixel
-  label map Z_p (``labels``, (H, W) int16) of restart 0 at path length 80 and at its
-  last checkpoint, for the figures.
+Written under ``results/<experiment>/``: ``batch/<dataset>.npz``, the batch reference Z_b
+of a map (:mod:`~curiosity_cli.label.batch_references`), and each run's label file and
+example maps (:mod:`~curiosity_cli.label.label_files`). A label file is current while
+its recipe (:meth:`~curiosity_cli.experiment.experiment.Experiment.label_recipe`: its
+run's and batch reference's digests, the label settings, the share and the human labels)
+is the one they give now; the others are labelled again, and how many and why is noted.
 
 Every file is written atomically; a killed ``label`` resumes with the runs not yet done.
 
-Batch references and blocks of runs are tasks of :class:`~curiosity_cli.experiment.workers.Workers`.
+Batch references and blocks of runs are tasks of :class:`~curiosity_cli.workers.Workers`.
 A map's runs to label are cut into blocks
-(:func:`~curiosity_cli.experiment.workers.plan_blocks`: sizes that keep every worker busy
+(:func:`~curiosity_cli.label.blocks.plan_blocks`: sizes that keep every worker busy
 to the end, around :data:`CHAINS_PER_BLOCK` chains on the CPU, every chain of the map
 on a GPU), a run's chains (and a checked run's second chain) in one block, whose chains
 advance in lock-step in one task; a run's labels depend only on the run, never on its
@@ -36,19 +19,18 @@ block, so a killed ``label`` relabels what it lost to the same bytes. Batch refe
 computed every map's at once, each a task on its share of the cores: beside the blocks
 where each task gets a worker of its own at once (a GPU's one block per map; a block
 needs Z_b only to compare its first Z_p with it, and waits for the file then,
-:class:`~curiosity_cli.evaluate.batch_references.WrittenBatch`), else before them. With loky, a worker reads each map's word
+:class:`~curiosity_cli.label.batch_references.WrittenBatch`), else before them. With loky, a worker reads each map's word
 store, human labels and Z_b once. On a Dask cluster, each
 map's word store goes to the cluster once and its human labels and Z_b pixel labels
 once; each run's ``run.json`` and checkpoint counts Φ_p
 (a few kilobytes) travel with its block, so workers need no copy of the maps, stores or
 results. Either way this process writes every file, and the same functions
-(:mod:`~curiosity_cli.evaluate.label_sampling`) compute the labels, so the results are
+(:mod:`~curiosity_cli.label.sampling`) compute the labels, so the results are
 identical.
 """
 
 from __future__ import annotations
 
-import json
 import time
 from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable, Sequence
@@ -63,29 +45,22 @@ from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
-from curiosity_cli.experiment.recipes import (
-    CLASS_SHARE_PERCENT, LABEL_FORMAT, RECIPE_KEY, SECOND_START, Recipe, first_of, is_checked,
-)
+from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT, LABEL_FORMAT, RECIPE_KEY, first_of, is_checked
 from curiosity_cli.experiment.saved_config import record_label_settings
-from curiosity_cli.experiment.wholeness import FILES_KEY, changed, records
-from curiosity_cli.evaluate.batch_references import (
+from curiosity_cli.files import display_path, note, open_npz, remove_leftovers
+from curiosity_cli.label.batch_references import (
     BatchTask, WrittenBatch, batch_is_current, batch_task, compute_batch_references, write_batch,
 )
-from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz, read_meta, remove_leftovers
+from curiosity_cli.label.label_files import EXAMPLE_LENGTHS, NOT_LABELLED, SECOND_PREFIX, label_changes, write_labels
+from curiosity_cli.label.sampling import path_seed
 from curiosity_cli.paths import DEFAULT_CACHE
 
 if TYPE_CHECKING:
-    from curiosity_cli.evaluate.pixel_tables import PixelTables
-    from curiosity_cli.experiment.workers import Workers
+    from curiosity_cli.label.pixel_tables import PixelTables
+    from curiosity_cli.workers import Workers
     from curiosity_cli.explore.runs import Run
     from curiosity_cli.words.store import WordStore
 
-#: Why a run without a label file is labelled (:func:`label_changes`).
-NOT_LABELLED = "not labelled yet"
-#: Path lengths whose Z_p maps are kept for restart 0 (besides the last checkpoint).
-EXAMPLE_LENGTHS = (80,)
-#: The prefix of the second chain's tables' names in a checked run's label file.
-SECOND_PREFIX = f"{SECOND_START}_"
 #: Chains labelled in lock-step in one task: past 16 they gained no more on the 2-core
 #: AVX2 machine (``scripts/bench_label.py``), and smaller blocks share out better.
 CHAINS_PER_BLOCK = 16
@@ -127,9 +102,9 @@ def map_arrays(
 ) -> MapArrays:
     """A map's :class:`MapArrays` from its words, its (H, W) human labels (or None) of ``n_classes``, its image
     ``shape``, its class pixels per cell (or None) and its Z_b of ``topics``: the (H, W) pixel labels, or
-    ``(path, digest)`` of the batch file this command writes (:class:`~curiosity_cli.evaluate.batch_references.WrittenBatch`)."""
-    from curiosity_cli.evaluate.label_sampling import pixel_words
-    from curiosity_cli.evaluate.pixel_tables import PixelTables
+    ``(path, digest)`` of the batch file this command writes (:class:`~curiosity_cli.label.batch_references.WrittenBatch`)."""
+    from curiosity_cli.label.sampling import pixel_words
+    from curiosity_cli.label.pixel_tables import PixelTables
 
     words = pixel_words(store, shape)
     human_tables = None if human is None else PixelTables(words, human, n_classes)
@@ -205,22 +180,11 @@ class _DenseCheckpoints(Sequence):
         return self._run.phi(self._run.meta["checkpoints"][j])
 
 
-#: What every label file's ``meta`` names: a file without one of these is corrupt.
-LABEL_META_KEYS = ("dataset", "weight_function", "restart", "run_seed", "store", "vocabulary_hashes", "sweeps")
-
-
-def path_seed(run_seed, *, second: bool = False) -> int:
-    """The seed of a run's labelling chain (``second``: of its checking chain), from the run's own seed entropy."""
-    from curiosity_cli.seeds import PATH_TAG, SECOND_CHAIN_TAG
-
-    tag = SECOND_CHAIN_TAG if second else PATH_TAG
-    return int(np.random.SeedSequence((*run_seed, tag)).generate_state(1, np.uint64)[0])
-
 
 def _map_references(entry: str) -> tuple:
     """A map's (human labels or None, number of classes, image shape, class pixels per cell or None)."""
-    from curiosity_cli.data import load_map
-    from curiosity_cli.evaluate.information import cell_class_pixels
+    from curiosity_cli.maps.map_data import load_map
+    from curiosity_cli.label.classes import cell_class_pixels
 
     map_data = load_map(entry)
     n_classes = max(c.id for c in map_data.legend) + 1 if map_data.labels is not None else 0
@@ -232,7 +196,7 @@ def _map_references(entry: str) -> tuple:
 
 @lru_cache(maxsize=4)
 def _map_arrays(inputs: MapInputs, topics: int) -> MapArrays:
-    """A map's arrays, made once per (loky) worker; its Z_b read when first needed (:class:`~curiosity_cli.evaluate.batch_references.WrittenBatch`)."""
+    """A map's arrays, made once per (loky) worker; its Z_b read when first needed (:class:`~curiosity_cli.label.batch_references.WrittenBatch`)."""
     from curiosity_cli.words.store import load_store
 
     return map_arrays(
@@ -251,10 +215,10 @@ def label_block(
     ``inputs`` names the map's files, ``arrays`` holds their contents; the runs were made
     from the map's current word store (:func:`label_experiment` checks). Their chains,
     and the second chain of each restart below ``label.check_restarts`` (from a placed
-    start), advance in lock-step (:func:`~curiosity_cli.evaluate.label_sampling.label_paths`);
+    start), advance in lock-step (:func:`~curiosity_cli.label.sampling.label_paths`);
     a run's labels depend only on the run, never on the runs labelled with it.
     """
-    from curiosity_cli.evaluate.label_sampling import label_paths
+    from curiosity_cli.label.sampling import label_paths
 
     store, pixel_words, human, batch, cell_classes = arrays
     k = config.model.topics
@@ -311,7 +275,7 @@ def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordSto
     LabelError
         The map's grid (``cell_classes``, from its cell width) is not the word store's.
     """
-    from curiosity_cli.evaluate.information import classes_present, first_steps
+    from curiosity_cli.label.classes import classes_present, first_steps
 
     if cell_classes.shape[0] != store.n_cells:
         raise LabelError(
@@ -319,76 +283,6 @@ def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordSto
             f"make {cell_classes.shape[0]}; {RERUN} makes the store again", rerun="extract"
         )
     return first_steps(path, classes_present(cell_classes, CLASS_SHARE_PERCENT)).astype(np.int32)
-
-
-def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None:
-    """Write a run's label file and its example maps, each atomically: the examples first,
-    then the label file, whose meta records their sizes and digests (``files``)."""
-    written = []
-    for length, pixels in examples.items():
-        path = ExperimentFolder(folder).example(meta["dataset"], meta["weight_function"], meta["restart"], length)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as tmp:
-            with open(tmp, "wb") as handle:
-                np.savez_compressed(handle, labels=pixels)
-        written.append(str(path.relative_to(folder)))
-    meta = {**meta, FILES_KEY: records(folder, written)}
-    path = ExperimentFolder(folder).label_file(meta["dataset"], meta["weight_function"], meta["restart"])
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as handle:
-            np.savez_compressed(handle, **arrays, meta=json.dumps(meta, sort_keys=True))
-
-
-def read_label_file(path: Path) -> tuple[dict, dict]:
-    """``(meta, arrays)`` of a run's label file, as :func:`label_block` makes it.
-
-    Raises
-    ------
-    FileNotFoundError, OSError
-        As :func:`~curiosity_cli.files.open_npz`.
-    CorruptFileError
-        The file cannot be read, lacks an array a label file has, or has a table array
-        without one table per checkpoint length.
-    """
-    tables = ("batch", "human", SECOND_PREFIX + "batch", SECOND_PREFIX + "human")
-    with open_npz(path) as npz:
-        meta = read_meta(npz, LABEL_META_KEYS)
-        arrays = {"lengths": npz["lengths"], "batch": npz["batch"]}  # a file without them is corrupt (KeyError)
-        arrays.update({name: npz[name] for name in (*tables, "class_first_step") if name in npz.files})
-        for name in tables:
-            if name in arrays and (arrays[name].ndim != 3 or len(arrays[name]) != len(arrays["lengths"])):
-                # raised inside open_npz: reported as a corrupt file, not as an IndexError later
-                raise ValueError(
-                    f"{name} has shape {arrays[name].shape}, expected one table for each of {len(arrays['lengths'])} lengths"
-                )
-    return meta, arrays
-
-
-def label_changes(path: Path, recipe: Recipe) -> str | None:
-    """Why a run's label file at ``path`` must be made again, in words; ``None`` when it was made from ``recipe``.
-
-    A missing file gives :data:`NOT_LABELLED`; a corrupt one (:func:`read_label_file`)
-    is noted on stderr as labelled again. So is a file whose example maps (``files``) are
-    missing or not as it wrote them.
-    """
-    try:
-        meta = read_label_file(path)[0]
-    except FileNotFoundError:
-        return NOT_LABELLED
-    except CorruptFileError as exc:
-        note(f"{exc}; labelling the run again")
-        return str(exc)
-    if (change := recipe.changes(meta)) is not None:
-        return change
-    return examples_changed(path, meta)
-
-
-def examples_changed(path: Path, meta: dict) -> str | None:
-    """``None`` when the example maps the label file at ``path`` records (its ``meta``'s
-    ``files``) are as it wrote them; else the first that is not, in words."""
-    change = changed(ExperimentFolder.holding_label_file(path).root, meta.get(FILES_KEY, {}))
-    return None if change is None else f"{display_path(change[0])}: {change[1]}"
 
 
 def label_experiment(
@@ -435,7 +329,7 @@ def label_experiment(
         ``jobs``: open ones another stage shares (``curiosity reproduce``).
     chains_per_block : int
         On the CPU, the block size past which lock-step chains gain no more speed
-        (:func:`~curiosity_cli.experiment.workers.plan_blocks` cuts blocks around it);
+        (:func:`~curiosity_cli.label.blocks.plan_blocks` cuts blocks around it);
         the labels do not depend on it.
 
     Returns
@@ -455,13 +349,14 @@ def label_experiment(
         labelled (corrupt, without a ``run.json``, a task that raised, a batch reference
         that failed), all of them named.
     ParameterError, BackendError
-        As :class:`~curiosity_cli.experiment.workers.Workers`; and a Dask scheduler that cannot be
+        As :class:`~curiosity_cli.workers.Workers`; and a Dask scheduler that cannot be
         reached or has unusable workers.
     FolderInUseError
         Another process works in the folder (:mod:`~curiosity_cli.experiment.lock`).
     """
     from curiosity_cli.experiment.maps import prepare_stores
-    from curiosity_cli.experiment.workers import Workers, plan_blocks
+    from curiosity_cli.label.blocks import plan_blocks
+    from curiosity_cli.workers import Workers
     from curiosity_cli.topics.chains import LANES, block_chains
     from curiosity_cli.topics.devices import resolve_device
     from curiosity_cli.explore.runs import RunError
@@ -482,7 +377,7 @@ def label_experiment(
         experiment = Experiment(folder, config, {name: info.facts for name, info in by_name.items()})
         # the runs of the grid the config holds, as they sit: a run folder outside it (a config narrowed since) is not labelled
         folders = [layout.run(r.dataset, r.weight_function, r.restart) for r in experiment.planned()]
-        runs = [p for p in folders if (p / "run.json").is_file()]
+        runs = [p for p in folders if (p / ExperimentFolder.RUN_META).is_file()]
         left_out = [unexplored(p, layout) for p in folders if p not in runs]
         if not runs:
             raise LabelError(
@@ -661,7 +556,7 @@ class LabelTask(NamedTuple):
 
 
 def _stage_task(task: BatchTask | LabelTask, config: ExperimentConfig, shipped=None, *, threads: int = 1):
-    """A task of the stage in a worker: a batch reference (:func:`~curiosity_cli.evaluate.batch_references.batch_task`)
+    """A task of the stage in a worker: a batch reference (:func:`~curiosity_cli.label.batch_references.batch_task`)
     or a block of runs (:func:`_label_task`);
     ``shipped`` is its map's word store (a batch reference) or arrays (a block) on Dask, else None."""
     if isinstance(task, BatchTask):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from curiosity_cli.experiment.workers import _block_cost, _makespan, plan_blocks
+from curiosity_cli.label.blocks import _block_cost, _makespan, plan_blocks
 
 #: The paper grid (3 maps x 4 walkers x 20 restarts, restart 0 checked: 84 chains a map) and the quick job's map.
 PAPER = [[2] * 4 + [1] * 76] * 3

@@ -1,7 +1,7 @@
 """Drawing a whole map's topic labels: with a path's model (Z_p) or in batch mode (Z_b).
 
 This module computes labels and writes nothing; which runs need them, and the files and
-tasks of the ``label`` stage, are in :mod:`~curiosity_cli.evaluate.label_stage`.
+tasks of the ``label`` stage, are in :mod:`~curiosity_cli.label.stage`.
 
 Paper section 5.1: "Each of these exploration runs returned a topic model Φ_p, which we
 then used to compute topic labels for each pixel in the map in batch mode."
@@ -249,3 +249,11 @@ def pixel_words(store: WordStore, image_shape: tuple[int, int]) -> np.ndarray:
     nearest_row = np.minimum((np.arange(rows) + (stride - 1) // 2) // stride, grid.shape[0] - 1)
     nearest_col = np.minimum((np.arange(cols) + (stride - 1) // 2) // stride, grid.shape[1] - 1)
     return grid[np.ix_(nearest_row, nearest_col)]
+
+
+def path_seed(run_seed, *, second: bool = False) -> int:
+    """The seed of a run's labelling chain (``second``: of its checking chain), from the run's own seed entropy."""
+    from curiosity_cli.seeds import PATH_TAG, SECOND_CHAIN_TAG
+
+    tag = SECOND_CHAIN_TAG if second else PATH_TAG
+    return int(np.random.SeedSequence((*run_seed, tag)).generate_state(1, np.uint64)[0])

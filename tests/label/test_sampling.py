@@ -9,7 +9,7 @@ import pytest
 from small_maps import small_config, synthetic_store
 
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.evaluate.label_sampling import batch_labels, label_with_phi, pixel_labels
+from curiosity_cli.label.sampling import batch_labels, label_with_phi, pixel_labels
 from curiosity_cli.words.store import WordType, build_store
 
 
@@ -68,7 +68,7 @@ def test_a_phi_of_the_wrong_shape_is_refused():
 def test_paths_are_labelled_by_their_own_chains_cold_then_warm(warm_sweeps):
     from naive import NaiveModel, ml_topics_naive, start_chain_naive, sweep_chain_naive
 
-    from curiosity_cli.evaluate.label_sampling import label_paths, whole_map_model
+    from curiosity_cli.label.sampling import label_paths, whole_map_model
 
     store = synthetic_store(np.arange(12).reshape(3, 4) % 3, words_per_cell=10)
     model = dataclasses.replace(small_config().model, topics=5)
@@ -99,7 +99,7 @@ def test_paths_are_labelled_by_their_own_chains_cold_then_warm(warm_sweeps):
 
 def test_warm_started_checkpoints_reach_the_labels_of_a_long_cold_chain():
     from curiosity_cli.evaluate.information import contingency, mutual_information
-    from curiosity_cli.evaluate.label_sampling import label_paths
+    from curiosity_cli.label.sampling import label_paths
 
     regions = np.zeros((8, 8), int)
     regions[:, 4:] = 1

@@ -1,6 +1,6 @@
 """Contingency tables of many labelings of a map's pixels against one reference, without drawing the pixel maps.
 
-Every pixel takes the label of one word (:func:`~curiosity_cli.evaluate.label_sampling.pixel_words`),
+Every pixel takes the label of one word (:func:`~curiosity_cli.label.sampling.pixel_words`),
 so the table of a word labelling's pixel map against a reference labelling of the pixels
 (the human labels, or Z_b) only needs, once per map, how many pixels each (word, reference
 class) pair holds. Labelling a map compares hundreds of chains at each checkpoint with two
@@ -64,7 +64,7 @@ class PixelTables:
         ParameterError
             Fewer words than the pixels take labels from, or a label out of range.
         """
-        from curiosity_cli.evaluate._table_kernels import pixel_tables_kernel
+        from curiosity_cli.label._table_kernels import pixel_tables_kernel
 
         word_labels = np.asarray(word_labels)
         if word_labels.ndim != 2 or word_labels.shape[0] < self._n_words:

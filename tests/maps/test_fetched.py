@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 import tifffile
 
-from curiosity_cli import fetched
-from curiosity_cli.data import load_map
+from curiosity_cli.maps import fetched
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.errors import DatasetError
-from curiosity_cli.fetched import FETCHED_MAPS, fetched_dir, is_fetched
+from curiosity_cli.maps.fetched import FETCHED_MAPS, fetched_dir, is_fetched
 
 ZH = FETCHED_MAPS["zurich-zh17"]
 # Zurich Summer's ground-truth colours, by class name (from the dataset's documentation).

@@ -5,7 +5,7 @@
 (batch_sweeps,) float64 and ``meta`` (JSON: its recipe,
 :meth:`~curiosity_cli.experiment.experiment.Experiment.batch_recipe`, and seconds). It is
 reused while its recipe is the one the experiment's settings give; otherwise computed again,
-with a note saying what changed. The stage (:mod:`~curiosity_cli.evaluate.label_stage`)
+with a note saying what changed. The stage (:mod:`~curiosity_cli.label.stage`)
 computes every stale map's at once, before its label blocks or beside them; a block that
 runs beside reads Z_b when it first needs it (:class:`WrittenBatch`).
 """
@@ -26,7 +26,7 @@ from curiosity_cli.files import CorruptFileError, atomic_path, display_path, not
 
 if TYPE_CHECKING:
     from curiosity_cli.experiment.maps import StoreInfo
-    from curiosity_cli.experiment.workers import Workers
+    from curiosity_cli.workers import Workers
     from curiosity_cli.words.store import WordStore
 
 
@@ -65,7 +65,7 @@ def batch_task(task: BatchTask, config: ExperimentConfig, store: WordStore | Non
     """A map's batch reference, in a worker, on ``task.threads`` threads: ``(pixel labels, word labels, trace,
     seconds)``; from its word ``store`` when shipped (Dask), else read here. (``threads``, the worker's share, is the
     same for every task of a stage; a batch reference beside label blocks has its own.)"""
-    from curiosity_cli.evaluate.label_sampling import batch_labels, pixel_labels
+    from curiosity_cli.label.sampling import batch_labels, pixel_labels
     from curiosity_cli.seeds import BATCH_TAG, name_key
     from curiosity_cli.words.store import load_store
 
@@ -97,7 +97,7 @@ def compute_batch_references(
     a line for each that failed, whose map is then left out of ``files``.
 
     Every map's at once, each a task on its share of the cores
-    (:meth:`~curiosity_cli.experiment.workers.Workers.whole_machine_threads`): its sweeps
+    (:meth:`~curiosity_cli.workers.Workers.whole_machine_threads`): its sweeps
     scale with threads less well than maps side by side do. A map's sweeps are counted
     when it arrives.
     """
@@ -132,7 +132,7 @@ BATCH_POLL_SECONDS = 0.2
 
 
 class WrittenBatch:
-    """Z_b's tables (:class:`~curiosity_cli.evaluate.pixel_tables.PixelTables`) from the batch file at ``path`` made
+    """Z_b's tables (:class:`~curiosity_cli.label.pixel_tables.PixelTables`) from the batch file at ``path`` made
     from the recipe ``digest``, read when first needed: a label task may start while its map's batch reference is
     still being computed beside it, and waits for the file only when it first compares a Z_p with Z_b.
 
@@ -145,8 +145,8 @@ class WrittenBatch:
         self._tables = None
 
     def tables(self, word_labels: np.ndarray, n_labels: int) -> np.ndarray:
-        """As :meth:`PixelTables.tables <curiosity_cli.evaluate.pixel_tables.PixelTables.tables>`, once the file is there."""
-        from curiosity_cli.evaluate.pixel_tables import PixelTables
+        """As :meth:`PixelTables.tables <curiosity_cli.label.pixel_tables.PixelTables.tables>`, once the file is there."""
+        from curiosity_cli.label.pixel_tables import PixelTables
 
         if self._tables is None:
             self._tables = PixelTables(self._pixel_words, self._wait(), self._topics)

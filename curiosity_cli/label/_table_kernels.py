@@ -1,6 +1,6 @@
 """Numba kernel of the contingency tables of many word labelings' pixel maps.
 
-Private: call :class:`curiosity_cli.evaluate.pixel_tables.PixelTables`; twin in
+Private: call :class:`curiosity_cli.label.pixel_tables.PixelTables`; twin in
 ``tests/naive.py`` (``pixel_tables_naive``).
 """
 

@@ -8,8 +8,8 @@ from naive import pixel_tables_naive
 
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.evaluate.information import contingency
-from curiosity_cli.evaluate.label_sampling import pixel_labels, pixel_words
-from curiosity_cli.evaluate.pixel_tables import PixelTables
+from curiosity_cli.label.sampling import pixel_labels, pixel_words
+from curiosity_cli.label.pixel_tables import PixelTables
 from curiosity_cli.words.store import WordType, build_store
 
 

@@ -10,11 +10,11 @@ import pytest
 from test_dask_labels import label_contents
 from test_pipeline import small_experiment
 
-from curiosity_cli.evaluate.batch_references import WrittenBatch, write_batch
-from curiosity_cli.evaluate.label_stage import label_experiment
-from curiosity_cli.evaluate.pixel_tables import PixelTables
+from curiosity_cli.label.batch_references import WrittenBatch, write_batch
+from curiosity_cli.label.stage import label_experiment
+from curiosity_cli.label.pixel_tables import PixelTables
 from curiosity_cli.experiment.recipes import Recipe
-from curiosity_cli.experiment.workers import cores
+from curiosity_cli.workers import cores
 
 
 @pytest.mark.skipif(cores() < 2, reason="a batch reference beside a block needs two workers")

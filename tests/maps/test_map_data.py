@@ -6,8 +6,8 @@ import pytest
 import yaml
 from small_maps import edit_yaml
 
-from curiosity_cli.cell_grid import SquareGrid
-from curiosity_cli.data import dataset_names, load_legend, load_map
+from curiosity_cli.maps.cell_grid import SquareGrid
+from curiosity_cli.maps.map_data import dataset_names, load_legend, load_map
 from curiosity_cli.errors import ConfigError, DatasetError
 
 # Size and cells from each map's purpose: the paper's Table 1 and section 5.1 settings.

@@ -1,0 +1,341 @@
+"""The experiment's commands as functions: ``extract``, ``explore``, ``label``, ``evaluate``, ``plot`` and ``reproduce``.
+
+Each takes the arguments its command takes, under the same names and with the same
+defaults; the command line only parses its options into them and reports what they
+return. Arguments that do not go together raise :class:`~curiosity_cli.errors.UsageError`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import typing
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+from curiosity_cli.errors import UsageError
+from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
+
+if typing.TYPE_CHECKING:
+    from curiosity_cli.config import ExperimentConfig
+    from curiosity_cli.evaluate.tables import Evaluation
+    from curiosity_cli.explore.grid import GridSummary
+    from curiosity_cli.plots.figures import WrittenFigures
+    from curiosity_cli.words.extract import Extraction
+    from curiosity_cli.words.store import WordStore
+
+Config = typing.Union[str, Path, "ExperimentConfig"]
+#: Where a command's tasks run (:data:`curiosity_cli.workers.BACKENDS`).
+BACKEND = "loky"
+#: The experiment folder the stages after ``explore`` work in by default: the quick job's.
+DEFAULT_EXPERIMENT = DEFAULT_RESULTS / "quick"
+
+
+def load(config: Config, overrides: typing.Iterable[str] = ()) -> ExperimentConfig:
+    """An experiment config: a shipped config's name or a YAML path, with ``overrides``; or a config as it is.
+
+    Parameters
+    ----------
+    config : str, Path or ExperimentConfig
+    overrides : iterable of str
+        ``KEY=VALUE`` with dotted keys, e.g. ``explore.restarts=4``.
+
+    Raises
+    ------
+    ConfigError
+        The file does not validate, naming the key; ``overrides`` with an
+        ``ExperimentConfig``, which is already resolved (change it with
+        ``dataclasses.replace``); or a file that declares a sweep whose swept keys
+        ``overrides`` do not all set, or specifications: many experiments, not one
+        (:func:`reproduce` runs them).
+    """
+    from curiosity_cli.config import ExperimentConfig, load_config
+    from curiosity_cli.errors import ConfigError
+    from curiosity_cli.schema import OVERRIDES
+
+    overrides = list(overrides)
+    if isinstance(config, ExperimentConfig):
+        if overrides:
+            raise ConfigError(
+                f"{OVERRIDES}: got {overrides}, but the config is already resolved; give its name or path, "
+                "or change it with dataclasses.replace", parameter=OVERRIDES,
+            )
+        return config
+    _refuse_many(config, overrides)
+    return load_config(config, overrides)
+
+
+def _refuse_many(config: str | Path, overrides: Sequence[str]) -> None:
+    """A config that declares a sweep (whose keys ``overrides`` leave open) or specifications is many experiments."""
+    from curiosity_cli.config import config_file
+    from curiosity_cli.errors import ConfigError
+    from curiosity_cli.files import display_path
+    from curiosity_cli.specifications import declared_specifications
+    from curiosity_cli.sweep import declared_sweeps, split_values
+
+    fixed = {text.split("=", 1)[0] for text in overrides}
+    swept = [text.split("=", 1) for text in declared_sweeps(config)]
+    open_axes = [(key, values) for key, values in swept if key not in fixed]
+    specifications = declared_specifications(config)
+    if open_axes or specifications:
+        what = f"a sweep over {', '.join(key for key, _ in open_axes)}" if open_axes else f"{len(specifications)} specifications"
+        one = "; to load one, set each swept key, e.g. " + " ".join(
+            f"{key}={split_values(values)[0]}" for key, values in open_axes
+        ) if open_axes else ""
+        raise ConfigError(
+            f"config: {display_path(config_file(config))} declares {what}, which is many experiments (reproduce runs "
+            f"them all){one}", parameter="config",
+        )
+
+
+def _is_config(config: Config) -> bool:
+    from curiosity_cli.config import ExperimentConfig
+
+    return isinstance(config, ExperimentConfig)
+
+
+def _check_scheduler(backend: str, scheduler: str | None) -> None:
+    if scheduler is not None and backend != "dask":
+        raise UsageError("scheduler: needs `backend` dask", parameter="scheduler")
+
+
+def extract(
+    dataset: str, *, config: Config = "paper", overrides: typing.Iterable[str] = (), stride: int | None = None,
+    cell_width: int | None = None, cache_dir: Path = DEFAULT_CACHE, force: bool = False, density: Path | None = None,
+) -> Extraction:
+    """``curiosity extract``: a map's word store under ``config``'s word settings, from the cache or made now.
+
+    Parameters
+    ----------
+    dataset : str
+        A registered map's name or a dataset YAML.
+    config : str, Path or ExperimentConfig
+        Whose ``words`` section to use; ``overrides`` may change only ``words.*`` keys.
+    stride, cell_width : int, optional
+        Texton words every ``stride`` pixels in cells of ``cell_width``; default the dataset's.
+    density : Path, optional
+        Also write a PNG of words per cell and a sample of words there.
+
+    Returns
+    -------
+    Extraction
+        The store, its path, whether it was reused, and the seconds of each stage.
+        As :func:`~curiosity_cli.words.extract.extract_words`.
+    """
+    from curiosity_cli.config import load_words_config
+    from curiosity_cli.maps.map_data import load_map
+    from curiosity_cli.words.extract import extract_words
+
+    if density is not None and Path(density).suffix.lower() != ".png":
+        raise UsageError(f"density: got {density}, expected a path ending in .png (the figure is a PNG)", parameter="density")
+    words = load(config, overrides).words if _is_config(config) else load_words_config(config, overrides)
+    map_data = load_map(dataset)
+    result = extract_words(map_data, words, stride=stride, cell_width=cell_width, cache_dir=cache_dir, force=force)
+    if density is not None:
+        from curiosity_cli.plots.words import write_word_density
+
+        write_word_density(map_data, result.store, Path(density))
+    return result
+
+
+def word_store(dataset: str, config: Config = "paper", *, cache_dir: Path = DEFAULT_CACHE) -> WordStore:
+    """A map's word store under ``config``'s word settings (:func:`extract`'s store).
+
+    Parameters
+    ----------
+    dataset : str
+        A registered map's name or a dataset YAML.
+    """
+    return extract(dataset, config=config, cache_dir=cache_dir).store
+
+
+def explore(
+    config: Config = "quick", *, maps: Sequence[str] = (), weights: Sequence[str] | None = None,
+    restarts: int | None = None, steps: int | None = None, overrides: typing.Iterable[str] = (),
+    jobs: int | None = None, force: bool = False, results_dir: Path = DEFAULT_RESULTS, cache_dir: Path = DEFAULT_CACHE,
+    backend: str = BACKEND, scheduler: str | None = None,
+    on_prepared: Callable[[str, int, int], None] | None = None, on_run: Callable[..., None] | None = None,
+) -> GridSummary:
+    """``curiosity explore``: every missing run of the grid.
+
+    Parameters
+    ----------
+    config : str, Path or ExperimentConfig
+    maps : sequence of str
+        Only these maps (names or dataset YAMLs); default the config's datasets.
+    weights : sequence of str, optional
+        Only these weight functions (walkers).
+    restarts : int, optional
+        Restarts per weight function.
+    steps : int, optional
+        The path length; checkpoints beyond it are dropped, and it becomes the last.
+    overrides : iterable of str
+        ``KEY=VALUE``, under ``maps``, ``weights`` and ``restarts``.
+    on_prepared : callable, optional
+        ``on_prepared(name, to_run, skipped)``: the experiment's name and its runs to do and
+        already done, before any runs.
+    on_run : callable, optional
+        As :func:`~curiosity_cli.explore.grid.run_grid`, which says what is checked and raised.
+
+    Returns
+    -------
+    GridSummary
+        The experiment folder (``folder``) and what was run, skipped and written.
+    """
+    from curiosity_cli.errors import ConfigError
+    from curiosity_cli.explore.grid import run_grid
+    from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS
+    from curiosity_cli.maps.datasets import dataset_path
+
+    _check_scheduler(backend, scheduler)
+    options = []
+    if maps:
+        try:
+            paths = [str(dataset_path(name).resolve()) for name in maps]
+        except ConfigError as exc:
+            raise UsageError(f"maps: {exc}", parameter="maps") from None
+        options.append(f"datasets={paths}")
+    if weights is not None:
+        for name in weights:
+            if name not in WEIGHT_FUNCTIONS:
+                raise UsageError(f"weights: got {name!r}, expected one of {', '.join(WEIGHT_FUNCTIONS)}", parameter="weights")
+        options.append(f"explore.weight_functions={list(weights)}")
+    if restarts is not None:
+        options.append(f"explore.restarts={restarts}")
+    resolved = load(config, [*overrides, *options])
+    if steps is not None:
+        kept = tuple(c for c in resolved.explore.checkpoints if c < steps) + (steps,)
+        resolved = dataclasses.replace(
+            resolved, explore=dataclasses.replace(resolved.explore, path_length=steps, checkpoints=kept)
+        )
+    return run_grid(
+        resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
+        on_prepared=None if on_prepared is None else functools.partial(on_prepared, resolved.name), on_run=on_run,
+        backend=backend, scheduler=scheduler,
+    )
+
+
+def label(
+    folder: Path = DEFAULT_EXPERIMENT, *, overrides: typing.Iterable[str] = (), jobs: int | None = None,
+    force: bool = False, cache_dir: Path = DEFAULT_CACHE, backend: str = BACKEND, scheduler: str | None = None,
+    converged: bool = False, on_stage: Callable[[str, int], None] | None = None, on_done: Callable[[], None] | None = None,
+) -> dict:
+    """``curiosity label``: Z_b per map and Z_p per run of an explored experiment folder.
+
+    ``overrides`` may change only ``label.*`` keys, which the folder's ``config.yaml`` then
+    records; ``converged`` is the converged schedule (``label.sweeps=256``,
+    ``label.warm_sweeps=null``). As :func:`~curiosity_cli.label.stage.label_experiment`,
+    which says what is returned and raised.
+    """
+    from curiosity_cli.config import with_converged_labels
+    from curiosity_cli.experiment.saved_config import load_saved_config
+    from curiosity_cli.label.stage import label_experiment
+
+    _check_scheduler(backend, scheduler)
+    config = load_saved_config(folder, with_converged_labels(overrides) if converged else overrides)
+    return label_experiment(
+        config, Path(folder), cache_dir=cache_dir, jobs=jobs, force=force, on_stage=on_stage, on_done=on_done,
+        backend=backend, scheduler=scheduler,
+    )
+
+
+def evaluate(folder: Path = DEFAULT_EXPERIMENT, *, partial: bool = False) -> Evaluation:
+    """``curiosity evaluate``: MI, statistics and tables of a labelled experiment; ``partial`` leaves out (and
+    lists) the runs without usable labels. As :func:`~curiosity_cli.evaluate.tables.evaluate_experiment`."""
+    from curiosity_cli.evaluate.tables import evaluate_experiment
+
+    return evaluate_experiment(Path(folder), partial=partial)
+
+
+def plot(folder: Path = DEFAULT_EXPERIMENT) -> WrittenFigures:
+    """``curiosity plot``: the figures of an evaluated experiment; the files written, and (``skipped``) what was
+    not drawn and why. As :func:`~curiosity_cli.plots.figures.write_figures`."""
+    from curiosity_cli.plots.figures import write_figures
+
+    return write_figures(Path(folder))
+
+
+def animate(
+    folder: Path, dataset: str, weight_function: str, restart: int, *, out: Path | None = None,
+    cache_dir: Path | None = None,
+) -> Path:
+    """``curiosity plot --animate``: one run's path growing over its map beside Z_p at each checkpoint; returns
+    the file written. As :func:`~curiosity_cli.plots.animation.animate_run`."""
+    from curiosity_cli.plots.animation import animate_run
+
+    return animate_run(Path(folder), dataset, weight_function, restart, out=out, cache_dir=cache_dir)
+
+
+def reproduce(
+    config: Config = "paper-grid", *, overrides: typing.Iterable[str] = (), sweeps: Sequence[str] = (),
+    jobs: int | None = None, force: bool = False, backend: str = BACKEND, scheduler: str | None = None,
+    results_dir: Path = DEFAULT_RESULTS, cache_dir: Path = DEFAULT_CACHE, converged: bool = False,
+    on_stage: Callable[[str, int], None] | None = None, on_done: Callable[[], None] | None = None,
+    on_status: Callable[[str], None] | None = None,
+) -> Path:
+    """``curiosity reproduce``: explore, label, evaluate and plot; returns the path of ``REPORT.md``.
+
+    A config that declares a sweep (or specifications), or ``sweeps``, runs once per
+    combination of values, each as its own experiment under ``results_dir/<name>-sweep/``,
+    and returns the path of that folder's ``SWEEP.md``.
+
+    Parameters
+    ----------
+    config : str, Path or ExperimentConfig
+        Default the paper's full grid (``paper-grid``).
+    sweeps : sequence of str
+        ``KEY=V1,V2,...``, each an axis of the sweep; one replaces the values of a key the
+        config's ``sweep:`` declares.
+    converged : bool
+        The converged label schedule (``label.sweeps=256``, ``label.warm_sweeps=null``).
+    on_stage, on_done : callable, optional
+        ``on_stage(description, units)`` when a stage starts, ``on_done()`` after each unit.
+    on_status : callable, optional
+        ``on_status(line)`` with a sweep's size and folder before it runs.
+
+    Raises
+    ------
+    UsageError
+        ``sweeps`` not in the ``KEY=V1,V2,...`` form; ``scheduler`` without ``backend="dask"``.
+    """
+    from curiosity_cli.config import with_converged_labels
+    from curiosity_cli.reproduce import reproduce as run_pipeline
+    from curiosity_cli.specifications import declared_specifications
+    from curiosity_cli.sweep import declared_sweeps, merge_sweeps
+
+    _check_scheduler(backend, scheduler)
+    overrides = list(overrides)
+    if converged:
+        overrides = with_converged_labels(overrides)
+    if not _is_config(config):
+        sweeps = merge_sweeps(declared_sweeps(config), sweeps)
+        specifications = declared_specifications(config)
+        if sweeps or specifications:
+            return _reproduce_sweep(
+                config, overrides, sweeps, specifications, on_stage=on_stage, on_done=on_done, on_status=on_status,
+                results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, backend=backend, scheduler=scheduler,
+            )
+    elif sweeps:
+        raise UsageError("sweeps: a resolved config is one experiment; give the config's name or path to sweep it", parameter="sweeps")
+    resolved = load(config, overrides)
+    return run_pipeline(
+        resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
+        backend=backend, scheduler=scheduler, on_stage=on_stage, on_done=on_done,
+    )
+
+
+def _reproduce_sweep(config, overrides, sweeps, specifications, *, on_status, **options) -> Path:
+    """A sweep, or a study's specifications: every option and combination checked, then all run."""
+    from curiosity_cli.files import display_path
+    from curiosity_cli.specifications import study_size
+    from curiosity_cli.sweep import SweepSyntaxError, count, parse_sweeps, plan_sweep, run_sweep
+
+    try:
+        axes = parse_sweeps(sweeps, overrides)
+    except SweepSyntaxError as exc:
+        raise UsageError(f"sweeps: {exc}", parameter="sweeps") from None
+    sweep = plan_sweep(config, axes, overrides, specifications)
+    if on_status is not None:
+        of = f" ({study_size(sweep)})" if specifications else ""
+        on_status(f"{count(len(sweep.combinations), 'combination')}{of}, in {display_path(sweep.folder(options['results_dir']))}")
+    return run_sweep(sweep, **options)

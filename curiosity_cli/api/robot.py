@@ -1,0 +1,180 @@
+"""The robot's commands as functions: ``drive`` (and its ``--timeline``) and ``simrobot``."""
+
+from __future__ import annotations
+
+import math
+import typing
+from collections.abc import Callable
+from pathlib import Path
+from typing import NamedTuple
+
+from curiosity_cli.api.pipeline import Config, load
+from curiosity_cli.errors import UsageError
+
+if typing.TYPE_CHECKING:
+    from curiosity_cli.drive.driver import Outcome
+    from curiosity_cli.maps.map_data import MapData
+
+#: The config whose model, words and drive sections (and seed) the robot uses by default.
+ROBOT_CONFIG = "paper-grid"
+
+
+class RobotStart(NamedTuple):
+    """Where :func:`simrobot`'s robot starts, and on what."""
+
+    map_data: MapData
+    row: float
+    col: float
+    heading_deg: float
+    metres_per_pixel: float
+
+
+def _finite(name: str, value: float | None) -> None:
+    if value is not None and not math.isfinite(value):
+        raise UsageError(f"{name}: got {value}, expected a finite number", parameter=name)
+
+
+def _start(start: tuple[float, float] | None, shape: tuple[int, int]) -> tuple[float, float]:
+    """``start`` (row, col) in map pixels, the map's centre without it; refused unless inside the map."""
+    if start is None:
+        return shape[0] / 2, shape[1] / 2
+    row, col = start
+    if not (0 <= row <= shape[0] and 0 <= col <= shape[1]):
+        raise UsageError(
+            f"start: got {row:g},{col:g}, expected a point inside the map ({shape[0]} x {shape[1]} px)", parameter="start"
+        )
+    return row, col
+
+
+def drive(
+    *, serial: str | None = None, baud: int | None = None, dry_run: bool = False, camera: str = "0",
+    topic: str | None = None, sim_map: str | None = None, start: tuple[float, float] | None = None,
+    heading_deg: float | None = None, config: Config = ROBOT_CONFIG, overrides: typing.Iterable[str] = (),
+    seed: int | None = None, out: Path | None = None, force: bool = False, clock: str = "bag", strict: bool = False,
+    video_out: Path | None = None, png_every: int = 0, max_frames: int | None = None,
+    on_status: Callable[[str], None] = lambda line: None, on_frame=lambda frame_number, decision: None,
+    on_replay: Callable[[str, int], None] = lambda description, frames: None,
+) -> tuple[Outcome, Path]:
+    """``curiosity drive``: steer a robot towards what its camera finds most curious, until the camera ends,
+    ``max_frames``, ESTOP, SIGINT or SIGTERM (paper section 5.2). Call it from the main thread.
+
+    Parameters
+    ----------
+    serial : str, optional
+        The robot's serial device or pyserial URL; default the config's ``drive.port``.
+    dry_run : bool
+        No serial port: commands are computed and logged, not sent (with
+        ``camera="sim"`` the robot is simulated in this process).
+    camera : str
+        A device index, a video file, a stream URL, a recorded bag, or ``sim``.
+    sim_map : str, optional
+        With ``camera="sim"`` (and only then): the simulated robot's map.
+    start, heading_deg : optional
+        With ``dry_run`` and ``camera="sim"``: the start (row, col) in map pixels (default
+        the map's centre) and heading, degrees clockwise from the map's +col axis.
+    seed : int, optional
+        Of the topic models; default the config's.
+
+    The other arguments are :func:`~curiosity_cli.drive.session.drive_session`'s.
+
+    Returns
+    -------
+    (Outcome, Path)
+        How the drive ended, and its run folder.
+
+    Raises
+    ------
+    UsageError
+        Arguments that do not go together, naming them.
+    """
+    from curiosity_cli.drive.session import drive_session
+    from curiosity_cli.maps.map_data import load_map
+
+    _finite("heading_deg", heading_deg)
+    if dry_run and serial is not None:
+        raise UsageError("dry_run: `dry_run` sends nothing; leave out `serial`", parameter="dry_run")
+    if (camera == "sim") != (sim_map is not None):
+        raise UsageError("sim_map: `camera` sim and `sim_map` go together", parameter="sim_map")
+    if (start is not None or heading_deg is not None) and not (dry_run and camera == "sim"):
+        parameter = "start" if start is not None else "heading_deg"
+        raise UsageError(
+            f"{parameter}: only a dry run simulates the robot here; give the start to `curiosity simrobot`",
+            parameter=parameter,
+        )
+    resolved = load(config, overrides)
+    port = serial or resolved.drive.port
+    if not dry_run and port is None:
+        raise UsageError(
+            "serial: give the robot's port with `serial` (or drive.port in the config), or `dry_run`", parameter="serial"
+        )
+    map_data, start_at = None, None
+    if sim_map is not None:
+        map_data = load_map(sim_map)
+        if dry_run:
+            if resolved.drive.sim_frame_interval <= 0:
+                raise UsageError(
+                    "overrides: a dry run with `camera` sim needs drive.sim_frame_interval > 0 (the simulated time per frame)",
+                    parameter="overrides",
+                )
+            start_at = _start(start, map_data.image.shape[:2])
+    return drive_session(
+        resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic,
+        port=None if dry_run else port, baud=baud, sim_map=map_data, start=start_at, heading_deg=heading_deg or 0.0,
+        out=out, force=force, strict=strict, clock=clock, video_out=video_out, png_every=png_every, max_frames=max_frames,
+        on_status=on_status, on_frame=on_frame, on_replay=on_replay,
+    )
+
+
+def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
+    """``curiosity drive --timeline``: a replay's surprise timeline drawn again from its run folder's log; the
+    files written. As :func:`~curiosity_cli.drive.session.redraw_timeline`."""
+    from curiosity_cli.drive.session import redraw_timeline as redraw
+
+    return redraw(Path(folder), clock)
+
+
+def simrobot(
+    map_name: str, *, start: tuple[float, float] | None = None, heading_deg: float = 0.0, noise: str = "",
+    seed: int | None = None, estop_after: float | None = None, link: Path | None = None, log_file: Path | None = None,
+    config: Config = ROBOT_CONFIG, overrides: typing.Iterable[str] = (),
+    on_ready: Callable[[str, RobotStart], None] = lambda path, start: None,
+) -> str:
+    """``curiosity simrobot``: a simulated robot on a new pseudo-terminal, served until SIGINT or SIGTERM.
+
+    Parameters
+    ----------
+    map_name : str
+        The map the robot moves over (name or dataset YAML).
+    start : (float, float), optional
+        (row, col) in map pixels; default the map's centre.
+    noise : str
+        Line noise on what the robot sends: ``KIND=RATE,...`` of garbage, checksum,
+        truncate and drop-ack, each a rate 0..1.
+    seed : int, optional
+        Of the noise; default the config's.
+    on_ready : callable
+        ``on_ready(path, start)`` once the pseudo-terminal at ``path`` is open.
+
+    The other arguments are :func:`~curiosity_cli.drive.session.simrobot_session`'s.
+
+    Returns
+    -------
+    str
+        The signal that stopped it: ``SIGINT`` or ``SIGTERM``.
+    """
+    from curiosity_cli.drive.session import simrobot_session
+    from curiosity_cli.drive.simrobot import Noise
+    from curiosity_cli.maps.map_data import load_map
+
+    _finite("heading_deg", heading_deg)
+    _finite("estop_after", estop_after)
+    resolved = load(config, overrides)
+    rates = Noise.parse(noise)
+    map_data = load_map(map_name)
+    row, col = _start(start, map_data.image.shape[:2])
+    robot = RobotStart(map_data, row, col, heading_deg, resolved.drive.sim_metres_per_pixel)
+    return simrobot_session(
+        resolved, map_data, start=(row, col), heading_deg=heading_deg, noise=rates,
+        seed=resolved.seed if seed is None else seed, estop_after=estop_after, link=link, log_file=log_file,
+        on_ready=lambda path: on_ready(path, robot),
+    )

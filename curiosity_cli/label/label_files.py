@@ -1,0 +1,114 @@
+"""The label file of a run and its example maps: what ``curiosity label`` writes and later stages read.
+
+- ``labels/<dataset>/<weight function>/restart-<NNN>.npz``: for one run, per checkpoint
+  length (``lengths``), the contingency tables of Z_p against the human labels
+  (``human``, (n, K, C) int64, absent for a map without labels) and against Z_b
+  (``batch``, (n, K, K) int64), and ``meta`` (JSON). Tables rather than label maps: MI and
+  NMI follow from them exactly, in kilobytes instead of a megabyte per checkpoint. A
+  restart below ``label.check_restarts`` also has ``placed_batch`` and ``placed_human``
+  (:data:`SECOND_PREFIX`): the same tables for a second labelling chain from a placed
+  start (:meth:`~curiosity_cli.topics.chains.FrozenChains.start`), which evaluation
+  compares with the first to check that Z_p has forgotten its start. For a map with
+  human labels also ``class_first_step`` ((C,) int32): the step at which the path first
+  stood in a cell where class ``h`` covers at least ``CLASS_SHARE_PERCENT`` % of the
+  pixels, -1 if never (:mod:`curiosity_cli.label.classes`); ``meta["class_share_percent"]``
+  records the share.
+- ``labels/<dataset>/examples/<weight function>-restart-<NNN>-<length>.npz``: the pixel
+  label map Z_p (``labels``, (H, W) int16) of restart 0 at the :data:`EXAMPLE_LENGTHS` and
+  at its last checkpoint, for the figures.
+
+Paths are :class:`~curiosity_cli.experiment.layout.ExperimentFolder`'s; each file is
+written atomically, the label file last, recording its example maps' sizes and digests.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.experiment.recipes import SECOND_START, Recipe
+from curiosity_cli.experiment.wholeness import FILES_KEY, changed, records
+from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz, read_meta
+
+#: Why a run without a label file is labelled (:func:`label_changes`).
+NOT_LABELLED = "not labelled yet"
+#: Path lengths whose Z_p maps are kept for restart 0 (besides the last checkpoint).
+EXAMPLE_LENGTHS = (80,)
+#: The prefix of the second chain's tables' names in a checked run's label file.
+SECOND_PREFIX = f"{SECOND_START}_"
+
+#: What every label file's ``meta`` names: a file without one of these is corrupt.
+LABEL_META_KEYS = ("dataset", "weight_function", "restart", "run_seed", "store", "vocabulary_hashes", "sweeps")
+
+
+def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None:
+    """Write a run's label file and its example maps, each atomically: the examples first,
+    then the label file, whose meta records their sizes and digests (``files``)."""
+    written = []
+    for length, pixels in examples.items():
+        path = ExperimentFolder(folder).example(meta["dataset"], meta["weight_function"], meta["restart"], length)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as handle:
+                np.savez_compressed(handle, labels=pixels)
+        written.append(str(path.relative_to(folder)))
+    meta = {**meta, FILES_KEY: records(folder, written)}
+    path = ExperimentFolder(folder).label_file(meta["dataset"], meta["weight_function"], meta["restart"])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as handle:
+            np.savez_compressed(handle, **arrays, meta=json.dumps(meta, sort_keys=True))
+
+
+def read_label_file(path: Path) -> tuple[dict, dict]:
+    """``(meta, arrays)`` of a run's label file, as :func:`~curiosity_cli.label.stage.label_block` makes it.
+
+    Raises
+    ------
+    FileNotFoundError, OSError
+        As :func:`~curiosity_cli.files.open_npz`.
+    CorruptFileError
+        The file cannot be read, lacks an array a label file has, or has a table array
+        without one table per checkpoint length.
+    """
+    tables = ("batch", "human", SECOND_PREFIX + "batch", SECOND_PREFIX + "human")
+    with open_npz(path) as npz:
+        meta = read_meta(npz, LABEL_META_KEYS)
+        arrays = {"lengths": npz["lengths"], "batch": npz["batch"]}  # a file without them is corrupt (KeyError)
+        arrays.update({name: npz[name] for name in (*tables, "class_first_step") if name in npz.files})
+        for name in tables:
+            if name in arrays and (arrays[name].ndim != 3 or len(arrays[name]) != len(arrays["lengths"])):
+                # raised inside open_npz: reported as a corrupt file, not as an IndexError later
+                raise ValueError(
+                    f"{name} has shape {arrays[name].shape}, expected one table for each of {len(arrays['lengths'])} lengths"
+                )
+    return meta, arrays
+
+
+def label_changes(path: Path, recipe: Recipe) -> str | None:
+    """Why a run's label file at ``path`` must be made again, in words; ``None`` when it was made from ``recipe``.
+
+    A missing file gives :data:`NOT_LABELLED`; a corrupt one (:func:`read_label_file`)
+    is noted on stderr as labelled again. So is a file whose example maps (``files``) are
+    missing or not as it wrote them.
+    """
+    try:
+        meta = read_label_file(path)[0]
+    except FileNotFoundError:
+        return NOT_LABELLED
+    except CorruptFileError as exc:
+        note(f"{exc}; labelling the run again")
+        return str(exc)
+    if (change := recipe.changes(meta)) is not None:
+        return change
+    return examples_changed(path, meta)
+
+
+def examples_changed(path: Path, meta: dict) -> str | None:
+    """``None`` when the example maps the label file at ``path`` records (its ``meta``'s
+    ``files``) are as it wrote them; else the first that is not, in words."""
+    change = changed(ExperimentFolder.holding_label_file(path).root, meta.get(FILES_KEY, {}))
+    return None if change is None else f"{display_path(change[0])}: {change[1]}"
