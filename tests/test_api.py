@@ -233,3 +233,67 @@ def test_simrobot_refuses_a_start_off_the_map_and_a_heading_that_is_no_number(ow
 def test_a_resolved_config_is_taken_as_it_is():
     config = api.load("quick")
     assert isinstance(config, ExperimentConfig) and api.load(config) is config
+
+
+# --------------------------------------------------------------------------- misuse from Python
+
+
+@pytest.fixture(scope="module")
+def evaluated(tmp_path_factory):
+    """A tiny experiment on an embedded map, explored, labelled and evaluated through the API."""
+    folder = tmp_path_factory.mktemp("evaluated")
+    small = ["datasets=[aerial-mosaic]", "explore.restarts=2", "explore.path_length=20", "explore.checkpoints=[10, 20]",
+             "explore.weight_functions=[random-walk, topic-perplexity]", "label.sweeps=2", "label.batch_sweeps=3",
+             "name=misuse"]
+    experiment = api.explore("quick", overrides=small, results_dir=folder, cache_dir=folder / "cache", jobs=1).folder
+    api.label(experiment, cache_dir=folder / "cache", jobs=1)
+    api.evaluate(experiment)
+    return api.open_experiment(experiment)
+
+
+@pytest.mark.parametrize("call, parameter", [
+    (lambda r: r.table("nope"), "name"),
+    (lambda r: r.table("../provenance"), "name"),
+    (lambda r: r.run("aerial-mosaic", "topic-perplexity", "0"), "restart"),
+    (lambda r: r.run("aerial-mosaic", "topic-perplexity", 0.5), "restart"),
+    (lambda r: r.run("aerial-mosaic", "topic-perplexity", -1), "restart"),
+    (lambda r: r.run("aerial-mosaic", "topic-perplexity", True), "restart"),
+    (lambda r: r.run("aerial-mosaic", "topic-perplexity", 0).phi("20"), "length"),
+])
+def test_misused_results_name_the_argument(evaluated, call, parameter):
+    with pytest.raises(ParameterError, match=rf"^{parameter}: got "):
+        call(evaluated)
+    assert evaluated.table("summary")["dataset"].unique().tolist() == ["aerial-mosaic"]
+    assert evaluated.run("aerial-mosaic", "topic-perplexity", 1).phi(20).sum() > 0
+
+
+@pytest.mark.parametrize("call, parameter", [
+    (lambda: api.load(123), "config"),
+    (lambda: api.load(None), "config"),
+    (lambda: api.load("quick", overrides=[3]), "overrides"),
+    (lambda: api.load("quick", overrides="explore.restarts=3"), "overrides"),
+    (lambda: api.explore(42), "config"),
+    (lambda: api.explore("quick", jobs="2"), "jobs"),
+    (lambda: api.explore("quick", restarts=True), "restarts"),
+    (lambda: api.explore("quick", weights="topic-perplexity"), "weights"),
+    (lambda: api.explore("quick", maps="aerial-mosaic"), "maps"),
+    (lambda: api.label(None), "folder"),
+    (lambda: api.label("results/quick", jobs=0), "jobs"),
+    (lambda: api.evaluate(5), "folder"),
+    (lambda: api.plot(5), "folder"),
+    (lambda: api.animate("results/quick", "aerial-mosaic", "topic-perplexity", "0"), "restart"),
+    (lambda: api.reproduce(7), "config"),
+    (lambda: api.reproduce("quick", sweeps="seed=0,1"), "sweeps"),
+    (lambda: api.extract(3), "dataset"),
+    (lambda: api.extract("aerial-mosaic", stride=0), "stride"),
+    (lambda: api.show_datasets("aerial-mosaic"), "datasets"),
+    (lambda: api.build_vocabularies(texton_words=2.5), "texton_words"),
+    (lambda: api.show_config(1), "config"),
+    (lambda: api.init_config(None), "name"),
+    (lambda: api.open_experiment(3), "folder"),
+    (lambda: api.drive(dry_run=True, max_frames=0), "max_frames"),
+    (lambda: api.simrobot(None), "map_name"),
+])
+def test_misused_functions_name_the_argument(call, parameter):
+    with pytest.raises(ParameterError, match=rf"^{parameter}: got "):
+        call()

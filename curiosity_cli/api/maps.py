@@ -80,12 +80,15 @@ def show_datasets(datasets: Sequence[str], *, out: Path | None = None) -> Previe
     from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.plots.preview import write_preview
 
+    from curiosity_cli.api.arguments import optional_path, strings
+
+    datasets, out = strings(datasets, "datasets", "aerial-mosaic"), optional_path(out, "out")
     maps = [load_map(d) for d in datasets]
     notes = [made_notes(m.config.fetch) if m.config.fetch is not None else {} for m in maps]
     if out is None:
         out = PREVIEWS / f"{maps[0].config.name if len(maps) == 1 else 'overview'}.png"
     write_preview(maps, out)
-    return Preview(maps, notes, Path(out))
+    return Preview(maps, notes, out)
 
 
 def build_vocabularies(
@@ -110,14 +113,18 @@ def build_vocabularies(
     from curiosity_cli.files import display_path
     from curiosity_cli.words.vocab import build_orb_vocabulary, build_texton_vocabulary, save_vocabulary
 
+    from curiosity_cli.api.arguments import folder_argument
+    from curiosity_cli.checks import check_int
+
+    out, seed = folder_argument(out, "out"), check_int("seed", seed, 0)
     plan = (("texton_words", build_texton_vocabulary, texton_words), ("orb_words", build_orb_vocabulary, orb_words))
     for name, _, size in plan:
-        if not 2 <= size <= MAX_VOCABULARY:
-            raise ParameterError(f"{name}: got {size}, expected 2 to {MAX_VOCABULARY}", parameter=name)
+        if isinstance(size, bool) or not isinstance(size, int) or not 2 <= size <= MAX_VOCABULARY:
+            raise ParameterError(f"{name}: got {size!r}, expected 2 to {MAX_VOCABULARY}", parameter=name)
     written = []
     for _, builder, size in plan:
         vocabulary = builder(size, seed=seed, log=log)
-        path = save_vocabulary(vocabulary, Path(out))
+        path = save_vocabulary(vocabulary, out)
         log(f"wrote {display_path(path)} (sha256 {vocabulary.sha256[:16]}…)")
         written.append((path, vocabulary))
     return written

@@ -13,6 +13,9 @@ import typing
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from curiosity_cli.api.arguments import (
+    config_argument, folder_argument, name_or_path, optional_count, optional_path, overrides_argument, strings,
+)
 from curiosity_cli.errors import UsageError
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
@@ -53,7 +56,7 @@ def load(config: Config, overrides: typing.Iterable[str] = ()) -> ExperimentConf
     from curiosity_cli.errors import ConfigError
     from curiosity_cli.schema import OVERRIDES
 
-    overrides = list(overrides)
+    config, overrides = config_argument(config), overrides_argument(overrides)
     if isinstance(config, ExperimentConfig):
         if overrides:
             raise ConfigError(
@@ -126,7 +129,10 @@ def extract(
     from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.words.extract import extract_words
 
-    if density is not None and Path(density).suffix.lower() != ".png":
+    dataset = name_or_path(dataset, "dataset")
+    density, cache_dir = optional_path(density, "density"), folder_argument(cache_dir, "cache_dir")
+    stride, cell_width = optional_count(stride, "stride"), optional_count(cell_width, "cell_width")
+    if density is not None and density.suffix.lower() != ".png":
         raise UsageError(f"density: got {density}, expected a path ending in .png (the figure is a PNG)", parameter="density")
     words = load(config, overrides).words if _is_config(config) else load_words_config(config, overrides)
     map_data = load_map(dataset)
@@ -134,7 +140,7 @@ def extract(
     if density is not None:
         from curiosity_cli.plots.words import write_word_density
 
-        write_word_density(map_data, result.store, Path(density))
+        write_word_density(map_data, result.store, density)
     return result
 
 
@@ -188,6 +194,10 @@ def explore(
     from curiosity_cli.maps.datasets import dataset_path
 
     _check_scheduler(backend, scheduler)
+    maps = strings(maps, "maps", "aerial-mosaic")
+    weights = None if weights is None else strings(weights, "weights", "topic-perplexity")
+    restarts, steps, jobs = optional_count(restarts, "restarts"), optional_count(steps, "steps"), optional_count(jobs, "jobs")
+    results_dir, cache_dir = folder_argument(results_dir, "results_dir"), folder_argument(cache_dir, "cache_dir")
     options = []
     if maps:
         try:
@@ -199,10 +209,10 @@ def explore(
         for name in weights:
             if name not in WEIGHT_FUNCTIONS:
                 raise UsageError(f"weights: got {name!r}, expected one of {', '.join(WEIGHT_FUNCTIONS)}", parameter="weights")
-        options.append(f"explore.weight_functions={list(weights)}")
+        options.append(f"explore.weight_functions={weights}")
     if restarts is not None:
         options.append(f"explore.restarts={restarts}")
-    resolved = load(config, [*overrides, *options])
+    resolved = load(config, [*overrides_argument(overrides), *options])
     if steps is not None:
         kept = tuple(c for c in resolved.explore.checkpoints if c < steps) + (steps,)
         resolved = dataclasses.replace(
@@ -232,9 +242,11 @@ def label(
     from curiosity_cli.label.stage import label_experiment
 
     _check_scheduler(backend, scheduler)
+    folder, overrides = folder_argument(folder), overrides_argument(overrides)
+    jobs, cache_dir = optional_count(jobs, "jobs"), folder_argument(cache_dir, "cache_dir")
     config = load_saved_config(folder, with_converged_labels(overrides) if converged else overrides)
     return label_experiment(
-        config, Path(folder), cache_dir=cache_dir, jobs=jobs, force=force, on_stage=on_stage, on_done=on_done,
+        config, folder, cache_dir=cache_dir, jobs=jobs, force=force, on_stage=on_stage, on_done=on_done,
         backend=backend, scheduler=scheduler,
     )
 
@@ -244,7 +256,7 @@ def evaluate(folder: Path = DEFAULT_EXPERIMENT, *, partial: bool = False) -> Eva
     lists) the runs without usable labels. As :func:`~curiosity_cli.evaluate.tables.evaluate_experiment`."""
     from curiosity_cli.evaluate.tables import evaluate_experiment
 
-    return evaluate_experiment(Path(folder), partial=partial)
+    return evaluate_experiment(folder_argument(folder), partial=partial)
 
 
 def plot(folder: Path = DEFAULT_EXPERIMENT) -> WrittenFigures:
@@ -252,7 +264,7 @@ def plot(folder: Path = DEFAULT_EXPERIMENT) -> WrittenFigures:
     not drawn and why. As :func:`~curiosity_cli.plots.figures.write_figures`."""
     from curiosity_cli.plots.figures import write_figures
 
-    return write_figures(Path(folder))
+    return write_figures(folder_argument(folder))
 
 
 def animate(
@@ -261,9 +273,14 @@ def animate(
 ) -> Path:
     """``curiosity plot --animate``: one run's path growing over its map beside Z_p at each checkpoint; returns
     the file written. As :func:`~curiosity_cli.plots.animation.animate_run`."""
+    from curiosity_cli.checks import check_int
     from curiosity_cli.plots.animation import animate_run
 
-    return animate_run(Path(folder), dataset, weight_function, restart, out=out, cache_dir=cache_dir)
+    return animate_run(
+        folder_argument(folder), name_or_path(dataset, "dataset"), name_or_path(weight_function, "weight_function"),
+        check_int("restart", restart, 0),
+        out=optional_path(out, "out"), cache_dir=optional_path(cache_dir, "cache_dir"),
+    )
 
 
 def reproduce(
@@ -304,7 +321,9 @@ def reproduce(
     from curiosity_cli.sweep import declared_sweeps, merge_sweeps
 
     _check_scheduler(backend, scheduler)
-    overrides = list(overrides)
+    config, overrides, sweeps = config_argument(config), overrides_argument(overrides), strings(sweeps, "sweeps", "seed=0,1")
+    jobs = optional_count(jobs, "jobs")
+    results_dir, cache_dir = folder_argument(results_dir, "results_dir"), folder_argument(cache_dir, "cache_dir")
     if converged:
         overrides = with_converged_labels(overrides)
     if not _is_config(config):

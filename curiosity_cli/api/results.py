@@ -5,6 +5,7 @@ from __future__ import annotations
 import typing
 from pathlib import Path
 
+from curiosity_cli.api.arguments import folder_argument, name_or_path
 from curiosity_cli.paths import DEFAULT_RESULTS, experiment_root
 
 if typing.TYPE_CHECKING:
@@ -33,10 +34,16 @@ class Results:
         ------
         StaleTablesError
             The tables are not one set made from the folder's files as they are now.
+        ParameterError
+            ``name`` is none of the tables ``evaluate`` wrote, naming them.
         """
         import pandas as pd
 
-        self.experiment.check_tables()
+        from curiosity_cli.errors import ParameterError
+
+        written = sorted(Path(file).stem for file in self.experiment.check_tables() if Path(file).suffix == ".csv")
+        if name not in written:
+            raise ParameterError(f"name: got {name!r}, expected one of {', '.join(written)}")
         return pd.read_csv(self.experiment.folder.table(name))
 
     @property
@@ -61,10 +68,14 @@ class Results:
         ------
         RunError
             A missing, incomplete or altered run, naming the file.
+        ParameterError
+            ``restart`` is not an int >= 0, or a name is not a string.
         """
+        from curiosity_cli.checks import check_int
         from curiosity_cli.explore.runs import read_run
 
-        return read_run(self.experiment.folder.run(dataset, weight_function, restart))
+        dataset, weight_function = name_or_path(dataset, "dataset"), name_or_path(weight_function, "weight_function")
+        return read_run(self.experiment.folder.run(dataset, weight_function, check_int("restart", restart, 0)))
 
 
 def open_experiment(folder: Path | str | None = None, *, name: str = "quick", results_dir: Path = DEFAULT_RESULTS) -> Results:
@@ -77,4 +88,6 @@ def open_experiment(folder: Path | str | None = None, *, name: str = "quick", re
     """
     from curiosity_cli.experiment.experiment import Experiment
 
-    return Results(Experiment.open(experiment_root(results_dir, name) if folder is None else folder))
+    if folder is None:
+        folder = experiment_root(folder_argument(results_dir, "results_dir"), name_or_path(name, "name"))
+    return Results(Experiment.open(folder_argument(folder)))

@@ -8,6 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
 
+from curiosity_cli.api.arguments import folder_argument, name_or_path, optional_count, optional_path
 from curiosity_cli.api.pipeline import Config, load
 from curiosity_cli.errors import UsageError
 
@@ -91,6 +92,10 @@ def drive(
     from curiosity_cli.maps.map_data import load_map
 
     _finite("heading_deg", heading_deg)
+    out, video_out = optional_path(out, "out"), optional_path(video_out, "video_out")
+    seed, max_frames = optional_count(seed, "seed", 0), optional_count(max_frames, "max_frames")
+    # a device index may come as the int it is
+    camera = str(camera) if isinstance(camera, int) and not isinstance(camera, bool) else name_or_path(camera, "camera")
     if dry_run and serial is not None:
         raise UsageError("dry_run: `dry_run` sends nothing; leave out `serial`", parameter="dry_run")
     if (camera == "sim") != (sim_map is not None):
@@ -130,7 +135,7 @@ def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
     files written. As :func:`~curiosity_cli.drive.session.redraw_timeline`."""
     from curiosity_cli.drive.session import redraw_timeline as redraw
 
-    return redraw(Path(folder), clock)
+    return redraw(folder_argument(folder), clock)
 
 
 def simrobot(
@@ -168,6 +173,8 @@ def simrobot(
 
     _finite("heading_deg", heading_deg)
     _finite("estop_after", estop_after)
+    map_name, seed = name_or_path(map_name, "map_name"), optional_count(seed, "seed", 0)
+    link, log_file = optional_path(link, "link"), optional_path(log_file, "log_file")
     resolved = load(config, overrides)
     rates = Noise.parse(noise)
     map_data = load_map(map_name)

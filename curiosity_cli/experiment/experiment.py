@@ -150,8 +150,13 @@ class Experiment:
         recorded = {name: record(path) for name, path in tables.items()}
         return json.dumps({_TABLES: recorded, _INPUTS: inputs}, indent=1, sort_keys=True) + "\n"
 
-    def check_tables(self) -> None:
-        """Refuse tables that are not one complete set made from the files there are now.
+    def check_tables(self) -> list[str]:
+        """Refuse tables that are not one complete set made from the files there are now; the files of the set.
+
+        Returns
+        -------
+        list of str
+            The set's files, relative to the folder (``mi.csv``, ..., ``skipped.json``).
 
         Raises
         ------
@@ -183,6 +188,7 @@ class Experiment:
                 f"{display_path(self.folder.table('mi'))}: made from other files than the experiment holds now "
                 f"({difference}); {remedy}", rerun="evaluate", force=False,
             )
+        return sorted(tables)
 
 
 def _first_difference(recorded: dict, now: dict, root: Path) -> str | None:

@@ -142,7 +142,18 @@ class Run:
     path: np.ndarray
 
     def phi(self, length: int) -> np.ndarray:
-        """(V, K) int32 ndarray: the word-topic counts Φ_p after ``length`` steps."""
+        """(V, K) int32 ndarray: the word-topic counts Φ_p after ``length`` steps.
+
+        Raises
+        ------
+        ParameterError
+            ``length`` is not an int.
+        RunError
+            The run has no checkpoint at ``length``, naming those it has.
+        """
+        from curiosity_cli.checks import check_int
+
+        length = check_int("length", length, 0)
         if length not in self.meta["checkpoints"]:
             raise RunError(
                 f"{display_path(self.folder)}: no checkpoint at path length {length}; "
@@ -152,7 +163,6 @@ class Run:
             self.folder / ExperimentFolder.RUN_CHECKPOINTS, [f"{length}/words", f"{length}/topics", f"{length}/counts"]
         )
         return SparseCounts(words, topics, counts, (self.meta["vocabulary_size"], self.meta["n_topics"])).dense()
-
 
     def boxed_in(self) -> np.ndarray:
         """(L,) bool ndarray: ``path.csv``'s ``boxed_in``, the steps whose neighbours were all visited.

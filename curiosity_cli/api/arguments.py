@@ -1,0 +1,72 @@
+"""The checks of the API's arguments: a wrong type is a :class:`~curiosity_cli.errors.ParameterError`
+naming the argument, as a wrong value is, never a ``TypeError`` from deep inside.
+
+The command line cannot give these wrong (its options are parsed into the right types);
+a notebook can.
+"""
+
+from __future__ import annotations
+
+import os
+import typing
+from pathlib import Path
+
+from curiosity_cli.errors import ParameterError
+from curiosity_cli.yamlfile import shown
+
+
+def _given(value) -> str:
+    return f"{shown(value)} ({type(value).__name__})"
+
+
+def config_argument(config):
+    """``config``: a shipped config's name, a YAML path, or an ``ExperimentConfig``, as given."""
+    from curiosity_cli.config import ExperimentConfig
+
+    if isinstance(config, (str, os.PathLike, ExperimentConfig)):
+        return config
+    raise ParameterError(
+        f"config: got {_given(config)}, expected a shipped config's name, a path to a YAML config or an ExperimentConfig"
+    )
+
+
+def folder_argument(folder, name: str = "folder") -> Path:
+    """A folder's path, given as a string or a path."""
+    if isinstance(folder, (str, os.PathLike)):
+        return Path(folder)
+    raise ParameterError(f"{name}: got {_given(folder)}, expected the path of a folder")
+
+
+def name_or_path(value, name: str) -> str:
+    """A registered name, or a path given as a string or a path; as a string."""
+    if isinstance(value, (str, os.PathLike)):
+        return os.fspath(value)
+    raise ParameterError(f"{name}: got {_given(value)}, expected a name or a path")
+
+
+def optional_path(value, name: str) -> Path | None:
+    """A file's path, or None."""
+    return None if value is None else folder_argument(value, name)
+
+
+def strings(value, name: str, example: str) -> list[str]:
+    """A list of strings (a sequence, not one string, which would be read letter by letter)."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, typing.Iterable):
+        raise ParameterError(f"{name}: got {_given(value)}, expected a list of strings, e.g. [{example!r}]")
+    value = list(value)
+    for item in value:
+        if not isinstance(item, str):
+            raise ParameterError(f"{name}: got {_given(item)} in the list, expected strings, e.g. [{example!r}]")
+    return value
+
+
+def overrides_argument(overrides) -> list[str]:
+    """``overrides``: ``KEY=VALUE`` strings."""
+    return strings(overrides, "overrides", "explore.restarts=4")
+
+
+def optional_count(value, name: str, minimum: int = 1) -> int | None:
+    """An int of at least ``minimum`` (a bool is not one), or None."""
+    from curiosity_cli.checks import check_int
+
+    return None if value is None else check_int(name, value, minimum)
