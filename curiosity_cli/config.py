@@ -363,17 +363,23 @@ def config_file(name_or_path: str | Path) -> Path:
     Raises
     ------
     ConfigError
-        Neither a file nor a shipped config, naming the shipped ones.
+        Neither a file nor a shipped config, naming the shipped ones; or a folder (an
+        experiment folder: naming its ``config.yaml``).
     """
     path = Path(name_or_path)
+    expected = f"expected a path to a YAML config or the name of a shipped one ({', '.join(shipped_configs())})"
+    if path.is_dir():
+        saved = path / "config.yaml"
+        if saved.is_file():
+            raise ConfigError(
+                f"{display_path(path)}: an experiment folder, not a config; its saved config is {display_path(saved)}"
+            )
+        raise ConfigError(f"{display_path(path)}: a folder, not a config; {expected}")
     if os.path.lexists(path):
         return path
     if (shipped := shipped_config(str(name_or_path))) is not None:
         return shipped
-    raise ConfigError(
-        f"{display_path(path)}: config file not found; expected a path to a YAML config or the name of a shipped one "
-        f"({', '.join(shipped_configs())})"
-    )
+    raise ConfigError(f"{display_path(path)}: config file not found; {expected}")
 
 
 def init_config(name: str, source: str = "quick", folder: Path = Path(".")) -> Path:
@@ -581,6 +587,23 @@ def to_dict(config) -> dict:
 def to_yaml(config) -> str:
     """The resolved config as YAML: every key."""
     return dump_yaml(to_dict(config))
+
+
+#: The sections of an experiment config that ``curiosity drive`` reads (with its seed).
+DRIVE_SECTIONS = ("model", "words", "drive")
+
+
+def drive_yaml(config, seed: int) -> str:
+    """What a drive run folder saves of ``config``: the seed it ran with and :data:`DRIVE_SECTIONS`, every key.
+
+    A drive has no maps or grid; the experiment's name, datasets, exploration and
+    labelling would only mislead a reader of the run folder.
+    """
+    data = to_dict(config)
+    return (
+        f"# the settings of {config.name}'s config that this drive ran with (its maps, exploration and labels are not used)\n"
+        + dump_yaml({"seed": seed, **{key: data[key] for key in DRIVE_SECTIONS}})
+    )
 
 
 def saved_yaml(config) -> str:

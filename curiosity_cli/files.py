@@ -164,14 +164,17 @@ def atomic_path(path: Path):
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}")
+    except OSError as exc:  # a read-only folder: name the file to be written, not its temporary twin
+        raise OSError(exc.errno, exc.strerror, os.fspath(path)) from None
     os.close(fd)
     # mkstemp makes the file private (0600); a result should get the permissions of any new file
     umask = os.umask(0)
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)
     try:
-        with naming_os_errors(path):
+        with naming_os_errors(path, tmp):
             yield Path(tmp)
         try:
             os.replace(tmp, path)
@@ -183,16 +186,18 @@ def atomic_path(path: Path):
 
 
 @contextlib.contextmanager
-def naming_os_errors(path: Path):
-    """Give an OS error raised in the block without a file name the name ``path``.
+def naming_os_errors(path: Path, stand_in: str | None = None):
+    """Give an OS error raised in the block the name ``path`` when it has no file name, or names ``stand_in``.
 
     A write to a file already open (a full disk: ``ENOSPC``) fails without saying which
-    file; the user is told the result it was writing instead.
+    file, and one to a temporary file (``stand_in``, :func:`atomic_path`) names a file the
+    user never asked for; the user is told the result it was writing instead.
     """
     try:
         yield
     except OSError as exc:
-        if exc.filename is not None or exc.errno is None:
+        named = exc.filename is not None and not (stand_in is not None and os.fsdecode(exc.filename) == stand_in)
+        if named or exc.errno is None:
             raise
         raise OSError(exc.errno, exc.strerror, os.fspath(path)) from None
 

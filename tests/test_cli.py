@@ -120,6 +120,17 @@ def test_missing_config_is_one_line_error():
     _assert_one_line_error(run("config", "show", "no/such.yaml"), "no/such.yaml: config file not found")
 
 
+def test_a_folder_given_for_a_config_is_named_as_one(tmp_path):
+    experiment = tmp_path / "quick"
+    experiment.mkdir()
+    _assert_one_line_error(run("explore", str(tmp_path)), f"{tmp_path}: a folder, not a config; expected a path to a YAML")
+    (experiment / "config.yaml").write_text("name: quick\n")
+    _assert_one_line_error(
+        run("explore", str(experiment)), f"{experiment}: an experiment folder, not a config; its saved config is "
+        f"{experiment / 'config.yaml'}",
+    )
+
+
 def test_unknown_dataset_is_one_line_error():
     _assert_one_line_error(run("datasets", "show", "atlantis"), "no dataset 'atlantis'")
 

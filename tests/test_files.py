@@ -31,6 +31,31 @@ def test_a_folder_where_the_result_belongs_is_named_not_the_temporary_file(tmp_p
     assert sorted(os.listdir(tmp_path)) == ["mi.csv"], "the temporary file is gone"
 
 
+def test_a_read_only_folder_is_named_by_the_file_being_written_not_the_temporary_one(tmp_path, monkeypatch):
+    import tempfile
+
+    from typer.testing import CliRunner
+
+    from curiosity_cli.cli import app
+
+    def refused(dir, prefix, suffix):  # what a read-only folder does to mkstemp, even for root's files elsewhere
+        raise PermissionError(13, "Permission denied", os.path.join(dir, f"{prefix}0gfy9i8s{suffix}"))
+
+    monkeypatch.setattr(tempfile, "mkstemp", refused)
+    with pytest.raises(OSError) as info:
+        with atomic_path(tmp_path / "foo.yaml"):
+            pass
+    assert info.value.filename == str(tmp_path / "foo.yaml")
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, ["config", "init", "mine"])
+    assert result.exit_code == 1 and result.stderr.strip() == "Error: mine.yaml: Permission denied"
+    monkeypatch.undo()
+    with pytest.raises(OSError) as info:  # the temporary file refused inside the block is named as the result too
+        with atomic_path(tmp_path / "bar.csv") as tmp:
+            raise PermissionError(13, "Permission denied", str(tmp))
+    assert info.value.filename == str(tmp_path / "bar.csv")
+
+
 def test_atomic_path_gives_ordinary_permissions(tmp_path):
     umask = os.umask(0o022)
     try:

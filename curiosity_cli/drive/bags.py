@@ -107,8 +107,12 @@ class BagCamera:
     CameraError
         rosbags not installed (naming the ``bags`` extra); a missing, truncated or
         non-bag file; no image topic, several without ``topic``, an unknown topic or one
-        that is not an image, each naming the bag's image topics and their message counts.
+        that is not an image, each naming the bag's image topics and their message counts
+        (``parameter="topic"``, but for a bag without image topics).
     """
+
+    #: What the drive's last line says when the frames run out.
+    ending = "end of the bag"
 
     def __init__(self, source: str, topic: str | None = None):
         try:
@@ -130,17 +134,24 @@ class BagCamera:
             counts.setdefault(connection.topic, [connection.msgtype, 0])[1] += connection.msgcount
         images = {name: n for name, (kind, n) in counts.items() if kind in (IMAGE, COMPRESSED)}
         listed = ", ".join(f"{name} ({n} messages)" for name, n in sorted(images.items())) or "none"
-        if topic is None and len(images) != 1:
+        if topic is None and not images:
             self.close()
-            raise CameraError(f"{where}: topic: expected one of the bag's image topics: {listed}")
+            topics = ", ".join(f"{name} ({kind})" for name, (kind, _) in sorted(counts.items())) or "none"
+            raise CameraError(f"{where}: no image topic to replay; its topics: {topics}")
+        if topic is None and len(images) > 1:
+            self.close()
+            raise CameraError(f"topic: expected one of the image topics of {where}: {listed}", parameter="topic")
         topic = topic if topic is not None else next(iter(images))
         if topic not in counts:
             self.close()
-            raise CameraError(f"{where}: topic: got {topic!r}, which the bag does not have; its image topics: {listed}")
+            raise CameraError(
+                f"topic: got {topic!r}, which {where} does not have; its image topics: {listed}", parameter="topic"
+            )
         if topic not in images:
             self.close()
             raise CameraError(
-                f"{where}: topic: {topic!r} holds {counts[topic][0]}, not images; the bag's image topics: {listed}"
+                f"topic: {topic!r} holds {counts[topic][0]}, not images; the image topics of {where}: {listed}",
+                parameter="topic",
             )
         self.topic = topic
         self.messages = images[topic]

@@ -58,6 +58,9 @@ class OpenCVCamera:
         When OpenCV cannot open the source.
     """
 
+    #: What the drive's last line says when the frames run out.
+    ending = "end of the video"
+
     def __init__(self, source: str):
         import cv2
 

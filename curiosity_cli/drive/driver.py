@@ -80,16 +80,16 @@ RUN_LOG = "log.jsonl"
 
 
 def prepare_folder(folder: Path, config: ExperimentConfig, seed: int) -> None:
-    """Write the resolved config and the run's provenance into ``folder``."""
+    """Write the settings the drive runs with (:func:`~curiosity_cli.config.drive_yaml`) and its provenance into ``folder``."""
     import yaml
 
-    from curiosity_cli.config import saved_yaml
+    from curiosity_cli.config import drive_yaml
     from curiosity_cli.experiment.provenance import provenance
     from curiosity_cli.files import atomic_path
 
     folder.mkdir(parents=True, exist_ok=True)
     with atomic_path(folder / "config.yaml") as tmp:
-        tmp.write_text(saved_yaml(config))
+        tmp.write_text(drive_yaml(config, seed))
     with atomic_path(folder / "provenance.yaml") as tmp:
         tmp.write_text(yaml.safe_dump(provenance(seed), sort_keys=False))
 
@@ -183,7 +183,7 @@ def run(
             if got is None:
                 if frames == 0 and skipped:  # nothing replayed is no result, not a quiet one
                     raise CameraError(f"every one of the {skipped} messages held no usable frame; the first: {first_bad}")
-                outcome = Outcome("end of video", frames, "end of the video", None)
+                outcome = Outcome("end of video", frames, camera.ending, None)
                 break
             image, captured, recorded, header = got
             state = robot.state() if robot is not None else None

@@ -48,8 +48,8 @@ def animate_run(
     Raises
     ------
     AnimationError
-        A map not in the experiment, an output that is neither ``.gif`` nor ``.mp4``, or
-        an ``.mp4`` without an FFmpeg writer.
+        A map, walker or restart not in the experiment's grid, an output that is neither
+        ``.gif`` nor ``.mp4``, or an ``.mp4`` without an FFmpeg writer.
     RunError
         The run is missing, incomplete or altered, naming the file.
     """
@@ -71,6 +71,15 @@ def animate_run(
     layout = experiment.folder
     if dataset not in experiment.maps:
         raise AnimationError(f"animate: map {dataset!r} is not in {display_path(layout.config)}: {', '.join(experiment.maps)}")
+    grid = experiment.config.explore
+    if weight_function not in grid.weight_functions:
+        raise AnimationError(
+            f"animate: walker {weight_function!r} is not in {display_path(layout.config)}: {', '.join(grid.weight_functions)}"
+        )
+    if not 0 <= restart < grid.restarts:
+        raise AnimationError(
+            f"animate: restart {restart} is not in the grid of {display_path(layout.config)} (restarts 0 to {grid.restarts - 1})"
+        )
     out = Path(out) if out is not None else layout.figures / f"animation-{dataset}-{weight_function}-{restart:03d}.gif"
     if out.suffix not in (".gif", ".mp4"):
         raise AnimationError(f"out: got {display_path(out)}, expected a .gif or .mp4 file", parameter="out")

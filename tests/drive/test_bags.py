@@ -147,8 +147,8 @@ def test_a_bayer_frame_is_demosaiced_in_rosbag_naming():
 @pytest.mark.parametrize(
     "case, says",
     [
-        ("two-topics", "topic: expected one of the bag's image topics: /a (4 messages), /b (4 messages)"),
-        ("unknown-topic", "topic: got '/nope', which the bag does not have; its image topics: /a (4 messages)"),
+        ("two-topics", "--topic: expected one of the image topics of "),
+        ("unknown-topic", "--topic: got '/nope', which "),
         ("missing", "no such bag file or folder"),
         ("not-a-bag", "not a readable bag"),
         ("truncated", "mission.bag"),
@@ -176,6 +176,10 @@ def test_bad_bags_are_one_error_line(tmp_path, frames, case, says):
     assert "Traceback" not in result.output
     errors = [line for line in result.stderr.splitlines() if line.startswith("Error: ")]
     assert len(errors) == 1 and says in errors[0], result.stderr
+    if case == "two-topics":
+        assert errors[0].endswith("mission.bag: /a (4 messages), /b (4 messages)")
+    if case == "unknown-topic":
+        assert errors[0].endswith("mission.bag does not have; its image topics: /a (4 messages)")
 
 
 def test_a_topic_that_holds_no_images_is_named(tmp_path, frames):
@@ -185,8 +189,11 @@ def test_a_topic_that_holds_no_images_is_named(tmp_path, frames):
     with Writer1(other) as writer:
         connection = writer.add_connection("/imu/temp", "std_msgs/msg/Float64", typestore=store)
         writer.write(connection, START, store.serialize_ros1(store.types["std_msgs/msg/Float64"](data=1.0), "std_msgs/msg/Float64"))
-    with pytest.raises(CameraError, match=r"topic: '/imu/temp' holds std_msgs/msg/Float64, not images; the bag's image topics: none"):
+    with pytest.raises(CameraError, match=r"^topic: '/imu/temp' holds std_msgs/msg/Float64, not images; the image topics of .*imu.bag: none$") as bad:
         BagCamera(str(other), "/imu/temp")
+    assert bad.value.parameter == "topic"
+    with pytest.raises(CameraError, match=r"imu.bag: no image topic to replay; its topics: /imu/temp \(std_msgs/msg/Float64\)$"):
+        BagCamera(str(other))
     camera = BagCamera(str(bag))
     assert camera.topic == "/a"  # the one image topic, without naming it
     camera.close()
@@ -311,7 +318,7 @@ def test_a_damaged_message_is_skipped_logged_and_counted(tmp_path, frames, case)
     bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": encoding}, frames, {1: damage})
     result = replay(bag, tmp_path / "run")
     assert result.exit_code == 0, result.output
-    assert "drove 3 frames: end of the video; 1 damaged messages skipped" in result.stdout
+    assert "drove 3 frames: end of the bag; 1 damaged messages skipped" in result.stdout
     records = [json.loads(line) for line in (tmp_path / "run" / "log.jsonl").read_text().splitlines()]
     (skipped,) = [r for r in records if r["event"] == "skipped"]
     assert skipped["message"] == 1 and skipped["bag_time"] == pytest.approx((START + PERIOD) / 1e9)
