@@ -6,12 +6,10 @@ so a stopped reproduction picks up where it was.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from pathlib import Path
 
 from curiosity_cli.config import ExperimentConfig
-from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS, experiment_root
 
 
@@ -35,13 +33,11 @@ def reproduce(
     ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
     of it done, for a progress display.
     """
-    from curiosity_cli.label.stage import label_experiment
-    from curiosity_cli.evaluate.report import write_report
     from curiosity_cli.evaluate.tables import evaluate_experiment
-    from curiosity_cli.workers import Workers
     from curiosity_cli.explore.grid import run_grid
+    from curiosity_cli.label.stage import label_experiment
     from curiosity_cli.plots.figures import write_figures
-    from curiosity_cli.yamlfile import read_yaml
+    from curiosity_cli.workers import Workers
 
     def stage(description: str, units: int) -> None:
         if on_stage is not None:
@@ -52,28 +48,16 @@ def reproduce(
             on_done()
 
     folder = experiment_root(results_dir, config.name)
-    seconds = {}
-    started = time.perf_counter()
     stage("words and exploration set-up", 0)
     with Workers(backend, scheduler, jobs) as workers:
         run_grid(
             config, results_dir=results_dir, cache_dir=cache_dir, force=force, workers=workers,
             on_prepared=lambda to_run, skipped: stage(f"exploring ({skipped} runs already done)", to_run), on_run=done,
         )
-        seconds["extract and explore"] = time.perf_counter() - started
-        mark = time.perf_counter()
         label_experiment(
             config, folder, cache_dir=cache_dir, force=force, workers=workers, on_stage=stage, on_done=done
         )
-        seconds["label"] = time.perf_counter() - mark
-    mark = time.perf_counter()
     stage("evaluating", 0)
-    evaluation = evaluate_experiment(folder)
-    seconds["evaluate"] = time.perf_counter() - mark
-    mark = time.perf_counter()
+    evaluate_experiment(folder)
     stage("plotting", 0)
-    figures = write_figures(folder)
-    seconds["plot"] = time.perf_counter() - mark
-    seconds["total"] = time.perf_counter() - started
-    provenance = read_yaml(ExperimentFolder(folder).provenance, "provenance file")
-    return write_report(folder, config, evaluation, list(figures), figures.skipped, seconds, provenance)
+    return write_figures(folder).report

@@ -17,6 +17,7 @@ from curiosity_cli import api
 from curiosity_cli.cli import app
 from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.errors import ConfigError, CuriosityError, ParameterError, UsageError
+from curiosity_cli.experiment.stage_seconds import STAGES, read_stage_seconds
 
 #: Each command's function, and the options the command line keeps to itself (each
 #: parsed into an argument, or choosing which function to call).
@@ -150,6 +151,17 @@ def test_explore_label_evaluate_plot_and_animate_from_python(own_map, tmp_path):
     assert set(evaluation.mi["weight_function"]) == {"topic-perplexity"}
     written = api.plot(summary.folder)
     assert written and all(path.is_file() for path in written)
+    # the stages one at a time give the report reproduce gives, timed by what each stage did
+    assert written.report == summary.folder / "REPORT.md" and "## Verdict" in written.report.read_text()
+    times = read_stage_seconds(summary.folder)
+    assert list(times) == list(STAGES) and all(seconds > 0 for seconds in times.values())
+    table = written.report.read_text().split("## Time")[1]
+    assert f"| label | {times['label']:.0f} |" in table and f"| total | {sum(times.values()):.0f} |" in table
+    assert api.label(summary.folder, cache_dir=tmp_path / "cache", jobs=1)["labelled"] == 0
+    assert read_stage_seconds(summary.folder)["label"] == times["label"]  # a call with nothing to do adds nothing
+    api.explore(config, weights=["topic-perplexity"], restarts=2, steps=40, results_dir=results,
+                cache_dir=tmp_path / "cache", jobs=1)
+    assert read_stage_seconds(summary.folder)["extract and explore"] > times["extract and explore"]  # resumed: added
     animation = api.animate(summary.folder, "own", "topic-perplexity", 0, cache_dir=tmp_path / "cache")
     assert animation.is_file() and animation.suffix == ".gif"
 

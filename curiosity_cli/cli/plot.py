@@ -21,7 +21,7 @@ def plot(
     out: Path = typer.Option(None, "--out", help="With --animate: the .gif (or .mp4, with FFmpeg) to write; default figures/animation-MAP-WALKER-NNN.gif."),
     cache_dir: Path = typer.Option(None, "--cache-dir", help="With --animate: where word stores are kept."),
 ) -> None:
-    """The paper's figures from the results tables: MI against path length, paths and label maps.
+    """The paper's figures from the results tables: MI against path length, paths and label maps; then REPORT.md.
 
     Writes PNG and PDF under EXPERIMENT_DIR/figures/: MI against path length versus human and versus batch labels, an example path beside its labelling, the label maps side by side, and the batch model's convergence.
 
@@ -46,3 +46,5 @@ def plot(
         typer.echo(f"wrote {display_path(path)}")
     if not written:
         typer.echo(f"no figures written to {display_path(Path(folder) / 'figures')}", err=True)
+    if written.report is not None:
+        typer.echo(f"wrote {display_path(written.report)}")

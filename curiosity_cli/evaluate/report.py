@@ -508,9 +508,10 @@ def write_report(
     folder: Path, config: ExperimentConfig, evaluation: Evaluation, figures: list[Path], figure_notes: list[str],
     seconds: dict[str, float], provenance: dict,
 ) -> Path:
-    """Write ``folder/REPORT.md`` and return its path.
+    """Write ``folder/REPORT.md`` and return its path (``plot`` does, after the figures).
 
-    ``figure_notes`` says which figures were left out and why (from ``write_figures``).
+    ``figure_notes`` says which figures were left out and why (from ``write_figures``);
+    ``seconds`` the seconds of each stage and their total, empty when none were recorded.
     """
     summary, tests, top = evaluation.summary, evaluation.tests, evaluation.headline
     # the lengths the paper discusses: 80 (about a map's width) and the longest
@@ -550,8 +551,12 @@ def write_report(
         if Path(path).suffix == ".png":
             relative = os.path.relpath(path, folder)
             lines += [f"![{Path(path).stem}]({relative})", ""]
-    lines += ["## Time", "", "| stage | seconds |", "|---|---|"]
-    lines += [f"| {stage} | {value:.0f} |" for stage, value in seconds.items()] + [""]
+    lines += ["## Time", ""]
+    if seconds:
+        lines += ["| stage | seconds |", "|---|---|"]
+        lines += [f"| {stage} | {value:.0f} |" for stage, value in seconds.items()] + [""]
+    else:
+        lines += ["Not recorded (the stages ran before their times were kept).", ""]
     lines += [
         "## Config",
         "",

@@ -60,6 +60,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -537,7 +538,9 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
     import pandas as pd
 
     from curiosity_cli.experiment.lock import working_in
+    from curiosity_cli.experiment.stage_seconds import record_stage_seconds
 
+    started = time.perf_counter()
     with working_in(folder, "evaluate"):
         experiment = Experiment.open(folder)
         layout = experiment.folder
@@ -582,6 +585,47 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
             temporary(layout.skipped).write_text(json.dumps(skipped, indent=2) + "\n")
             record = experiment.record_tables(written, inputs)
             temporary(layout.tables_record).write_text(record)
+        record_stage_seconds(folder, "evaluate", time.perf_counter() - started, add=False)
         return Evaluation(
             mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits, steering
         )
+
+
+def read_evaluation(folder: Path) -> Evaluation:
+    """The tables ``evaluate`` wrote in ``folder``, read back as it returned them.
+
+    Raises
+    ------
+    StaleTablesError
+        The tables are not one set made from the folder's files as they are now
+        (:meth:`~curiosity_cli.experiment.experiment.Experiment.check_tables`).
+    EvaluationError
+        A table that cannot be read, naming it.
+    """
+    import pandas as pd
+
+    experiment = Experiment.open(folder)
+    experiment.check_tables()
+    layout = experiment.folder
+
+    def read(name: str) -> pd.DataFrame:
+        path = layout.table(name)
+        try:
+            return pd.read_csv(path)
+        except pd.errors.EmptyDataError:  # a table without columns (no run was labelled twice) is written empty
+            return pd.DataFrame()
+        except FileNotFoundError:
+            raise EvaluationError(f"{display_path(path)}: not found; {RERUN} makes it", rerun="evaluate", force=False) from None
+        except (OSError, ValueError) as exc:
+            raise EvaluationError(f"{display_path(path)}: cannot read it ({exc}); {RERUN} makes it again",
+                                  rerun="evaluate", force=False) from None
+
+    try:
+        skipped = json.loads(layout.skipped.read_text())
+    except (OSError, ValueError) as exc:
+        raise EvaluationError(f"{display_path(layout.skipped)}: cannot read it ({exc}); {RERUN} makes it again",
+                              rerun="evaluate", force=False) from None
+    return Evaluation(
+        read("mi"), read("summary"), read("tests"), read("headline"), skipped, read_maps(folder), read("effects"),
+        read("classes"), read("classes_summary"), read("convergence"), read("revisits"), read("steering"),
+    )

@@ -12,7 +12,8 @@ are the models)::
         labels/<map>/<walker>/restart-NNN.npz                     (label, Z_p tables)
         labels/<map>/examples/<walker>-restart-NNN-<length>.npz   (label, Z_p maps)
         <table>.csv  mi.parquet  skipped.json  tables.json        (evaluate)
-        figures/  REPORT.md                                       (plot, reproduce)
+        stage_seconds.json                                        (every stage: its time)
+        figures/  REPORT.md                                       (plot)
 
 Where an experiment of a name lives by default is :mod:`curiosity_cli.paths`' business.
 """
@@ -97,6 +98,11 @@ class ExperimentFolder:
     @property
     def skipped(self) -> Path:
         return self.root / "skipped.json"
+
+    @property
+    def stage_seconds(self) -> Path:
+        """``stage_seconds.json``: the seconds each stage took (:mod:`~curiosity_cli.experiment.stage_seconds`)."""
+        return self.root / "stage_seconds.json"
 
     @property
     def lock(self) -> Path:

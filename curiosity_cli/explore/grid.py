@@ -45,6 +45,7 @@ from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.lock import working_in
+from curiosity_cli.experiment.stage_seconds import record_stage_seconds
 from curiosity_cli.experiment.maps import StoreInfo, prepare_stores
 from curiosity_cli.experiment.recipes import RECIPE_KEY, Recipe, first_of
 from curiosity_cli.experiment.saved_config import check_saved_config
@@ -240,6 +241,8 @@ def run_grid(
                         on_run(task, size)
         summary = GridSummary(folder, len(todo) - len(failed), len(tasks) - len(todo), failed, fallbacks, written,
                               time.perf_counter() - started)
+        if todo:  # a call that found every run done made nothing
+            record_stage_seconds(folder, "extract and explore", summary.seconds, add=not force)
         if failed:
             raise GridError(f"{len(failed)} of {len(todo)} runs failed (the others are written): " + "; ".join(failed))
         return summary

@@ -47,6 +47,7 @@ from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT, LABEL_FORMAT, RECIPE_KEY, first_of, is_checked
 from curiosity_cli.experiment.saved_config import record_label_settings
+from curiosity_cli.experiment.stage_seconds import record_stage_seconds
 from curiosity_cli.files import display_path, note, open_npz, remove_leftovers
 from curiosity_cli.label.batch_references import (
     BatchTask, WrittenBatch, batch_is_current, batch_task, compute_batch_references, write_batch,
@@ -486,6 +487,9 @@ def label_experiment(
                 for write in writes:
                     write.result()  # a file that could not be written stops the stage, as it did
                     labelled += 1
+        seconds = time.perf_counter() - started
+        if todo or stale:  # a call that found every label file current made nothing
+            record_stage_seconds(folder, "label", seconds, add=not force)
         if problems or left_out:
             failed = todo - labelled + len(left_out)
             raise LabelError(
@@ -493,7 +497,7 @@ def label_experiment(
                 + "; ".join([*problems, *left_out])
             )
         return {
-            "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": time.perf_counter() - started,
+            "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": seconds,
             "relabelled": relabelled,
         }
 

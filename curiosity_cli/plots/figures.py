@@ -9,7 +9,11 @@
   end, beside the map labelled with the topic model learned on that path (fig. 2);
 - ``labelings-<dataset>``: input image, ground truth, Z_b and Z_p side by side (fig. 3),
   topic colours matched between Z_p and Z_b (see :mod:`curiosity_cli.plots.palette`);
-- ``batch-convergence``: the batch model's log-likelihood per Gibbs sweep, per map.
+- ``batch-convergence``: the batch model's log-likelihood per Gibbs sweep, per map;
+
+and then the experiment's ``REPORT.md`` (:mod:`curiosity_cli.evaluate.report`), from its
+tables, the figures and the seconds its stages took, so that the stages run one at a time
+give the report that ``reproduce`` gives.
 
 Weight functions keep the paper's visual language: topic perplexity blue squares,
 stochastic coverage orange circles, random walk purple triangles, word perplexity green
@@ -22,11 +26,12 @@ from __future__ import annotations
 
 import contextlib
 import math
+import time
 from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.errors import RERUN
+from curiosity_cli.errors import RERUN, CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.explore.weights import CEILINGS
@@ -87,11 +92,15 @@ class WrittenFigures(list):
     ----------
     skipped : list of str
         One line per figure (or panel) left out, saying which input was missing or bad.
+    report : Path or None
+        ``REPORT.md``, written with the figures (None where a table it reads is missing,
+        named in ``skipped``).
     """
 
     def __init__(self, paths=(), skipped=()):
         super().__init__(paths)
         self.skipped = list(skipped)
+        self.report = None
 
 
 def _check_runs(experiment: Experiment) -> None:
@@ -150,6 +159,9 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
     """
     import pandas as pd
 
+    from curiosity_cli.experiment.stage_seconds import record_stage_seconds
+
+    started = time.perf_counter()
     experiment_dir = Path(experiment_dir)
     layout = ExperimentFolder(experiment_dir)
     if not experiment_dir.is_dir():
@@ -225,7 +237,33 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
             else:
                 notes.append("batch-convergence: no batch log-likelihood trace under batch/ (label the experiment)")
         written.skipped[:] = list(dict.fromkeys(notes))  # a corrupt file is named once, not once per figure
+        record_stage_seconds(experiment_dir, "plot", time.perf_counter() - started, add=False)
+        written.report = _write_report(experiment, written)
         return written
+
+
+def _write_report(experiment: Experiment, figures: WrittenFigures) -> Path | None:
+    """``REPORT.md`` of the experiment, from its tables, these figures and the seconds its stages took; None,
+    with a note among the figures' ``skipped``, where a table of ``evaluate`` is missing."""
+    from curiosity_cli.evaluate.report import write_report
+    from curiosity_cli.evaluate.tables import EvaluationError, read_evaluation
+    from curiosity_cli.experiment.stage_seconds import read_stage_seconds
+    from curiosity_cli.yamlfile import read_yaml
+
+    root = experiment.folder.root
+    seconds = read_stage_seconds(root)
+    if seconds:
+        seconds["total"] = sum(seconds.values())
+    try:
+        provenance = read_yaml(experiment.folder.provenance, "provenance file")
+    except CuriosityError:  # a folder from before provenance.yaml: the report says "unknown"
+        provenance = {}
+    try:
+        evaluation = read_evaluation(root)
+    except EvaluationError as exc:
+        figures.skipped.append(f"REPORT.md: {exc}")
+        return None
+    return write_report(root, experiment.config, evaluation, list(figures), figures.skipped, seconds, provenance)
 
 
 # --------------------------------------------------------------------------- the figures

@@ -1,0 +1,53 @@
+"""The seconds each stage of an experiment took, whether it ran in one ``reproduce`` or one command at a time.
+
+``stage_seconds.json`` holds, per stage, the time of the calls that made its results: the
+resumable stages (extract and explore, label) add each call's time to the last, so a
+resumed stage reports all the work it did, not the few seconds of its last call; a call
+that recomputes everything (``force``, and always ``evaluate`` and ``plot``) replaces it.
+The report's time table reads it (:func:`read_stage_seconds`).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.files import atomic_path
+
+#: The stages, in the order they run and the report lists them.
+STAGES = ("extract and explore", "label", "evaluate", "plot")
+
+
+def record_stage_seconds(folder: Path, stage: str, seconds: float, *, add: bool) -> None:
+    """Record that ``stage`` took ``seconds`` in the experiment ``folder``: added to its time so far, or in its place.
+
+    The stage holds the folder's lock (:mod:`~curiosity_cli.experiment.lock`) while it
+    records, so no two stages write the file at once.
+    """
+    if stage not in STAGES:
+        raise ValueError(f"stage: got {stage!r}, expected one of {', '.join(STAGES)}")
+    path = ExperimentFolder(folder).stage_seconds
+    times = read_stage_seconds(folder)
+    times[stage] = (times.get(stage, 0.0) if add else 0.0) + float(seconds)
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps({name: times[name] for name in STAGES if name in times}, indent=1) + "\n")
+
+
+def read_stage_seconds(folder: Path) -> dict[str, float]:
+    """The seconds of each stage recorded in ``folder``, in :data:`STAGES` order; none for a file missing or unreadable.
+
+    The times are a report's footnote, never a reason to refuse one: a file that cannot
+    be read counts as no times at all.
+    """
+    path = ExperimentFolder(folder).stage_seconds
+    try:
+        recorded = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(recorded, dict):
+        return {}
+    return {
+        name: float(recorded[name]) for name in STAGES
+        if isinstance(recorded.get(name), (int, float)) and not isinstance(recorded.get(name), bool)
+    }
