@@ -23,8 +23,9 @@ from typing import Any
 
 from curiosity_cli.errors import ConfigError
 from curiosity_cli.files import atomic_path, display_path, resolved
-from curiosity_cli.maps.datasets import DATASET_CONFIG_DIR, dataset_path
+from curiosity_cli.maps.datasets import DATASET_CONFIG_DIR, dataset_path, load_dataset_config
 from curiosity_cli.paths import SHIPPED_CONFIGS, SHIPPED_DATA
+from curiosity_cli.config_yaml import SAVED_BASE, to_dict, to_yaml
 from curiosity_cli.schema import NAME_PATTERN, NAME_RULE, OVERRIDES, Raw, build, invalid, spec
 from curiosity_cli.yamlfile import dump_yaml, parse_yaml, read_yaml, shown
 
@@ -34,8 +35,6 @@ CONFIG_DIR = SHIPPED_CONFIGS
 #: config too, so that an experiment folder copied to another machine finds them there).
 SHIPPED_VOCABULARIES = {"shipped": SHIPPED_DATA / "vocab"}
 
-#: The shipped config a saved experiment config builds on (:func:`saved_yaml`).
-_SAVED_BASE = "paper.yaml"
 #: The top-level key of an experiment config that declares a sweep over its other keys
 #: (:func:`curiosity_cli.sweep.declared_sweeps`); an experiment never sees it.
 SWEEP_KEY = "sweep"
@@ -483,12 +482,25 @@ def load_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> Exper
     ConfigError
         One line naming the file (or ``overrides``), the key, the value and what was expected.
     """
-    raw = _read_chain(path, overrides)
-    return _check_experiment(build(ExperimentConfig, raw.data, (), raw), raw)
+    return _experiment(_read_chain(path, overrides))
 
 
 #: What an experiment config adds to the base it builds on (``paper.yaml`` has none of them).
 _EXPERIMENT_KEYS = ("name", "seed", "datasets")
+#: An example of each, for the message of one left out.
+_EXPERIMENT_EXAMPLES = {"name": "name: my-experiment", "seed": "seed: 0", "datasets": "datasets: [aerial-mosaic]"}
+
+
+def _experiment(raw: Raw) -> ExperimentConfig:
+    """The experiment a merged chain of configs makes, every rule checked."""
+    # the base holds the paper's parameters, never these: say what is expected (an unknown key is named first)
+    missing = [key for key in _EXPERIMENT_KEYS if key not in raw.data]
+    if missing and raw.data.keys() <= {f.name for f in dataclasses.fields(ExperimentConfig)}:
+        raise invalid(
+            raw, (missing[0],), f"missing key; an experiment config names its {', '.join(_EXPERIMENT_KEYS)} (its base "
+            f"holds only parameters), e.g. {_EXPERIMENT_EXAMPLES[missing[0]]}",
+        )
+    return _check_experiment(build(ExperimentConfig, raw.data, (), raw), raw)
 
 
 def show_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> str:
@@ -503,7 +515,7 @@ def show_config(path: str | Path, overrides: typing.Iterable[str] = ()) -> str:
     raw = _read_chain(path, overrides)
     sections = {f.name for f in dataclasses.fields(ExperimentConfig) if f.name not in _EXPERIMENT_KEYS}
     if not raw.data.keys() <= sections:  # an experiment, or a key of neither: refused as an experiment's
-        return to_yaml(_check_experiment(build(ExperimentConfig, raw.data, (), raw), raw))
+        return to_yaml(_experiment(raw))
     hints = typing.get_type_hints(ExperimentConfig)
     sections = {
         f.name: to_dict(build(hints[f.name], raw.data.get(f.name), (f.name,), raw))
@@ -569,62 +581,13 @@ def load_words_config(path: str | Path, overrides: typing.Iterable[str] = ()) ->
     return words
 
 
-def to_dict(config) -> dict:
-    """A config as plain YAML-ready data (paths as strings or their names, tuples as lists)."""
-
-    def plain(value, named=None):
-        if dataclasses.is_dataclass(value):
-            return {f.name: plain(getattr(value, f.name), f.metadata.get("named")) for f in dataclasses.fields(value)}
-        if isinstance(value, tuple):
-            return [plain(v) for v in value]
-        if isinstance(value, Path):
-            return next((name for name, path in (named or {}).items() if value == path), str(value))
-        return value
-
-    return plain(config)
-
-
-def to_yaml(config) -> str:
-    """The resolved config as YAML: every key."""
-    return dump_yaml(to_dict(config))
-
-
-#: The sections of an experiment config that ``curiosity drive`` reads (with its seed).
-DRIVE_SECTIONS = ("model", "words", "drive")
-
-
-def drive_yaml(config, seed: int) -> str:
-    """What a drive run folder saves of ``config``: the seed it ran with and :data:`DRIVE_SECTIONS`, every key.
-
-    A drive has no maps or grid; the experiment's name, datasets, exploration and
-    labelling would only mislead a reader of the run folder.
-    """
-    data = to_dict(config)
-    return (
-        f"# the settings of {config.name}'s config that this drive ran with (its maps, exploration and labels are not used)\n"
-        + dump_yaml({"seed": seed, **{key: data[key] for key in DRIVE_SECTIONS}})
-    )
-
-
-def saved_yaml(config) -> str:
-    """The config as an experiment folder saves it: every key, on top of the shipped ``paper.yaml``.
-
-    Every key is written, so the file says what the experiment ran with; the ``base``
-    gives a key added to the project after the file was saved its default from
-    ``configs/paper.yaml``, so the folder still loads. A file made with another value
-    than that default is then refused or made again by its recipe
-    (:mod:`curiosity_cli.experiment.recipes`), never taken as made with it.
-    """
-    return f"base: {_SAVED_BASE}  # the shipped configs/{_SAVED_BASE}: defaults for keys added after saving\n" + to_yaml(config)
-
-
 # --------------------------------------------------------------------------- validation
 
 
 def _check_experiment(config: ExperimentConfig, raw: Raw) -> ExperimentConfig:
     """Rules that tie keys together; dataset paths become absolute so a saved config travels."""
     _check_words(config.words, raw)
-    datasets = []
+    datasets, names = [], {}
     for i, entry in enumerate(config.datasets):
         source = raw.origin(("datasets", i))
         relative_to = None if source == OVERRIDES else Path(source).parent
@@ -633,6 +596,16 @@ def _check_experiment(config: ExperimentConfig, raw: Raw) -> ExperimentConfig:
         except ConfigError as exc:
             raise invalid(raw, ("datasets", i), str(exc)) from None
         datasets.append(entry if path.parent == DATASET_CONFIG_DIR else str(path))
+        try:
+            name = load_dataset_config(path).name
+        except ConfigError:  # a map that does not load is named by the stage that loads it
+            continue
+        if name in names:
+            raise invalid(
+                raw, ("datasets", i), f"got {shown(entry)}, a second map named {name!r} (datasets[{names[name]}]); "
+                "runs are filed by map name",
+            )
+        names[name] = i
     explore = config.explore
     for i, name in enumerate(explore.weight_functions):
         if name not in WALKER_NAMES:
@@ -659,7 +632,7 @@ def _check_coverage(explore: ExploreConfig, raw: Raw) -> None:
     """The clamp needs its floor; a floor set without naming a reading is the old syntax."""
     if COVERAGE_READINGS[explore.coverage].reads_min_d2 and explore.min_d2 is None:
         raise invalid(raw, ("explore", "min_d2"), "got null, expected a number > 0: the clamp reading's floor on d^2")
-    paper = str((CONFIG_DIR / _SAVED_BASE).resolve())
+    paper = str((CONFIG_DIR / SAVED_BASE).resolve())
     if explore.min_d2 is not None and raw.origin(("explore", "min_d2")) != paper and (
         raw.origin(("explore", "coverage")) == paper
     ):

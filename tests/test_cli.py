@@ -131,6 +131,16 @@ def test_a_folder_given_for_a_config_is_named_as_one(tmp_path):
     )
 
 
+def test_a_map_listed_twice_is_refused_by_config_show_as_explore_would(own_map, tmp_path):
+    twice = f"datasets=[aerial-mosaic, {own_map}, aerial-mosaic]"
+    _assert_one_line_error(
+        run("config", "show", "quick", "--set", twice),
+        "--set: datasets[2]: got 'aerial-mosaic', a second map named 'aerial-mosaic' (datasets[0]); runs are filed by map name",
+    )
+    _assert_one_line_error(run("explore", "quick", "--set", twice, "--results-dir", str(tmp_path / "results")), "datasets[2]")
+    assert not (tmp_path / "results").exists()
+
+
 def test_unknown_dataset_is_one_line_error():
     _assert_one_line_error(run("datasets", "show", "atlantis"), "no dataset 'atlantis'")
 
@@ -264,7 +274,8 @@ def saved_experiment(folder: Path) -> Path:
     """An experiment folder holding only its saved config (the quick job's): what `label` reads first."""
     import yaml
 
-    from curiosity_cli.config import load_config, to_dict
+    from curiosity_cli.config import load_config
+    from curiosity_cli.config_yaml import to_dict
 
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "config.yaml").write_text(yaml.safe_dump(to_dict(load_config("quick"))))

@@ -13,10 +13,9 @@ from curiosity_cli.config import (
     SHIPPED_VOCABULARIES,
     ExperimentConfig,
     load_config,
-    saved_yaml,
     shipped_configs,
-    to_yaml,
 )
+from curiosity_cli.config_yaml import saved_yaml, to_yaml
 from curiosity_cli.errors import ConfigError
 from curiosity_cli.maps.datasets import dataset_names, load_dataset_config
 
@@ -195,8 +194,14 @@ def test_a_bad_experiment_config_names_file_key_value_and_expectation(tmp_path, 
 def test_a_missing_key_is_named(tmp_path):
     path = tmp_path / "exp.yaml"
     path.write_text(f"base: {CONFIG_DIR / 'paper.yaml'}\nname: t\ndatasets: [aerial-mosaic]\n")
-    with pytest.raises(ConfigError, match=r"exp\.yaml: seed: missing key"):
+    with pytest.raises(ConfigError, match=r"exp\.yaml: seed: missing key; an experiment config names its name, seed, "
+                       r"datasets \(its base holds only parameters\), e\.g\. seed: 0$"):
         load_config(path)
+    path.write_text(f"base: {CONFIG_DIR / 'paper.yaml'}\nname: t\nseed: 0\ndatasets: [aerial-mosaic]\nexplore: {{}}\n")
+    load_config(path)  # the parameters come from the base
+    path.write_text(f"base: {CONFIG_DIR / 'paper.yaml'}\nname: t\nseed: 0\ndatasets: [aerial-mosaic]\nmodel: {{topicz: 3}}\n")
+    with pytest.raises(ConfigError, match=r"exp\.yaml: model\.topicz: unknown key"):
+        load_config(path)  # a key of neither is refused as before
 
 
 def test_an_error_in_a_base_file_names_the_base_file(tmp_path, monkeypatch):

@@ -83,7 +83,7 @@ def prepare_folder(folder: Path, config: ExperimentConfig, seed: int) -> None:
     """Write the settings the drive runs with (:func:`~curiosity_cli.config.drive_yaml`) and its provenance into ``folder``."""
     import yaml
 
-    from curiosity_cli.config import drive_yaml
+    from curiosity_cli.config_yaml import drive_yaml
     from curiosity_cli.experiment.provenance import provenance
     from curiosity_cli.files import atomic_path
 

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.config import ExperimentConfig, to_yaml
+from curiosity_cli.config import ExperimentConfig
+from curiosity_cli.config_yaml import to_yaml
 from curiosity_cli.evaluate.power import POWER, TARGET_LEAD
 from curiosity_cli.evaluate.statistics import ALPHA
 from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation

@@ -30,7 +30,8 @@ import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from curiosity_cli.config import ExperimentConfig, to_dict
+from curiosity_cli.config import ExperimentConfig
+from curiosity_cli.config_yaml import to_dict
 
 #: Where a file's meta (``run.json``, an ``.npz``'s ``meta``) holds its recipe.
 RECIPE_KEY = "recipe"

@@ -14,7 +14,8 @@ from __future__ import annotations
 import typing
 from pathlib import Path
 
-from curiosity_cli.config import ExperimentConfig, load_config, saved_yaml, to_dict
+from curiosity_cli.config import ExperimentConfig, load_config
+from curiosity_cli.config_yaml import saved_yaml, to_dict
 from curiosity_cli.errors import RERUN, ConfigError
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import SELECTION_KEYS, differences

@@ -40,7 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.config import ExperimentConfig, saved_yaml
+from curiosity_cli.config import ExperimentConfig
+from curiosity_cli.config_yaml import saved_yaml
 from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from curiosity_cli.config import CONFIG_DIR, load_config, to_yaml
+from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.config_yaml import to_yaml
 from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.experiment.experiment import Experiment
 
