@@ -195,7 +195,7 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
         with figure_style():
             if summary is not None:
                 for against, stem in (("human", "mi-vs-length-human"), ("batch", "mi-vs-length-batch")):
-                    fig = mi_figure(summary, against, order)
+                    fig = mi_figure(summary, against, order, _largest_mi(maps, experiment.config, against))
                     if fig is None:
                         notes.append(f"{stem}: {summary_path.name} has no MI against {against} labels (no map has them)")
                     else:
@@ -291,9 +291,9 @@ def _label(weight_function: str) -> str:
     return weight_function.replace("-", " ").replace("_", " ")
 
 
-def mi_figure(summary, against: str, datasets: list[str]):
-    """MI against path length, one panel per map: mean line and 95% CI band per weight function,
-    and a dashed line per ceiling.
+def mi_figure(summary, against: str, datasets: list[str], largest: dict[str, float] | None = None):
+    """MI against path length, one panel per map: mean line and 95% CI band per weight function
+    (an error bar where a map has one path length), and a dashed line per ceiling.
 
     Parameters
     ----------
@@ -303,6 +303,10 @@ def mi_figure(summary, against: str, datasets: list[str]):
     against : {"human", "batch"}
     datasets : list of str
         Panel order; maps without finite means against ``against`` are left out.
+    largest : dict of str to float, optional
+        Per map, the largest MI there can be against ``against`` (log2 of its classes or
+        topics): a Student-t interval of few restarts can reach past it, and is drawn
+        only up to it (the title says so where it was cut).
 
     Returns
     -------
@@ -324,6 +328,7 @@ def mi_figure(summary, against: str, datasets: list[str]):
     n_rows = math.ceil(len(panels) / n_cols)
     fig = Figure(figsize=(0.6 + 4.0 * n_cols, 0.9 + 3.2 * n_rows), layout="constrained")
     axes = fig.subplots(n_rows, n_cols, squeeze=False)
+    cut = False
     for ax, dataset in zip(axes.flat, panels):
         table = rows[rows["dataset"].astype(str) == dataset]
         for weight in weights:
@@ -337,8 +342,17 @@ def mi_figure(summary, against: str, datasets: list[str]):
                 continue
             colour, marker = weight_style(weight, others)
             low, high = curve["ci_low"].to_numpy(float), curve["ci_high"].to_numpy(float)
+            low = np.maximum(low, 0.0)  # MI is never negative, nor above its largest value
+            if (bound := (largest or {}).get(dataset)) is not None and np.any(high > bound):
+                high, cut = np.minimum(high, bound), True
             band = np.isfinite(low) & np.isfinite(high)
-            ax.fill_between(x, low, high, where=band, color=colour, alpha=0.15, linewidth=0, interpolate=False)
+            if x.size == 1:  # one length: no band to stretch between lengths
+                if band[0]:
+                    ax.errorbar(x, curve["mean"].to_numpy(float), yerr=[curve["mean"].to_numpy(float) - low,
+                                high - curve["mean"].to_numpy(float)], color=colour, capsize=4, linewidth=1.2,
+                                linestyle="none")
+            else:
+                ax.fill_between(x, low, high, where=band, color=colour, alpha=0.15, linewidth=0, interpolate=False)
             ax.plot(
                 x, curve["mean"].to_numpy(float), color=colour, marker=marker, markersize=5.5,
                 linewidth=1.5, linestyle="-" if weight in WEIGHT_STYLES else "--",
@@ -376,6 +390,8 @@ def mi_figure(summary, against: str, datasets: list[str]):
     fit = max(1, int(fig.get_figwidth() / 2.0))  # a legend entry takes about 2 inches
     fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), fit), frameon=False)
     title = f"Mutual information of path labels $Z_p$ with {reference}: mean and 95% CI over restarts"
+    if cut:
+        title += f" (cut at the largest MI there can be, log2 of the {'classes' if against == 'human' else 'topics'})"
     fig.suptitle(_wrap(title, fig.get_figwidth(), _RC["figure.titlesize"]))
     return fig
 
@@ -560,6 +576,15 @@ def labelings_figure(m, z_b: np.ndarray | None, z_ps: list[tuple[Example, np.nda
     return fig
 
 
+def _largest_mi(maps: dict, config, against: str) -> dict[str, float]:
+    """Per map, the largest MI of path labels with ``against``: log2 of the classes with pixels, or of the topics."""
+    if against == "batch":
+        return {name: math.log2(config.model.topics) for name in maps}
+    return {
+        name: math.log2(max(1, np.unique(m.labels).size)) for name, m in maps.items() if m.labels is not None
+    }
+
+
 def convergence_figure(traces: dict[str, np.ndarray]):
     """The batch model's mean per-word log-likelihood after each Gibbs sweep, one column per map.
 
@@ -584,7 +609,7 @@ def convergence_figure(traces: dict[str, np.ndarray]):
     for i, (name, trace) in enumerate(traces.items()):
         sweeps = np.arange(1, trace.size + 1)
         half = trace.size // 2
-        tail = trace[-max(1, trace.size // 10):]
+        tail = trace[-max(3, trace.size // 10):]
         for ax, start in ((axes[0, i], 0), (axes[1, i], half)):
             ax.plot(sweeps[start:], trace[start:], color="tab:blue", linewidth=1.5,
                     marker="." if trace.size - start <= 60 else None)
@@ -593,7 +618,7 @@ def convergence_figure(traces: dict[str, np.ndarray]):
             ax.grid(True, color="0.9", linewidth=0.8)
             ax.set_axisbelow(True)
         axes[0, i].set_title(f"{name}: all {trace.size} sweeps")
-        axes[1, i].set_title(f"second half, zoomed\nlast {tail.size} sweeps within {np.ptp(tail):.2g} nats")
+        axes[1, i].set_title(f"second half, zoomed\n{_trend(trace, tail)}")
         axes[1, i].set_xlabel("Gibbs sweep")
     for ax in axes[:, 0]:
         ax.set_ylabel("log-likelihood per word (nats)")
@@ -603,6 +628,15 @@ def convergence_figure(traces: dict[str, np.ndarray]):
 
 
 # --------------------------------------------------------------------------- helpers
+
+
+def _trend(trace: np.ndarray, tail: np.ndarray) -> str:
+    """What the last sweeps of a log-likelihood trace say about convergence, in words."""
+    if trace.size < 2 * tail.size:
+        return f"{trace.size} sweeps: too few to tell whether it converged"
+    if np.all(np.diff(tail) > 0):
+        return f"still rising: +{tail[-1] - tail[0]:.2g} nats over the last {tail.size} sweeps"
+    return f"last {tail.size} sweeps within {np.ptp(tail):.2g} nats"
 
 
 def _chosen_examples(examples: list[Example]) -> list[Example]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import shutil
 from pathlib import Path
 
@@ -181,3 +182,42 @@ def test_maps_are_shrunk_before_drawing_labels_by_picking_and_images_by_averagin
     assert abs(float(shrunk.mean()) - 127.5) < 3
     same = np.ones((MAX_SIDE, 10, 3), np.uint8)
     assert shrink_image(same) is same and shrink_labels(same[:, :, 0]).shape == (MAX_SIDE, 10)
+
+
+def _summary(lengths, high):
+    """A summary.csv of one map and one walker, MI 1 bit at each length, the interval up to ``high``."""
+    return pd.DataFrame({
+        "dataset": "own", "weight_function": "topic-perplexity", "path_length": lengths, "against": "human",
+        "n": 2, "mean": 1.0, "std": 1.0, "ci_low": -0.5, "ci_high": high,
+    })
+
+
+def test_a_ci_band_is_cut_at_the_largest_mi_there_can_be_and_one_length_gets_an_error_bar():
+    figure = mi_figure(_summary([10, 20], 3.7), "human", ["own"], {"own": math.log2(7)})
+    (ax,) = [a for a in figure.axes if a.get_visible()]
+    (band,) = ax.collections
+    ys = band.get_paths()[0].vertices[:, 1]
+    assert ys.max() == pytest.approx(math.log2(7)) and ys.min() == 0  # neither above log2(classes) nor below 0
+    assert "cut at the largest MI there can be, log2 of the classes" in figure._suptitle.get_text().replace("\n", " ")
+    uncut = mi_figure(_summary([10, 20], 1.5), "human", ["own"], {"own": math.log2(7)})
+    assert "cut at" not in uncut._suptitle.get_text()
+    single = mi_figure(_summary([80], 1.5), "human", ["own"])
+    (ax,) = [a for a in single.axes if a.get_visible()]
+    (bar,) = ax.containers  # an error bar, not a band with nothing to stretch between
+    segment = bar.lines[2][0].get_segments()[0]
+    assert segment[:, 1].tolist() == [0.0, 1.5]
+
+
+def test_the_convergence_subtitle_says_rising_or_too_few_instead_of_within_nothing():
+    from curiosity_cli.plots.figures import convergence_figure
+
+    titles = {
+        name: convergence_figure({"own": trace}).axes[1].get_title()
+        for name, trace in {
+            "few": np.array([-9.0, -8.5]), "rising": -8.0 + np.linspace(0, 1, 40) ** 0.5,
+            "flat": np.r_[np.linspace(-9, -8, 36), [-8.0, -8.001, -8.0005, -8.0002]],
+        }.items()
+    }
+    assert titles["few"].endswith("2 sweeps: too few to tell whether it converged")
+    assert "still rising: +" in titles["rising"] and "over the last 4 sweeps" in titles["rising"]
+    assert titles["flat"].endswith("last 4 sweeps within 0.001 nats")
