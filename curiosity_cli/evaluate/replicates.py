@@ -17,9 +17,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from curiosity_cli.errors import RERUN
-from curiosity_cli.evaluate.statistics import paired_tests, summarise, summarise_revisits
+from curiosity_cli.evaluate.statistics import paired_tests, summarise, summarise_revisits, summarise_steering
 from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, EvaluationError, headline, paired_effects, with_power
-from curiosity_cli.evaluate.statistics import summarise_steering
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.experiment.layout import ExperimentFolder

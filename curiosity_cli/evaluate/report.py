@@ -19,9 +19,8 @@ import numpy as np
 from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.config_yaml import to_yaml
 from curiosity_cli.evaluate.power import POWER, TARGET_LEAD
-from curiosity_cli.evaluate.statistics import ALPHA
+from curiosity_cli.evaluate.statistics import ALPHA, CONFIDENCE, CONVERGENCE_TOLERANCE, smallest_wilcoxon_p
 from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation
-from curiosity_cli.evaluate.statistics import CONFIDENCE, CONVERGENCE_TOLERANCE
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT
 from curiosity_cli.explore.weights import CEILINGS, WEIGHT_FUNCTIONS
@@ -97,6 +96,8 @@ def verdict(row: Mapping) -> str:
     else:
         amount = f"{row['topic_perplexity']:.2f} bits against {next_best}'s {row['next_best_mi']:.2f}"
     text = f"{where}: {claim}: {amount}, {_p(row['p_value'])}"
+    if np.isfinite(row.get("pairs", np.nan)) and (least := smallest_wilcoxon_p(int(row["pairs"]))) >= ALPHA:
+        text += f" (with {int(row['pairs'])} pairs no paired test can reach p < {ALPHA}: the smallest p is {least:.2g})"
     others = [o for o in _text(row["not_beaten"]).split(";") if o and o != next_best]
     if others and not row["beats_all"]:
         text += f"; not clearly ahead of {', '.join(others)} either"
@@ -361,14 +362,19 @@ def _significance(tests) -> list[str]:
         lines.append(f"| {dataset} | {other} | " + " | ".join(cells) + " |")
     short = block[block["path_length"] <= _SHORT]
     significant = short[short["p_value"] < ALPHA]
+    most = int(short["n"].max()) if not short.empty and np.isfinite(short["n"].max()) else 0
+    if not significant.empty:
+        finding = f"{len(significant)} of {len(short)} pairs differ at p < 0.05 (the paper reports no difference)."
+    elif smallest_wilcoxon_p(most) >= ALPHA:
+        finding = (
+            f"no pair differs at p < 0.05, but with {most} pairs or fewer no test could: the smallest p of "
+            f"{most} pairs is {smallest_wilcoxon_p(most):.2g}. This says nothing about the paper's finding."
+        )
+    else:
+        finding = "no pair differs at p < 0.05, as the paper reports."
     lines += [
         "",
-        f"(+: {HEADLINE_WEIGHT} higher by the median paired difference.) At {_SHORT} steps or fewer, "
-        + (
-            "no pair differs at p < 0.05, as the paper reports."
-            if significant.empty
-            else f"{len(significant)} of {len(short)} pairs differ at p < 0.05 (the paper reports no difference)."
-        ),
+        f"(+: {HEADLINE_WEIGHT} higher by the median paired difference.) At {_SHORT} steps or fewer, " + finding,
         "",
     ]
     return lines

@@ -24,9 +24,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from curiosity_cli.evaluate.statistics import ALPHA
+from curiosity_cli.evaluate.statistics import ALPHA, CONFIDENCE
 from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT
-from curiosity_cli.evaluate.statistics import CONFIDENCE
 
 if TYPE_CHECKING:
     import pandas as pd

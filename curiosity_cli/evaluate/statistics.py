@@ -157,6 +157,15 @@ def paired_tests(mi):
     return pd.DataFrame(rows, columns=["dataset", "path_length", "against", "a", "b", "n", "median_difference", "p_value"])
 
 
+def smallest_wilcoxon_p(pairs: int) -> float:
+    """The smallest two-sided p an exact Wilcoxon signed-rank test of ``pairs`` pairs can give: ``2 ** (1 - pairs)``.
+
+    Every difference of one sign is the most extreme outcome, of chance ``2 ** -pairs``
+    each way; with 5 pairs or fewer no test reaches p < 0.05 whatever the data.
+    """
+    return 2.0 ** (1 - pairs) if pairs >= 1 else 1.0
+
+
 def paired_difference(a: np.ndarray, b: np.ndarray, confidence: float = CONFIDENCE) -> tuple[float, float, float]:
     """Mean of ``a - b`` and its Student-t confidence interval, as ``scipy.stats.ttest_rel(a, b)``.
 

@@ -8,8 +8,7 @@ import pytest
 
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.evaluate.report import _convergence_section
-from curiosity_cli.evaluate.statistics import label_convergence
-from curiosity_cli.evaluate.statistics import CONVERGENCE_TOLERANCE, within_noise
+from curiosity_cli.evaluate.statistics import CONVERGENCE_TOLERANCE, label_convergence, within_noise
 
 
 def test_within_noise_is_the_tolerance_or_twice_the_standard_error():

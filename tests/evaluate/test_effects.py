@@ -210,3 +210,23 @@ def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
     # classes found 2, 3, 4, 2, 3, 4, ... over 10 restarts: mean 2.9, CI half-width t(0.975, 9) * 0.876 / sqrt(10)
     assert "| topic-perplexity | 2.9 ± 0.6 of 6 |" in report
     assert "| lawnmower | 0.545 ± " in report
+
+
+def test_too_few_pairs_for_any_test_to_reach_p_005_are_said_plainly():
+    from curiosity_cli.evaluate.report import _significance
+    from curiosity_cli.evaluate.statistics import smallest_wilcoxon_p
+
+    for pairs in range(1, 9):  # every difference of one sign: scipy's exact p is the smallest there is
+        assert stats.wilcoxon(np.arange(1.0, pairs + 1)).pvalue == pytest.approx(smallest_wilcoxon_p(pairs))
+    mi = synthetic_mi()
+    mi = mi[(mi.restart < 2) & (mi.dataset == "win")]  # 2 pairs: the smallest p is 0.5
+    summary, tests = summarise(mi), paired_tests(mi)
+    top = with_power(headline(summary, tests, {"win": "Montreal1"}, paired_effects(mi, tests)), mi)
+    row = top.iloc[0].to_dict()
+    assert row["pairs"] == 2 and row["p_value"] == pytest.approx(0.5)
+    assert "p = 0.50 (with 2 pairs no paired test can reach p < 0.05: the smallest p is 0.5);" in verdict(row)
+    text = " ".join(_significance(tests))
+    assert "no pair differs at p < 0.05, but with 2 pairs or fewer no test could: the smallest p of 2 pairs is 0.5" in text
+    assert "as the paper reports" not in text
+    could = tests.assign(n=10, p_value=0.3)  # 10 pairs could reach it, and did not
+    assert "no pair differs at p < 0.05, as the paper reports." in " ".join(_significance(could))
