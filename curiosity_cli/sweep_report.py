@@ -115,7 +115,10 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
             rows.append({"combination": c.index, "folder": c.name, **dict(zip(keys, values)), **row})
         if top.empty:
             overview.append(f"| {link} | {cells} | (no headline) | | | | |")
-            sections += [f"(no human labels or no {HEADLINE_LENGTH}-step checkpoint: no headline ratio)", ""]
+            sections += [
+                f"(no checkpoint of {HEADLINE_LENGTH} steps or fewer with {HEADLINE_WEIGHT} and another walker: "
+                "no headline ratio)", "",
+            ]
             continue
         sections += [
             "| dataset | topic perplexity MI | next best | its MI | ratio | paired Wilcoxon p | pairs | paper's map | paper's ratio |",

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from curiosity_cli.errors import RERUN
 from curiosity_cli.evaluate.statistics import paired_tests, summarise, summarise_revisits, summarise_steering
-from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, EvaluationError, headline, paired_effects, with_power
+from curiosity_cli.evaluate.tables import EvaluationError, headline, headline_length, paired_effects, with_power
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.experiment.layout import ExperimentFolder
@@ -62,11 +62,9 @@ class Pooled:
 
 
 def _at_headline(summary, dataset: str, walker: str) -> float:
-    """``mean`` of a summary's row for ``dataset``, ``walker`` and the headline length; NaN if none."""
-    match = summary[
-        (summary["dataset"] == dataset) & (summary["weight_function"] == walker)
-        & (summary["path_length"] == HEADLINE_LENGTH)
-    ]["mean"]
+    """``mean`` of a summary's row for ``dataset``, ``walker`` and the headline's length; NaN if none."""
+    rows = summary[(summary["dataset"] == dataset) & (summary["weight_function"] == walker)]
+    match = rows[rows["path_length"] == headline_length(rows["path_length"].unique())]["mean"]
     return float(match.iloc[0]) if len(match) else float("nan")
 
 

@@ -20,7 +20,7 @@ from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.config_yaml import to_yaml
 from curiosity_cli.evaluate.power import POWER, TARGET_LEAD
 from curiosity_cli.evaluate.statistics import ALPHA, CONFIDENCE, CONVERGENCE_TOLERANCE, smallest_wilcoxon_p
-from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation
+from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation, headline_length
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT
 from curiosity_cli.explore.weights import CEILINGS, WEIGHT_FUNCTIONS
@@ -81,12 +81,14 @@ def verdict(row: Mapping) -> str:
     """
     dataset, against, next_best = row["dataset"], row["against"], row["next_best"]
     where = f"{dataset}" if against == "human" else f"{dataset} (MI against Z_b: the map has no human labels)"
+    length = int(row["path_length"])
+    steps = f"{length} steps" + ("" if length == HEADLINE_LENGTH else f" (its longest path; the paper reads {HEADLINE_LENGTH})")
     if row["beats_all"]:
-        claim = f"topic perplexity beats every other walker at {HEADLINE_LENGTH} steps"
+        claim = f"topic perplexity beats every other walker at {steps}"
     elif row["topic_perplexity"] > row["next_best_mi"]:
-        claim = f"topic perplexity leads every other walker at {HEADLINE_LENGTH} steps, but not clearly"
+        claim = f"topic perplexity leads every other walker at {steps}, but not clearly"
     else:
-        claim = f"topic perplexity does not beat every walker at {HEADLINE_LENGTH} steps"
+        claim = f"topic perplexity does not beat every walker at {steps}"
     diff = row["mean_difference"]
     if np.isfinite(diff):
         side = "above" if diff >= 0 else "below"
@@ -139,8 +141,8 @@ def power_sentence(row: Mapping) -> str:
 def _no_verdict(summary, dataset: str) -> str:
     """Why a map has no verdict."""
     block = summary[summary["dataset"] == dataset]
-    if HEADLINE_LENGTH not in set(block["path_length"]):
-        return f"{dataset}: no verdict: no {HEADLINE_LENGTH}-step checkpoint."
+    if headline_length(block["path_length"].unique()) is None:
+        return f"{dataset}: no verdict: no checkpoint of {HEADLINE_LENGTH} steps or fewer."
     walkers = set(block["weight_function"]) - set(CEILINGS)
     if HEADLINE_WEIGHT not in walkers:
         return f"{dataset}: no verdict: {HEADLINE_WEIGHT} was not run."
@@ -292,11 +294,11 @@ def _classes_cell(row) -> str:
 
 
 def _class_length(classes_summary) -> int | None:
-    """The length the class tables show: 80 steps if there, else the longest."""
+    """The length the class tables show: the headline's (:func:`~curiosity_cli.evaluate.tables.headline_length`), else the shortest."""
     if classes_summary is None or classes_summary.empty:
         return None
     present = set(classes_summary["path_length"])
-    return HEADLINE_LENGTH if HEADLINE_LENGTH in present else int(max(present))
+    return headline_length(present) or int(min(present))
 
 
 def _class_matrix(classes_summary, measure: str, length: int, cell) -> list[str]:
@@ -384,17 +386,20 @@ def _headline_table(top) -> list[str]:
     lines = [
         "## Headline",
         "",
-        f"Mean MI of {HEADLINE_WEIGHT} exploration at {HEADLINE_LENGTH} steps (against human labels, or Z_b on a map "
-        "without them), divided by the next best walker's; the mean paired difference to it with its 95 % CI; "
-        "its share of the better ceiling's MI:",
+        f"Mean MI of {HEADLINE_WEIGHT} exploration at {HEADLINE_LENGTH} steps, or a map's longest path below it "
+        "(steps), against human labels, or Z_b on a map without them, divided by the next best walker's; the mean "
+        "paired difference to it with its 95 % CI; its share of the better ceiling's MI:",
         "",
     ]
     if top.empty:
-        return lines + [f"(no {HEADLINE_LENGTH}-step checkpoint of {HEADLINE_WEIGHT} and another walker: no headline ratio)", ""]
+        return lines + [
+            f"(no checkpoint of {HEADLINE_LENGTH} steps or fewer with {HEADLINE_WEIGHT} and another walker: no headline "
+            "ratio)", "",
+        ]
     lines += [
-        "| dataset | against | ratio | next best | difference (95 % CI) | paired Wilcoxon p (pairs) | beats every walker "
-        "| share of ceiling | paper's map | paper's ratio |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| dataset | steps | against | ratio | next best | difference (95 % CI) | paired Wilcoxon p (pairs) | beats every "
+        "walker | share of ceiling | paper's map | paper's ratio |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in top.to_dict("records"):
         paper = f"{r['paper_ratio']:.2f}" if np.isfinite(r["paper_ratio"]) else ""
@@ -406,7 +411,7 @@ def _headline_table(top) -> list[str]:
                 diff += f" ({_signed(r['ci_low'])} to {_signed(r['ci_high'])})"
         share = f"{100 * r['ceiling_share']:.0f} % of {r['best_ceiling']}" if np.isfinite(r["ceiling_share"]) else ""
         lines.append(
-            f"| {r['dataset']} | {r['against']} | {r['ratio']:.2f} | {r['next_best']} | {diff} | {p} ({r['pairs']}) | "
+            f"| {r['dataset']} | {int(r['path_length'])} | {r['against']} | {r['ratio']:.2f} | {r['next_best']} | {diff} | {p} ({r['pairs']}) | "
             f"{'yes' if r['beats_all'] else 'no'} | {share} | {_text(r['paper_map'])} | {paper} |"
         )
     return lines + [""]
@@ -465,13 +470,13 @@ def _revisits_section(revisits, lengths: list[int], config: ExperimentConfig) ->
 
 
 def _steering_section(steering, lengths: list[int]) -> list[str]:
-    """Per map and walker, the mean steering at 80 steps (or the longest length without 80),
+    """Per map and walker, the mean steering at the headline's length (else the shortest),
     with what it means (:mod:`~curiosity_cli.evaluate.steering`)."""
     from curiosity_cli.evaluate.statistics import summarise_steering
 
     if steering is None or steering.dropna(subset=["steering"]).empty:
         return []
-    length = HEADLINE_LENGTH if HEADLINE_LENGTH in lengths else max(lengths)
+    length = headline_length(lengths) or min(lengths)
     summary = summarise_steering(steering)
     summary = summary[summary["path_length"] == length]
     if summary.empty:

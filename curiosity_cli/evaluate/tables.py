@@ -83,8 +83,17 @@ if TYPE_CHECKING:
 
     from curiosity_cli.config import ExperimentConfig
 
+#: The path length the paper reads its headline at (about a map's width); a map without
+#: that checkpoint is read at its longest one below it (:func:`headline_length`).
 HEADLINE_LENGTH = 80
 HEADLINE_WEIGHT = "topic-perplexity"
+
+
+def headline_length(lengths) -> int | None:
+    """The path length a map's headline is read at: :data:`HEADLINE_LENGTH`, or the longest of ``lengths``
+    below it; None when every length is longer."""
+    below = [int(n) for n in lengths if n <= HEADLINE_LENGTH]
+    return max(below) if below else None
 
 
 class EvaluationError(CuriosityError):
@@ -385,7 +394,7 @@ def paired_effects(mi, tests=None):
 
 
 HEADLINE_COLUMNS = [
-    "dataset", "against", "topic_perplexity", "next_best", "next_best_mi", "ratio", "mean_difference", "ci_low",
+    "dataset", "path_length", "against", "topic_perplexity", "next_best", "next_best_mi", "ratio", "mean_difference", "ci_low",
     "ci_high", "p_value", "pairs", "beats_all", "not_beaten", "best_ceiling", "ceiling_mi", "ceiling_share",
     "paper_map", "paper_ratio",
 ]
@@ -394,7 +403,8 @@ POWER_COLUMNS = ["ratio_ci_low", "ratio_ci_high", "detectable_ratio", "pairs_for
 
 
 def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
-    """Per dataset: topic perplexity's mean MI at 80 steps over the next best walker's.
+    """Per dataset: topic perplexity's mean MI at 80 steps (``path_length``: or the map's longest
+    checkpoint below 80, :func:`headline_length`) over the next best walker's.
 
     Against human labels, or against Z_b on a map without them (``against``). With the
     paired Wilcoxon p of topic perplexity against that next best; the mean paired
@@ -411,8 +421,11 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
     from curiosity_cli.paper import PAPER_MAPS
 
     rows = []
-    at = summary[summary["path_length"] == HEADLINE_LENGTH]
-    for dataset, block in at.groupby("dataset", sort=False):
+    for dataset, every in summary.groupby("dataset", sort=False):
+        length = headline_length(every["path_length"].unique())
+        block = every[every["path_length"] == length]
+        if block.empty:
+            continue
         against = "human" if (block["against"] == "human").any() else "batch"
         means = block[block["against"] == against].set_index("weight_function")["mean"]
         ceilings = means[means.index.isin(CEILINGS)]
@@ -422,12 +435,12 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
         ours = walkers[HEADLINE_WEIGHT]
         others = walkers.drop(HEADLINE_WEIGHT).sort_values(ascending=False, kind="stable")
         next_best = others.index[0]
-        p_values = {o: wilcoxon_p(tests, dataset, HEADLINE_LENGTH, against, HEADLINE_WEIGHT, o) for o in others.index}
+        p_values = {o: wilcoxon_p(tests, dataset, length, against, HEADLINE_WEIGHT, o) for o in others.index}
         not_beaten = [o for o in others.index if not (ours > others[o] and p_values[o][0] < ALPHA)]
         effect = None
         if effects is not None:
             match = effects[
-                (effects["dataset"] == dataset) & (effects["path_length"] == HEADLINE_LENGTH)
+                (effects["dataset"] == dataset) & (effects["path_length"] == length)
                 & (effects["against"] == against) & (effects["other"] == next_best)
             ]
             effect = match.iloc[0] if len(match) else None
@@ -435,8 +448,8 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
         ceiling_mi = ceilings[best_ceiling] if best_ceiling else np.nan
         paper = PAPER_MAPS.get(stands_in_for.get(dataset, ""))
         rows.append({
-            "dataset": dataset, "against": against, "topic_perplexity": ours, "next_best": next_best,
-            "next_best_mi": others.iloc[0], "ratio": ours / others.iloc[0],
+            "dataset": dataset, "path_length": length, "against": against, "topic_perplexity": ours, "next_best": next_best,
+            "next_best_mi": others.iloc[0], "ratio": ours / others.iloc[0] if others.iloc[0] > 0 else np.nan,
             "mean_difference": effect["mean_difference"] if effect is not None else np.nan,
             "ci_low": effect["ci_low"] if effect is not None else np.nan,
             "ci_high": effect["ci_high"] if effect is not None else np.nan,
@@ -452,7 +465,7 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
 def with_power(top, mi):
     """``top`` (:func:`headline`) with how sure each ratio is (:mod:`~curiosity_cli.evaluate.power`).
 
-    From the pairs of topic perplexity and the next best walker at 80 steps: the ratio's
+    From the pairs of topic perplexity and the next best walker at the headline's length: the ratio's
     95 % paired-bootstrap interval (``ratio_ci_low``, ``ratio_ci_high``), the smallest
     ratio the experiment could have detected at 80 % power (``detectable_ratio``), and
     the pairs a 10 % lead would need (``pairs_for_lead``, NaN beyond a million).
@@ -460,9 +473,9 @@ def with_power(top, mi):
     from curiosity_cli.evaluate.power import TARGET_LEAD, detectable_difference, pairs_needed, ratio_interval
 
     columns = {name: [] for name in POWER_COLUMNS}
-    blocks = {(against, dataset): block for against, dataset, length, block in paired_blocks(mi) if length == HEADLINE_LENGTH}
+    blocks = {(against, dataset, length): block for against, dataset, length, block in paired_blocks(mi)}
     for row in top.itertuples():
-        pair = blocks[(row.against, row.dataset)][[HEADLINE_WEIGHT, row.next_best]].dropna().to_numpy()
+        pair = blocks[(row.against, row.dataset, row.path_length)][[HEADLINE_WEIGHT, row.next_best]].dropna().to_numpy()
         ours, theirs = pair[:, 0], pair[:, 1]
         sd = float(np.std(ours - theirs, ddof=1)) if len(pair) > 1 else np.nan
         baseline = float(theirs.mean())

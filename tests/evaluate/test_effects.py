@@ -134,7 +134,7 @@ def test_the_verdict_of_a_clear_win():
 
 def test_the_verdict_of_a_clear_loss():
     row = {
-        "dataset": "zurich-zh17", "against": "human", "topic_perplexity": 0.38, "next_best": "word-perplexity",
+        "dataset": "zurich-zh17", "path_length": 80, "against": "human", "topic_perplexity": 0.38, "next_best": "word-perplexity",
         "next_best_mi": 0.40, "ratio": 0.95, "mean_difference": -0.02, "ci_low": -0.05, "ci_high": 0.01,
         "p_value": 0.48, "pairs": 20, "beats_all": False, "not_beaten": "word-perplexity;lawnmower",
         "best_ceiling": "", "ceiling_mi": np.nan, "ceiling_share": np.nan, "paper_map": "Montreal1", "paper_ratio": 1.51,
@@ -164,7 +164,7 @@ def test_the_verdict_of_a_map_without_human_labels():
 
 def test_a_lead_that_is_not_significant_is_not_a_win():
     row = {
-        "dataset": "m", "against": "human", "topic_perplexity": 0.42, "next_best": "lawnmower", "next_best_mi": 0.40,
+        "dataset": "m", "path_length": 80, "against": "human", "topic_perplexity": 0.42, "next_best": "lawnmower", "next_best_mi": 0.40,
         "ratio": 1.05, "mean_difference": 0.02, "ci_low": -0.01, "ci_high": 0.05, "p_value": 0.31, "pairs": 10,
         "beats_all": False, "not_beaten": "lawnmower", "best_ceiling": "", "ceiling_mi": np.nan,
         "ceiling_share": np.nan, "paper_map": np.nan, "paper_ratio": np.nan,
@@ -177,7 +177,7 @@ def test_a_lead_that_is_not_significant_is_not_a_win():
 
 def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
     mi, summary, tests, effects, top = tables()
-    mi = mi[mi.dataset != "loss"]  # so that one map has no verdict below: no 80-step checkpoint
+    mi = mi[mi.dataset != "loss"]  # so that one map's verdict is read at its longest path below 80 steps
     mi = pd.concat([mi, synthetic_mi().query("dataset == 'loss' and path_length == 40")])
     summary, tests = summarise(mi), paired_tests(mi)
     effects = paired_effects(mi, tests)
@@ -195,7 +195,10 @@ def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
     assert lines[4:6] == ["## Verdict", ""] and lines[6].startswith("- win: ")  # the answer first
     bullets = [line for line in lines if line.startswith("- ")]
     assert bullets[0].startswith("- win: topic perplexity beats every other walker at 80 steps")
-    assert bullets[1] == "- loss: no verdict: no 80-step checkpoint."
+    assert bullets[1].startswith(
+        "- loss: topic perplexity does not beat every walker at 40 steps (its longest path; the paper reads 80): "
+    )
+    assert "| loss | 40 | human | " in report and "| win | 80 | human | " in report  # the headline table says which
     assert bullets[2].startswith("- unlabelled (MI against Z_b")
     sections = [line for line in lines if line.startswith("## ")]
     assert sections == [
@@ -230,3 +233,14 @@ def test_too_few_pairs_for_any_test_to_reach_p_005_are_said_plainly():
     assert "as the paper reports" not in text
     could = tests.assign(n=10, p_value=0.3)  # 10 pairs could reach it, and did not
     assert "no pair differs at p < 0.05, as the paper reports." in " ".join(_significance(could))
+
+
+def test_a_map_whose_paths_are_all_longer_than_80_steps_has_no_verdict():
+    from curiosity_cli.evaluate.report import _no_verdict
+    from curiosity_cli.evaluate.tables import headline_length
+
+    assert headline_length([10, 40, 160]) == 40 and headline_length([80, 160]) == 80 and headline_length([160]) is None
+    mi = synthetic_mi().query("dataset == 'win' and path_length == 80").assign(path_length=160)
+    summary, tests = summarise(mi), paired_tests(mi)
+    assert headline(summary, tests, {}).empty
+    assert _no_verdict(summary, "win") == "win: no verdict: no checkpoint of 80 steps or fewer."

@@ -76,7 +76,8 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     assert (row["ci_high"] - row["mean"]).item() == pytest.approx(12.7062 * block.std() / np.sqrt(2), rel=1e-4)
     tests = pd.read_csv(folder / "tests.csv")
     assert len(tests) == 2 * 2 * 6 and tests["p_value"].between(0, 1).all()
-    assert evaluation.headline.empty, "no 80-step checkpoint, so no headline ratio"
+    # no 80-step checkpoint: the headline is read at the longest path below it, and says so
+    assert evaluation.headline["path_length"].tolist() == [12]
     effects = pd.read_csv(folder / "effects.csv")
     assert len(effects) == 2 * 2 * 3 and (effects["ci_low"] <= effects["mean_difference"]).all()
 
@@ -231,7 +232,7 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
     report = (folder / "REPORT.md").read_text()
     assert "## Mutual information" in report and "| own | topic-perplexity |" in report and "](figures/" in report
     assert report.splitlines()[4] == "## Verdict"  # right after the title and one line of context
-    assert "- own: no verdict: no 80-step checkpoint." in report
+    assert "- own: topic perplexity" in report and " at 12 steps (its longest path; the paper reads 80): " in report
     # the labels' settings (the --set above) and the convergence rule are stated
     assert "Labels: a run's first checkpoint's Z_p is 2 frozen-Φ Gibbs sweeps from random topics" in report
     assert "end at the same mean MI" in report
