@@ -141,6 +141,14 @@ def test_a_map_listed_twice_is_refused_by_config_show_as_explore_would(own_map, 
     assert not (tmp_path / "results").exists()
 
 
+def test_a_vocabulary_that_is_not_there_is_refused_by_config_show_as_explore_would(tmp_path):
+    message = "orb-10.npz: vocabulary not found; `curiosity vocab build` builds the orb vocabulary of 10 words"
+    _assert_one_line_error(run("config", "show", "quick", "--set", "words.orb_vocabulary=10"), message)
+    _assert_one_line_error(
+        run("explore", "quick", "--set", "words.orb_vocabulary=10", "--results-dir", str(tmp_path)), message
+    )
+
+
 def test_unknown_dataset_is_one_line_error():
     _assert_one_line_error(run("datasets", "show", "atlantis"), "no dataset 'atlantis'")
 

@@ -9,11 +9,18 @@ from pathlib import Path
 def show_config(config: str | Path, overrides: typing.Iterable[str] = ()) -> str:
     """``curiosity config show``: a config validated and resolved (base files and ``overrides`` applied), as
     YAML, every key, as a run saves it; a base that names no experiment (``paper``), its parameter sections.
-    As :func:`curiosity_cli.config.show_config`."""
+    As :func:`curiosity_cli.config.show_config`; and the vocabularies it names are there (a ``CuriosityError``
+    naming the file that is not)."""
     from curiosity_cli.api.arguments import name_or_path, overrides_argument
+    from curiosity_cli.config import load_words_config
     from curiosity_cli.config import show_config as shown
+    from curiosity_cli.words.kinds import WordRecipe
 
-    return shown(name_or_path(config, "config"), overrides_argument(overrides))
+    config, overrides = name_or_path(config, "config"), overrides_argument(overrides)
+    text = shown(config, overrides)
+    # the vocabularies it names must be there, as explore needs them (the config layer cannot know their files)
+    WordRecipe(load_words_config(config, [o for o in overrides if o.split("=", 1)[0].startswith("words.")]))
+    return text
 
 
 def init_config(name: str, source: str = "quick", folder: Path = Path(".")) -> Path:
