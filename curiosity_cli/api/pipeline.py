@@ -315,7 +315,7 @@ def reproduce(
     UsageError
         ``sweeps`` not in the ``KEY=V1,V2,...`` form; ``scheduler`` without ``backend="dask"``.
     """
-    from curiosity_cli.config import with_converged_labels
+    from curiosity_cli.config import load_config, with_converged_labels
     from curiosity_cli.reproduce import reproduce as run_pipeline
     from curiosity_cli.specifications import declared_specifications
     from curiosity_cli.sweep import declared_sweeps, merge_sweeps
@@ -326,7 +326,11 @@ def reproduce(
     results_dir, cache_dir = folder_argument(results_dir, "results_dir"), folder_argument(cache_dir, "cache_dir")
     if converged:
         overrides = with_converged_labels(overrides)
-    if not _is_config(config):
+    if _is_config(config):
+        if sweeps:
+            raise UsageError("sweeps: a resolved config is one experiment; give the config's name or path to sweep it", parameter="sweeps")
+        resolved = load(config, overrides)  # refuses overrides of a resolved config
+    else:
         sweeps = merge_sweeps(declared_sweeps(config), sweeps)
         specifications = declared_specifications(config)
         if sweeps or specifications:
@@ -334,9 +338,7 @@ def reproduce(
                 config, overrides, sweeps, specifications, on_stage=on_stage, on_done=on_done, on_status=on_status,
                 results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, backend=backend, scheduler=scheduler,
             )
-    elif sweeps:
-        raise UsageError("sweeps: a resolved config is one experiment; give the config's name or path to sweep it", parameter="sweeps")
-    resolved = load(config, overrides)
+        resolved = load_config(config, overrides)  # neither a sweep nor specifications, just read: one experiment
     return run_pipeline(
         resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
         backend=backend, scheduler=scheduler, on_stage=on_stage, on_done=on_done,

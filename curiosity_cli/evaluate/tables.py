@@ -604,21 +604,20 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
         )
 
 
-def read_evaluation(folder: Path) -> Evaluation:
-    """The tables ``evaluate`` wrote in ``folder``, read back as it returned them.
+def read_evaluation(experiment: Experiment) -> Evaluation:
+    """The tables ``evaluate`` wrote in an experiment folder, read back as it returned them.
+
+    The caller has checked that they are one set made from the folder's files as they are
+    now (:meth:`~curiosity_cli.experiment.experiment.Experiment.check_tables`), which
+    digests every input: ``plot`` does so once, for its figures and this report.
 
     Raises
     ------
-    StaleTablesError
-        The tables are not one set made from the folder's files as they are now
-        (:meth:`~curiosity_cli.experiment.experiment.Experiment.check_tables`).
     EvaluationError
         A table that cannot be read, naming it.
     """
     import pandas as pd
 
-    experiment = Experiment.open(folder)
-    experiment.check_tables()
     layout = experiment.folder
 
     def read(name: str) -> pd.DataFrame:
@@ -639,6 +638,6 @@ def read_evaluation(folder: Path) -> Evaluation:
         raise EvaluationError(f"{display_path(layout.skipped)}: cannot read it ({exc}); {RERUN} makes it again",
                               rerun="evaluate", force=False) from None
     return Evaluation(
-        read("mi"), read("summary"), read("tests"), read("headline"), skipped, read_maps(folder), read("effects"),
+        read("mi"), read("summary"), read("tests"), read("headline"), skipped, read_maps(layout.root), read("effects"),
         read("classes"), read("classes_summary"), read("convergence"), read("revisits"), read("steering"),
     )

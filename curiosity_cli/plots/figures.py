@@ -259,7 +259,7 @@ def _write_report(experiment: Experiment, figures: WrittenFigures) -> Path | Non
     except CuriosityError:  # a folder from before provenance.yaml: the report says "unknown"
         provenance = {}
     try:
-        evaluation = read_evaluation(root)
+        evaluation = read_evaluation(experiment)
     except EvaluationError as exc:
         figures.skipped.append(f"REPORT.md: {exc}")
         return None
@@ -346,15 +346,15 @@ def mi_figure(summary, against: str, datasets: list[str], largest: dict[str, flo
             if (bound := (largest or {}).get(dataset)) is not None and np.any(high > bound):
                 high, cut = np.minimum(high, bound), True
             band = np.isfinite(low) & np.isfinite(high)
+            mean = curve["mean"].to_numpy(float)
             if x.size == 1:  # one length: no band to stretch between lengths
                 if band[0]:
-                    ax.errorbar(x, curve["mean"].to_numpy(float), yerr=[curve["mean"].to_numpy(float) - low,
-                                high - curve["mean"].to_numpy(float)], color=colour, capsize=4, linewidth=1.2,
+                    ax.errorbar(x, mean, yerr=[mean - low, high - mean], color=colour, capsize=4, linewidth=1.2,
                                 linestyle="none")
             else:
                 ax.fill_between(x, low, high, where=band, color=colour, alpha=0.15, linewidth=0, interpolate=False)
             ax.plot(
-                x, curve["mean"].to_numpy(float), color=colour, marker=marker, markersize=5.5,
+                x, mean, color=colour, marker=marker, markersize=5.5,
                 linewidth=1.5, linestyle="-" if weight in WEIGHT_STYLES else "--",
             )
         lengths = sorted(table["path_length"].astype(int).unique())
