@@ -287,6 +287,14 @@ class LabelConfig:
 @dataclass(frozen=True)
 class DriveConfig:
     """The live robot driver (paper section 5.2), its wire protocol and the simulated robot."""
+    #: Keys no longer read: the value every config saved before holds, and what replaced
+    #: them. :func:`~curiosity_cli.schema.build` drops that value and refuses any other,
+    #: since a run could not do what it says.
+    RETIRED: typing.ClassVar[dict] = {
+        key: (value, "the live model no longer restarts every window_frames frames; "
+              "drive.memory_frames bounds what it remembers, forgetting one frame at a time")
+        for key, value in (("window_frames", 150), ("carry_frames", 50), ("carry_sweeps", 2))
+    }
 
     gamma: float = spec(min=0, max=1, max_exclusive=True)
     temporal_neighbours: int = spec(choices=(0, 2))
@@ -298,9 +306,7 @@ class DriveConfig:
     orb_per_tile: int = spec(min=1)
     orb_fill_threshold: int | None = spec(min=1, max=19)
     samples_per_frame: int = spec(min=0)
-    window_frames: int = spec(min=2)
-    carry_frames: int = spec(min=0)
-    carry_sweeps: int = spec(min=0)
+    memory_frames: int | None = spec(min=2)
     surge_cruise: float = spec()
     surge_gain: float = spec(min=0)
     surge_min: float = spec()
@@ -648,7 +654,6 @@ def _check_drive(drive: DriveConfig, raw: Raw) -> None:
     """Rules that tie ``drive`` keys together: the first broken one, where its key was set."""
     rules = [
         (drive.frame_width >= drive.grid_cols, "frame_width", f"at least grid_cols ({drive.grid_cols})"),
-        (drive.carry_frames < drive.window_frames, "carry_frames", f"fewer than window_frames ({drive.window_frames})"),
         (drive.surge_min <= drive.surge_max, "surge_min", f"at most surge_max ({drive.surge_max})"),
         (drive.keepalive < drive.watchdog, "keepalive", f"shorter than the robot's watchdog ({drive.watchdog} s)"),
     ]

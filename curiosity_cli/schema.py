@@ -162,8 +162,13 @@ def build(cls, data: Any, keys: tuple, raw: Raw):
         raise invalid(raw, keys, f"got {shown(data)} ({type(data).__name__}), expected a mapping of keys")
     hints = typing.get_type_hints(cls)
     names = [f.name for f in dataclasses.fields(cls)]
+    retired = getattr(cls, "RETIRED", {})
     for key in data:
-        if key not in names:
+        if key in retired:
+            value, why = retired[key]
+            if data[key] != value:
+                raise invalid(raw, keys + (key,), f"got {shown(data[key])}, but the key is retired: {why}")
+        elif key not in names:
             raise invalid(raw, keys + (key,), f"unknown key; expected one of {', '.join(names)}")
     values = {}
     for f in dataclasses.fields(cls):

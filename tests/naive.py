@@ -232,6 +232,11 @@ class NaiveModel:
     order: list
     times: list
     frozen: np.ndarray | None = None  # (V, K) frozen word-topic counts
+    free_stream: int | None = None  # the first stream id of no cell: n_cells as the model was made
+
+    def __post_init__(self):
+        if self.free_stream is None:
+            self.free_stream = self.n_cells
 
     @classmethod
     def of(cls, model) -> NaiveModel:
@@ -250,6 +255,7 @@ class NaiveModel:
             order=cells,
             times=[int(t) for t in model.observation_times()],
             frozen=model.topic_word_counts() if model.frozen else None,
+            free_stream=int(model._free_stream),
         )
 
     @property
@@ -320,6 +326,13 @@ def add_words_naive(state: NaiveModel, cell: int, words, time: int | None = None
     state.order.append(cell)
     state.times.append((max(state.times) + 1 if state.times else 0) if time is None else time)
     state.counter += 1
+
+
+def remove_cells_naive(state: NaiveModel, cells) -> None:
+    """Twin of ``TopicModel.remove_cells``: the cells' words and topics are gone, as if never added."""
+    for c in cells:
+        at = state.order.index(c)
+        del state.order[at], state.times[at], state.words[c], state.topics[c]
 
 
 def restart_naive(state: NaiveModel, seed: int) -> None:
@@ -404,7 +417,7 @@ def refine_realtime_naive(
     """Twin of ``refine_realtime_kernel``: (words sampled, picks)."""
     times = sorted(set(state.times))
     groups = [[c for c, t in zip(state.order, state.times) if t == time] for time in times]
-    picker = Stream(state.key, state.counter, state.n_cells)
+    picker = Stream(state.key, state.counter, state.free_stream)
     recent = picks == "recent"
     done = picks = idle = 0
     while done + idle < budget:  # a pick without words spends one unit
@@ -497,7 +510,7 @@ def topic_perplexity_naive(
     """Twin of ``topic_perplexity_kernel``: (eq. 12, the temporary topics)."""
     nwk, nk, ncz = count_topics(state)
     around = neighbourhood(state, ncz, cell) if context == "neighbourhood" else np.zeros(state.n_topics, np.int64)
-    stream = Stream(state.key, state.counter, state.n_cells + 1 + cell)
+    stream = Stream(state.key, state.counter, state.free_stream + 1 + cell)
     topics = [-1] * len(words)
     for sweep in range(sweeps):
         for i, w in enumerate(words):

@@ -29,8 +29,6 @@ class Decision:
     command : Command
     words : int
         Words extracted from the frame.
-    window : int
-        Which model of the stream (0, 1, ...) holds the frame.
     seconds : dict of str to float
         Time spent per stage: ``words``, ``model`` (add and refine), ``score``.
     """
@@ -40,7 +38,6 @@ class Decision:
     target: tuple[int, int]
     command: Command
     words: int
-    window: int
     seconds: dict
 
 
@@ -64,9 +61,7 @@ class CuriosityPipeline:
             model.topics,
             self.words.vocabulary_size,
             self.grid,
-            window=drive.window_frames,
-            carry=drive.carry_frames,
-            carry_sweeps=drive.carry_sweeps,
+            memory=drive.memory_frames,
             spatial=model.spatial_neighbours,
             temporal=drive.temporal_neighbours,
             alpha=model.alpha,
@@ -102,7 +97,6 @@ class CuriosityPipeline:
             target=target,
             command=command,
             words=sum(w.size for w in cell_words),
-            window=self.stream.windows - 1,
             seconds={"words": extracted - start, "model": modelled - extracted, "score": done - modelled},
         )
 
@@ -118,4 +112,5 @@ def warm_up(config: ExperimentConfig) -> None:
     frame = rng.integers(0, 256, (drive.sim_view_rows, drive.sim_view_cols, 3), dtype=np.uint8)
     pipeline = CuriosityPipeline(config, seed=0)
     pipeline.process(frame)
-    pipeline.stream.model.refine_batch(1)  # what a new window's carried frames get
+    model = pipeline.stream.model
+    model.remove_cells(model.observed_cells()[:1])  # what a bounded memory does from its M-th frame on

@@ -1,37 +1,42 @@
 """The topic model of a camera stream that never ends.
 
-A :class:`~curiosity_cli.topics.TopicModel` has a fixed number of cells, so the stream
-lives in windows: the model holds ``window`` frames (cell ``slot * rows * cols + row *
-cols + col``, neighbour table :func:`~curiosity_cli.topics.stream_neighbours`: 4 spatial
-neighbours in the frame, the same image cell one frame before and after). When the
-window is full, a new model (seeded from the run's seed and the window's number) takes
-the newest ``carry`` frames' words in the first slots, in their order, each frame one
-observation time, refines them with ``carry_sweeps`` batch sweeps, and the stream goes
-on after them. Older frames are forgotten: the robot's memory is the last ``window``
-frames at most and ``carry`` at least, which is what lets a place seen long ago become
-interesting again.
+One :class:`~curiosity_cli.topics.TopicModel` learns for the whole mission, as the
+paper's robot does ("life-long learning"): frame ``f``'s image cells are the model's
+cells ``f * rows * cols + row * cols + col``, linked by
+:func:`~curiosity_cli.topics.stream_neighbours` (4 spatial neighbours in the frame, the
+same image cell one frame before and after). The model's table holds a number of frames
+that doubles when a frame does not fit (:meth:`~curiosity_cli.topics.TopicModel.grow`,
+which keeps every count), so a mission of any length costs amortised constant time per
+frame and memory in proportion to its frames.
 
-Each frame is refined with the realtime sampler (paper eq. 6, bias ``eta``) within a
-fixed budget of word samples, so a run does not depend on the machine's speed.
+With a memory bound of ``M`` frames the frames take turns in ``M + 1`` slots of a ring,
+and before a frame arrives the oldest leaves, its words taken out of every count
+(:meth:`~curiosity_cli.topics.TopicModel.remove_cells`): forgetting is gradual, one
+frame at a time, and the empty slot keeps the newest frame from being the oldest's
+temporal neighbour.
+
+Each frame is refined with the realtime sampler (paper eq. 6: the newest frame with
+probability ``eta``, else a uniformly random earlier one) within a fixed budget of word
+samples, so a run does not depend on the machine's speed, nor a frame's cost on the
+mission's length. Not the authors' refinery (``picks="recent"``): it picks one of the
+newest 64 *observations*, which for a stream are frames, so the newest frame would be
+refined in about one pick in a hundred, and its perplexity read from topics still
+nearly as random as they were drawn.
 """
 
 from __future__ import annotations
-
-from collections import deque
 
 import numpy as np
 
 from curiosity_cli.checks import check_int
 from curiosity_cli.errors import ParameterError
 
-
-def window_seed(seed: int, window: int) -> int:
-    """The seed of the ``window``-th model of a run (0, 1, ...): independent streams per window."""
-    return int(np.random.SeedSequence([seed, window]).generate_state(1, np.uint64)[0])
+# frames the first table holds; it doubles from there
+_FIRST_FRAMES = 64
 
 
 class StreamModel:
-    """Frames in, per-cell topic counts out, over a sliding memory of frames.
+    """Frames in, per-cell topic counts out, one model for the whole stream.
 
     Parameters
     ----------
@@ -39,12 +44,9 @@ class StreamModel:
         K and V of the topic model.
     grid : (int, int)
         Image cells per column and per row of a frame.
-    window : int
-        Frames one model holds, >= 2.
-    carry : int
-        Frames carried into the next model, ``0 <= carry < window``.
-    carry_sweeps : int
-        Batch sweeps over the carried frames in a new model, >= 0.
+    memory : int or None
+        Frames the model remembers, >= 2, the oldest forgotten as each new one arrives;
+        None: every frame of the stream.
     spatial : {4, 0}
         Spatial neighbours within a frame.
     temporal : {2, 0}
@@ -58,7 +60,7 @@ class StreamModel:
     seed : int
         The run's seed.
     vocabulary_hashes : mapping, optional
-        Stored in each model, identifying the word ids.
+        Stored in the model, identifying the word ids.
     """
 
     def __init__(
@@ -67,9 +69,7 @@ class StreamModel:
         vocabulary_size: int,
         grid: tuple[int, int],
         *,
-        window: int,
-        carry: int,
-        carry_sweeps: int,
+        memory: int | None,
         spatial: int,
         temporal: int,
         alpha: float,
@@ -80,45 +80,42 @@ class StreamModel:
         vocabulary_hashes=None,
     ):
         from curiosity_cli.maps.cell_grid import SquareGrid
-        from curiosity_cli.topics import stream_neighbours
+        from curiosity_cli.topics import TopicModel
 
-        self._rows = check_int("grid rows", grid[0], 1)
-        self._cols = check_int("grid cols", grid[1], 1)
-        self._window = check_int("window", window, 2)
-        self._carry = check_int("carry", carry, 0, self._window - 1)
-        self._sweeps = check_int("carry_sweeps", carry_sweeps, 0)
+        self._grid = SquareGrid(check_int("grid rows", grid[0], 1), check_int("grid cols", grid[1], 1))
+        self._slots = None if memory is None else check_int("memory", memory, 2) + 1
         self._budget = check_int("budget", budget, 0)
         self._eta = eta
-        self._seed = seed
-        self._model_args = dict(
-            n_topics=n_topics, vocabulary_size=vocabulary_size, alpha=alpha, beta=beta,
+        self._links = dict(spatial=spatial, temporal=temporal)
+        self.frames = 0  # frames added so far
+        self.model = TopicModel(
+            n_topics, vocabulary_size, self._table(self._capacity_after(0)), alpha=alpha, beta=beta, seed=seed,
             vocabulary_hashes=vocabulary_hashes,
         )
-        self._table = stream_neighbours(
-            SquareGrid(self._rows, self._cols), self._window, spatial=spatial, temporal=temporal
-        )
-        self._recent: deque[list[np.ndarray]] = deque(maxlen=max(self._carry, 1))
-        self.windows = 0  # models started so far
-        self.model = self._new_model()
-        self._slot = 0
 
     @property
     def cells_per_frame(self) -> int:
-        return self._rows * self._cols
+        return self._grid.n_cells
 
-    def _new_model(self):
-        from curiosity_cli.topics import TopicModel
+    @property
+    def frames_in_memory(self) -> int:
+        """Frames whose words the model holds now."""
+        return self.frames if self._slots is None else min(self.frames, self._slots - 1)
 
-        model = TopicModel(
-            neighbours=self._table, seed=window_seed(self._seed, self.windows), **self._model_args
-        )
-        self.windows += 1
-        return model
+    def _capacity_after(self, frames: int) -> int:
+        """Frames the table holds once it has grown past ``frames`` frames (doubling)."""
+        capacity = _FIRST_FRAMES
+        while capacity <= frames:
+            capacity *= 2
+        return capacity if self._slots is None else min(capacity, self._slots)
 
-    def _add(self, slot: int, cell_words: list[np.ndarray]) -> None:
-        first = slot * self.cells_per_frame
-        for cell, words in enumerate(cell_words):
-            self.model.add_cell(first + cell, words, time=slot)
+    def _table(self, frames: int) -> np.ndarray:
+        from curiosity_cli.topics import stream_neighbours
+
+        return stream_neighbours(self._grid, frames, ring=frames == self._slots, **self._links)
+
+    def _cells_of(self, slot: int) -> np.ndarray:
+        return slot * self.cells_per_frame + np.arange(self.cells_per_frame)
 
     def add_frame(self, cell_words: list[np.ndarray]) -> np.ndarray:
         """Add a frame's cells as the newest observation, then refine within the budget.
@@ -146,26 +143,24 @@ class StreamModel:
             raise ParameterError(
                 f"cell_words: word ids must be in 0..{self.model.vocabulary_size - 1}, got {every.min()}..{every.max()}"
             )
-        if self._slot == self._window:
-            self._restart()
-        self._add(self._slot, cell_words)
-        self._slot += 1
-        if self._carry:
-            self._recent.append(cell_words)
+        frame = self.frames
+        if self._slots is None:
+            slot = frame
+        else:
+            slot = frame % self._slots
+            if frame >= self._slots - 1:  # the oldest frame leaves, so that one slot stays empty
+                self.model.remove_cells(self._cells_of((frame + 1) % self._slots))
+        if (slot + 1) * self.cells_per_frame > self.model.n_cells:
+            self.model.grow(self._table(self._capacity_after(slot)))
+        cells = self._cells_of(slot)
+        for cell, words in zip(cells, cell_words):
+            self.model.add_cell(int(cell), words, time=frame)
+        self.frames += 1
         self.model.refine_realtime(self._budget, eta=self._eta)
         k, n = self.model.n_topics, self.cells_per_frame
-        first = (self._slot - 1) * n
-        topics = self.model.topics(np.arange(first, first + n)).astype(np.int64)
+        topics = self.model.topics(cells).astype(np.int64)
         owner = np.repeat(np.arange(n), [np.size(words) for words in cell_words])
         return np.bincount(owner * k + topics, minlength=n * k).reshape(n, k)
-
-    def _restart(self) -> None:
-        self.model = self._new_model()
-        for slot, cell_words in enumerate(self._recent):
-            self._add(slot, cell_words)
-        self._slot = len(self._recent)
-        if self._slot:
-            self.model.refine_batch(self._sweeps)
 
     def topic_totals(self) -> np.ndarray:
         """(K,) int64: words per topic over the frames in memory (the path's topic counts)."""

@@ -55,6 +55,28 @@ def add_cell_kernel(
 
 
 @njit
+def remove_cells_kernel(cells, cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, n_topics, vbeta, update_phi):
+    """Take every word of ``cells`` out of the counts: what :func:`add_cell_kernel` and
+    refinement counted, undone (``nwk``, ``nk`` and ``inv`` only when ``update_phi``)."""
+    for j in range(cells.shape[0]):
+        cell = cells[j]
+        first = cell_first[cell]
+        for i in range(first, first + cell_count[cell]):
+            k = topics[i]
+            ncz[cell, k] -= 1
+            ng[cell, k] -= 1
+            for column in range(table.shape[1]):
+                d = table[cell, column]
+                if d >= 0:
+                    ng[d, k] -= 1
+            if update_phi:
+                nwk[words[i], k] -= 1
+                nk[k] -= 1
+    if update_phi:
+        refresh_inverse(nk, inv, n_topics, vbeta)
+
+
+@njit
 def redraw_topics_kernel(cells, cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, n_topics, vbeta, key, update_phi):
     """Draw every word's topic anew, the ``j``-th of ``cells`` from stream ``(j, cell)``,
     as :func:`add_cell_kernel` did when the cells were added in that order. The counts
@@ -195,7 +217,7 @@ def merge_phase(cells, cell_first, cell_count, words, before, topics, nwk, nk, i
 def refine_realtime_kernel(
     budget, eta, order, group_start,
     cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, alpha, beta, vbeta, key, counter,
-    update_phi, recent, window, tau,
+    update_phi, recent, window, tau, pick_stream,
 ):
     """Algorithm 2 of the paper: refine picked observation times until ``budget`` is spent.
 
@@ -210,7 +232,7 @@ def refine_realtime_kernel(
     -------
     (int, int)
         Words sampled and number of picks. Picks draw from stream
-        ``(counter, n_cells)``: with probability ``eta`` (or always, with one time) the
+        ``(counter, pick_stream)``: with probability ``eta`` (or always, with one time) the
         newest time, else a uniform earlier one (eq. 6); or, when ``recent``, with
         probability ``eta`` a uniform one of the newest ``window`` times, else time
         ``floor(T u^(1 / tau))`` for a uniform ``u`` (a Beta(tau, 1) draw by age: recent
@@ -219,10 +241,9 @@ def refine_realtime_kernel(
         unit of the budget, and so does a pick that finds no words, so the loop ends
         after at most ``budget`` picks even if every reachable cell is empty.
     """
-    n_cells = ncz.shape[0]
     n_times = group_start.shape[0] - 1
     p = weights_scratch(inv)
-    picker = stream_start(key, counter, n_cells)
+    picker = stream_start(key, counter, pick_stream)
     done = 0
     idle = 0
     picks = 0

@@ -34,7 +34,7 @@ def word_perplexity_kernel(words, nwk, nk, n_topics, alpha, beta, vbeta):
 
 @njit
 def topic_perplexity_kernel(
-    words, cell, nwk, nk, inv, ng, n_topics, alpha, alpha32, beta32, key, counter, own, sweeps, smoothed
+    words, cell, nwk, nk, inv, ng, n_topics, alpha, alpha32, beta32, key, counter, own, sweeps, smoothed, free_stream
 ):
     """Draw temporary topics for ``words`` at ``cell``; ``exp(-mean_i log P(z_i | path))``.
 
@@ -42,18 +42,17 @@ def topic_perplexity_kernel(
     order; see ``_sampler``) with neighbourhood counts ``ng[cell]`` (none when ``own``)
     plus the temporary topics of words ``0 .. i - 1``; each of ``sweeps - 1`` further
     passes draws every word again, in order, against the others' temporary topics. All
-    draws come from one stream, ``(counter, n_cells + 1 + cell)``. Nothing of the model
+    draws come from one stream, ``(counter, free_stream + 1 + cell)``. Nothing of the model
     changes. ``P(k | path)`` in float64 is ``(nk[k] + alpha) / (N + K alpha)`` when
     ``smoothed``, else ``nk[k] / N`` (``N = sum_k nk[k]``), and a topic the path has
     not seen makes the perplexity infinite. Returns ``(perplexity, topics)``.
     """
     kp = nk.shape[0]
-    n_cells = ng.shape[0]
     # one row of neighbourhood counts: the model's (or none), plus the temporary topics
     local = np.zeros((1, kp), ng.dtype) if own else ng[cell : cell + 1].copy()
     p = np.zeros(kp, np.float32)
     topics = np.empty(words.shape[0], np.int32)
-    state = stream_start(key, counter, n_cells + 1 + cell)
+    state = stream_start(key, counter, free_stream + 1 + cell)
     for sweep in range(sweeps):
         for i in range(words.shape[0]):
             if sweep:

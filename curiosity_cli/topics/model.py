@@ -20,7 +20,8 @@ public accessors return ``(V, K)``, topics in columns.
 Snapshots (:mod:`~curiosity_cli.topics.persistence`) read and restore the state through
 :meth:`TopicModel.full_state` and :meth:`TopicModel.set_full_state`; model files keep
 the compact form built on them (:mod:`~curiosity_cli.topics.compact_state`). What the
-model is given is checked by :mod:`~curiosity_cli.topics.model_checks`.
+model is given is checked by :mod:`~curiosity_cli.topics.model_checks`; how its cells grow
+and are forgotten after it is made is :mod:`~curiosity_cli.topics.model_memory`.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from curiosity_cli.topics.model_checks import (
     check_vocabulary_hashes,
     check_word_ids,
 )
+from curiosity_cli.topics.model_memory import CellMemory
 from curiosity_cli.topics.neighbours import check_neighbours
 
 _MIN_CAPACITY = 1024
@@ -48,7 +50,7 @@ RECENT_OBSERVATIONS = 64
 RECENT_TAU = 2.0
 
 
-class TopicModel:
+class TopicModel(CellMemory):
     """Spatial topic model over cells with a fixed neighbour table.
 
     Parameters
@@ -105,14 +107,22 @@ class TopicModel:
         self._colours = None
 
         n_cells = self._table.shape[0]
+        # streams from this id on are no cell's: the picks' and the perplexity draws'. Kept
+        # when the model grows, so that growing changes no draw.
+        self._free_stream = np.uint64(n_cells)
         self._words = np.zeros(0, np.int32)
         self._topics = np.zeros(0, self._topic_dtype)
-        self._n_words = 0
+        self._n_words = 0  # the end of the stored words, which hold removed cells' until compacted
+        self._n_dead = 0
         self._cell_first = np.full(n_cells, -1, np.int64)
         self._cell_count = np.zeros(n_cells, np.int64)
         self._order = np.zeros(n_cells, np.int32)
         self._times = np.zeros(n_cells, np.int64)
         self._n_observed = 0
+        # where each observation time's cells start in `_order`, for the first `_grouped` cells:
+        # adding cells extends it, anything that reorders them sets `_grouped` back to 0
+        self._groups = np.zeros(_MIN_CAPACITY, np.int64)
+        self._n_groups = self._grouped = 0
         self._nwk = aligned_zeros((self._v, self._kp), np.int32)
         self._nk = aligned_zeros(self._kp, np.int32)
         self._inv = aligned_zeros(self._kp, np.float32)
@@ -172,7 +182,7 @@ class TopicModel:
     @property
     def n_words(self) -> int:
         """Number of words in the model."""
-        return self._n_words
+        return self._n_words - self._n_dead
 
     @property
     def n_observed(self) -> int:
@@ -354,6 +364,7 @@ class TopicModel:
         self._cell_count[cell] += n_new
         self._n_words += n_new
         n = self._n_observed
+        self._grouped = 0
         at = int(np.flatnonzero(self._order[:n] == cell)[0])
         self._order[at : n - 1] = self._order[at + 1 : n].copy()
         self._times[at : n - 1] = self._times[at + 1 : n].copy()
@@ -404,6 +415,7 @@ class TopicModel:
         the cell counts; returns the cells, (n_observed,) int64, in that order."""
         self._seed = check_int("seed", seed, 0, 2**64 - 1)
         cells = self._cells_in_order()
+        self._grouped = 0
         self._order[: self._n_observed] = cells
         self._times[: self._n_observed] = np.arange(cells.size)
         self._ncz[:] = 0
@@ -485,7 +497,7 @@ class TopicModel:
         phases = batch_phases(self._cells_in_order(), self._colouring())
         sweep_phases(phases, self._sampler_arrays(), self._k, self._counter, sweeps, threads, frozen=self._frozen)
         self._counter += sweeps
-        return sweeps * self._n_words
+        return sweeps * self.n_words
 
     def refine_realtime(self, word_budget: int, *, eta: float, picks: str = "uniform") -> int:
         """Algorithm 2: refine picked observations until ``word_budget`` words are sampled.
@@ -525,12 +537,9 @@ class TopicModel:
         recent = check_choice("picks", picks, EXPLORE_READINGS["refine_picks"]) == "recent"
         if word_budget == 0 or self._n_observed == 0:
             return 0
-        order = self._order[: self._n_observed]
-        times = self._times[: self._n_observed]
-        group_start = np.concatenate([[0], np.flatnonzero(np.diff(times)) + 1, [times.size]]).astype(np.int64)
         done, n_picks = refine_realtime_kernel(
-            word_budget, eta, order, group_start, *self._sampler_arrays(), np.uint64(self._counter), not self._frozen,
-            recent, RECENT_OBSERVATIONS, RECENT_TAU,
+            word_budget, eta, self._order[: self._n_observed], self._time_groups(), *self._sampler_arrays(), np.uint64(self._counter), not self._frozen,
+            recent, RECENT_OBSERVATIONS, RECENT_TAU, self._free_stream,
         )
         self._counter += 1 + int(n_picks)
         return int(done)
@@ -579,9 +588,11 @@ class TopicModel:
         self._words = words.copy()
         self._topics = topics.copy()
         self._n_words = words.size
+        self._n_dead = words.size - int(cell_count.sum())
         self._cell_first[:] = cell_first
         self._cell_count[:] = cell_count
         self._n_observed = order.size
+        self._grouped = 0
         self._order[: self._n_observed] = order
         self._times[: self._n_observed] = times
         self._nwk[:] = nwk
@@ -605,6 +616,26 @@ class TopicModel:
             self._ncz, self._ng, self._table, np.float32(self._alpha), np.float32(self._beta),
             self._v * self._beta, self._key(),
         )
+
+    def _time_groups(self) -> np.ndarray:
+        """(T + 1,) int64: where each of the T observation times' cells start in the order
+        added, then ``n_observed``. Extended over the cells added since the last call, so
+        that a stream's refinement per frame costs no more as its frames accumulate."""
+        n, known = self._n_observed, self._grouped
+        times = self._times
+        if known == 0:
+            self._n_groups = 0
+            starts = np.flatnonzero(np.diff(times[:n])) + 1 if n else np.zeros(0, np.int64)
+            starts = np.concatenate([[0], starts]) if n else starts
+        else:
+            starts = np.flatnonzero(times[known:n] != times[known - 1 : n - 1]) + known
+        end = self._n_groups + starts.size
+        if end + 1 > self._groups.size:
+            self._groups = np.concatenate([self._groups, np.zeros(max(end + 1, self._groups.size), np.int64)])
+        self._groups[self._n_groups : end] = starts
+        self._groups[end] = n
+        self._n_groups, self._grouped = end, n
+        return self._groups[: end + 1]
 
     def _refresh_inverse(self) -> None:
         self._inv[:] = 0

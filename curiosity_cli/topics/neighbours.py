@@ -37,7 +37,9 @@ from curiosity_cli.checks import check_choice, check_int
 from curiosity_cli.errors import ParameterError
 
 
-def stream_neighbours(grid: SquareGrid, n_frames: int, *, spatial: int = 4, temporal: int = 2) -> np.ndarray:
+def stream_neighbours(
+    grid: SquareGrid, n_frames: int, *, spatial: int = 4, temporal: int = 2, ring: bool = False
+) -> np.ndarray:
     """Neighbour table of a stream of ``n_frames`` frames of a grid's cells.
 
     Parameters
@@ -50,6 +52,10 @@ def stream_neighbours(grid: SquareGrid, n_frames: int, *, spatial: int = 4, temp
         4 for up, down, left and right within a frame; 0 for none.
     temporal : {2, 0}
         2 for the same cell in the previous and next frame; 0 for none.
+    ring : bool
+        The frames are slots of a ring: the first frame's previous is the last, the
+        last's next the first (a stream that forgets its oldest frame reuses its slot).
+        Needs ``n_frames >= 3``.
 
     Returns
     -------
@@ -59,7 +65,7 @@ def stream_neighbours(grid: SquareGrid, n_frames: int, *, spatial: int = 4, temp
         then previous, next (if ``temporal``); ``-1`` where the neighbour is off the grid
         or outside the stream.
     """
-    n_frames = check_int("n_frames", n_frames, 1)
+    n_frames = check_int("n_frames", n_frames, 3 if ring else 1)
     within = np.tile(grid.neighbour_table(spatial).astype(np.int64), (n_frames, 1))  # (n_frames * n, spatial)
     temporal = check_choice("temporal", temporal, (2, 0))
     n = grid.n_cells
@@ -67,7 +73,10 @@ def stream_neighbours(grid: SquareGrid, n_frames: int, *, spatial: int = 4, temp
     columns = [np.where(within >= 0, within + first, -1)]
     if temporal:
         cells = np.arange(n_frames * n, dtype=np.int64)
-        columns += [np.where(cells >= n, cells - n, -1), np.where(cells < (n_frames - 1) * n, cells + n, -1)]
+        if ring:
+            columns += [(cells - n) % cells.size, (cells + n) % cells.size]
+        else:
+            columns += [np.where(cells >= n, cells - n, -1), np.where(cells < (n_frames - 1) * n, cells + n, -1)]
     return np.column_stack(columns).astype(np.int32)
 
 

@@ -77,7 +77,8 @@ def topic_perplexity(
     model holds no words).
 
     The draws come from the model's seed and its current random state with a stream of
-    their own (``(counter, n_cells + 1 + cell)``), without advancing the state: the
+    their own (``(counter, n_cells + 1 + cell)``, ``n_cells`` as the model was made,
+    before any :meth:`~curiosity_cli.topics.TopicModel.grow`), without advancing the state: the
     result is a deterministic function of the model's state, ``words`` and ``cell``,
     and calling it does not change what later refinement draws.
 
@@ -121,6 +122,7 @@ def topic_perplexity(
     value, topics = topic_perplexity_kernel(
         words, cell, nwk, nk, inv, ng, model.n_topics, model.alpha, np.float32(model.alpha),
         np.float32(model.beta), model._key(), np.uint64(model._counter), own, sweeps, smoothed,
+        model._free_stream,
     )
     return (float(value), topics) if return_topics else float(value)
 

@@ -44,9 +44,13 @@ def test_options_that_do_not_go_together_are_usage_errors(tmp_path):
 
 
 def test_contradicting_drive_keys_name_the_config_and_key():
-    result = runner.invoke(app, ["drive", "--dry-run", "--set", "drive.carry_frames=500"])
+    result = runner.invoke(app, ["drive", "--dry-run", "--set", "drive.surge_min=1.0"])
     # named where the key was set: here the --set, in a file the file
-    assert "Error: --set: drive.carry_frames: got 500, expected fewer than window_frames (150)" in one_line_error(result)
+    assert "Error: --set: drive.surge_min: got 1.0, expected at most surge_max (0.5)" in one_line_error(result)
+    result = runner.invoke(app, ["drive", "--dry-run", "--set", "drive.window_frames=300"])
+    assert "Error: --set: drive.window_frames: got 300, but the key is retired: the live model no longer restarts" in (
+        one_line_error(result)
+    )
     result = runner.invoke(app, ["simrobot", "--map", "reef-mosaic", "--set", "drive.watchdog=0"])
     assert "--set: drive.watchdog: got 0 (int), expected a number > 0" in one_line_error(result)
 

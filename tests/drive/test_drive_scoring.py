@@ -89,7 +89,6 @@ def test_steer_turns_towards_the_target_and_limits_apply():
 @pytest.mark.parametrize(
     "change, message",
     [
-        (dict(carry_frames=150), "drive.carry_frames: got 150, expected fewer than window_frames (150)"),
         (dict(surge_min=1.0), "drive.surge_min: got 1.0, expected at most surge_max (0.5)"),
         (dict(keepalive=1.5), "drive.keepalive: got 1.5, expected shorter than the robot's watchdog (1.0 s)"),
         (dict(frame_width=16, grid_cols=32), "drive.frame_width: got 16, expected at least grid_cols (32)"),
@@ -104,3 +103,18 @@ def test_drive_keys_that_contradict_each_other_are_refused_in_one_line(tmp_path,
     assert str(info.value) == f"{display_path(config)}: {message}"
     with pytest.raises(ConfigError, match=f"overrides: {message.split(':')[0]}"):
         load_config(CONFIG_DIR / "paper-grid.yaml", [f"drive.{key}={value}" for key, value in change.items()])
+
+
+def test_the_retired_window_keys_load_at_their_old_defaults_and_are_refused_otherwise(tmp_path):
+    # every config saved before the stream model stopped restarting holds all three at these values
+    config = tmp_path / "saved.yaml"
+    old = {"window_frames": 150, "carry_frames": 50, "carry_sweeps": 2}
+    config.write_text(yaml.safe_dump({"base": str(CONFIG_DIR / "paper-grid.yaml"), "drive": old}))
+    assert load_config(config).drive == load_config(CONFIG_DIR / "paper-grid.yaml").drive
+    config.write_text(yaml.safe_dump({"base": str(CONFIG_DIR / "paper-grid.yaml"), "drive": {**old, "carry_frames": 20}}))
+    with pytest.raises(ConfigError) as info:
+        load_config(config)
+    assert str(info.value) == (
+        f"{display_path(config)}: drive.carry_frames: got 20, but the key is retired: the live model no longer "
+        "restarts every window_frames frames; drive.memory_frames bounds what it remembers, forgetting one frame at a time"
+    )

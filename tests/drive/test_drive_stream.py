@@ -6,21 +6,20 @@ import dataclasses
 
 import numpy as np
 import pytest
+from naive import recount
 
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.drive.frame_words import FrameWords, split_by_cell
 from curiosity_cli.drive.pipeline import CuriosityPipeline
-from curiosity_cli.drive.stream import StreamModel, window_seed
+from curiosity_cli.drive.stream import StreamModel
 from curiosity_cli.errors import ParameterError
 
 CONFIG = load_config(CONFIG_DIR / "paper-grid.yaml")
 
 
 def stream(**changes) -> StreamModel:
-    args = dict(
-        window=4, carry=2, carry_sweeps=1, spatial=4, temporal=2, alpha=0.1, beta=0.1, eta=0.5, budget=500, seed=3
-    )
+    args = dict(memory=None, spatial=4, temporal=2, alpha=0.1, beta=0.1, eta=0.5, budget=500, seed=3)
     return StreamModel(8, 50, (2, 3), **{**args, **changes})
 
 
@@ -29,32 +28,47 @@ def frames(n: int, seed: int = 0) -> list[list[np.ndarray]]:
     return [[rng.integers(0, 50, rng.integers(0, 12)) for _ in range(6)] for _ in range(n)]
 
 
-def test_frames_keep_coming_after_the_window_fills():
+def test_one_model_holds_every_frame_and_grows_by_doubling():
     model = stream()
-    for i, cell_words in enumerate(frames(11)):
+    first = model.model
+    for i, cell_words in enumerate(frames(130)):
         counts = model.add_frame(cell_words)
         assert counts.shape == (6, 8)
         assert np.array_equal(counts.sum(axis=1), [w.size for w in cell_words])
-    # frames 0-3 fill the first model; frames 4, 6, 8, 10 each start a new one after the 2 carried
-    assert model.windows == 5
-    assert model.model.n_observed == 3 * 6  # frames 8 and 9 carried, and frame 10
-    carried = np.concatenate(frames(11)[8])
-    assert np.array_equal(np.concatenate([model.model.cell_words(c) for c in range(6)]), carried)
-    assert model.topic_totals().sum() == sum(w.size for f in frames(11)[8:11] for w in f)
+    assert model.model is first and model.frames == model.frames_in_memory == 130
+    assert model.model.n_observed == 130 * 6 and model.model.n_cells == 256 * 6  # 64 frames, 128, 256
+    words = frames(130)
+    assert np.array_equal(model.model.cell_words(129 * 6 + 2), words[129][2])
+    assert np.array_equal(model.model.cell_words(2), words[0][2])  # the first frame is still there
+    assert model.topic_totals().sum() == sum(w.size for f in words for w in f)
 
 
-def test_without_carry_a_full_window_starts_empty():
-    model = stream(carry=0, window=3)
-    for cell_words in frames(7):
+@pytest.mark.parametrize("memory", [3, 100])  # a ring from the start; a ring after the table grew to 101 slots
+def test_a_memory_bound_forgets_the_oldest_frame_one_at_a_time(memory):
+    model = stream(memory=memory)
+    words = frames(230)
+    for i, cell_words in enumerate(words):
         model.add_frame(cell_words)
-    assert model.windows == 3 and model.model.n_observed == 6
+        held = words[max(0, i + 1 - memory) : i + 1]
+        assert model.frames_in_memory == len(held)
+        assert model.topic_totals().sum() == sum(w.size for f in held for w in f)
+    assert model.model.n_cells == (memory + 1) * 6  # never more slots than the memory and one empty
+    assert_counts_exact(model.model)
+    newest = (229 % (memory + 1)) * 6
+    assert np.array_equal(model.model.cell_words(newest + 4), words[229][4])
 
 
-def test_same_seed_same_counts_and_each_window_has_its_own_seed():
-    a, b = stream(), stream()
-    for cell_words in frames(9):
+def assert_counts_exact(model):
+    counts = recount(model)
+    for name, value in [("nwk", model.topic_word_counts()), ("nk", model.topic_totals()),
+                        ("ncz", model.cell_topic_counts()), ("ng", model.neighbourhood_counts())]:
+        np.testing.assert_array_equal(value, counts[name], err_msg=name)
+
+
+def test_same_seed_same_counts():
+    a, b = stream(memory=5), stream(memory=5)
+    for cell_words in frames(20):
         assert np.array_equal(a.add_frame(cell_words), b.add_frame(cell_words))
-    assert len({window_seed(3, w) for w in range(5)}) == 5
 
 
 def test_a_bad_frame_changes_nothing():

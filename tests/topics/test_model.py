@@ -66,6 +66,8 @@ operations = st.lists(
         st.tuples(st.just("batch"), st.integers(1, 2)),
         st.tuples(st.just("realtime"), st.floats(0, 1)),
         st.tuples(st.just("add"), st.integers(0, 2**16)),
+        st.tuples(st.just("remove"), st.integers(0, 2**16)),
+        st.tuples(st.just("grow"), st.integers(1, 2)),
     ),
     max_size=6,
 )
@@ -104,6 +106,14 @@ def test_counts_stay_consistent_through_any_sequence_of_operations(
             model.refine_batch(1, threads=arg)
         elif op == "realtime":
             model.refine_realtime(5, eta=arg)
+        elif op == "remove" and model.n_observed > 1:
+            gone = np.random.default_rng(arg).choice(model.observed_cells(), size=1)
+            model.remove_cells(gone)
+            pending.append(int(gone[0]))
+        elif op == "grow":
+            rows += arg  # new rows below the grid: the old bottom row gains neighbours
+            pending += list(range(model.n_cells, rows * cols))
+            model.grow(SquareGrid(rows, cols).neighbour_table(spatial))
         assert_consistent(model)
         if frozen:
             np.testing.assert_array_equal(model.topic_word_counts(), frozen_counts)
@@ -413,6 +423,14 @@ def test_stream_neighbours_add_previous_and_next_frame():
     check_neighbours(stream_neighbours(SquareGrid(3, 4), 5))
 
 
+def test_a_ring_of_frames_links_the_last_frame_to_the_first():
+    ring = stream_neighbours(SquareGrid(2, 2), 3, ring=True)
+    np.testing.assert_array_equal(ring[1], [-1, 3, 0, -1, 9, 5])  # frame 0's previous is frame 2
+    np.testing.assert_array_equal(ring[9], [-1, 11, 8, -1, 5, 1])  # frame 2's next is frame 0
+    np.testing.assert_array_equal(ring[4:8], stream_neighbours(SquareGrid(2, 2), 3)[4:8])
+    check_neighbours(ring)
+
+
 @pytest.mark.parametrize(
     ("call", "name"),
     [
@@ -420,6 +438,7 @@ def test_stream_neighbours_add_previous_and_next_frame():
         (lambda: SquareGrid(3, -1), "cols"),
         (lambda: SquareGrid(3, 3).neighbour_table(spatial=6), "spatial"),
         (lambda: stream_neighbours(SquareGrid(2, 2), 0), "n_frames"),
+        (lambda: stream_neighbours(SquareGrid(2, 2), 2, ring=True), "n_frames"),
         (lambda: stream_neighbours(SquareGrid(2, 2), 2, temporal=1), "temporal"),
         (lambda: stream_neighbours(SquareGrid(2, 2), 2, spatial=True), "spatial"),
     ],
