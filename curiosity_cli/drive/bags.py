@@ -14,6 +14,7 @@ not decode is not: every message of the topic has it.
 
 from __future__ import annotations
 
+import struct
 import time
 from pathlib import Path
 
@@ -128,7 +129,14 @@ class BagCamera:
             self._reader = AnyReader(paths)
             self._reader.open()
         except Exception as exc:  # rosbags raises its own errors, and Python's own for torn or foreign bytes
-            raise CameraError(f"{where}: not a readable bag ({_why_unreadable(exc, paths)})") from None
+            self._reader = _cut_mcap(paths)
+            if self._reader is None:
+                raise CameraError(f"{where}: not a readable bag ({_why_unreadable(exc, paths)})") from None
+            cut = (
+                f"{display_path(paths[0])} ends before its summary (a recording cut short?): replaying its "
+                f"{self._reader.message_count} whole messages; its last {self._reader.unfinished:,} bytes are an unfinished record"
+            )
+            self.note = f"{self.note}; {cut}" if self.note else cut
         counts = {}
         for connection in self._reader.connections:
             counts.setdefault(connection.topic, [connection.msgtype, 0])[1] += connection.msgcount
@@ -195,7 +203,23 @@ class BagCamera:
         return Frame(image, time.monotonic(), stamp / 1e9, header)
 
     def close(self) -> None:
+        if hasattr(self, "_messages"):
+            self._messages.close()
         self._reader.close()
+
+
+def _cut_mcap(paths: list[Path]):
+    """A :class:`~curiosity_cli.drive.mcap_scan.CutMcap` of a lone MCAP file rosbags could not open,
+    if it holds whole messages (a file cut short); None otherwise."""
+    from curiosity_cli.drive.mcap_scan import CutMcap, CutMcapError
+
+    if len(paths) != 1 or paths[0].suffix.lower() != ".mcap" or not paths[0].is_file():
+        return None
+    try:
+        scan = CutMcap(paths[0])
+    except (CutMcapError, OSError, struct.error, UnicodeDecodeError):
+        return None
+    return scan if scan.message_count else None
 
 
 def _why_unreadable(exc: Exception, paths: list[Path]) -> str:

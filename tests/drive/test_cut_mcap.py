@@ -1,0 +1,82 @@
+"""An MCAP recording cut short replays up to its last whole message."""
+
+from __future__ import annotations
+
+import lz4.frame
+import numpy as np
+import pytest
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin
+from rosbags.rosbag2 import Writer as Writer2
+from rosbags.typesys import Stores, get_typestore
+from test_bags import START, PERIOD, _image, frame_records, replay
+
+from curiosity_cli.drive.mcap_scan import _decompress
+from curiosity_cli.maps.map_data import load_map
+
+FRAMES = 40  # of 57.6 kB: about 18 in each 1 MiB chunk rosbags writes
+
+
+@pytest.fixture(scope="module")
+def views() -> list[np.ndarray]:
+    image = load_map("aerial-mosaic").image
+    return [np.ascontiguousarray(image[10 * i : 10 * i + 120, 12 * i : 12 * i + 160]) for i in range(FRAMES)]
+
+
+def write_mcap(folder, views, zstd: bool):
+    """A ROS 2 bag folder of ``views`` as rgb8 Images; returns its .mcap file."""
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    writer = Writer2(folder, version=9, storage_plugin=StoragePlugin.MCAP)
+    if zstd:
+        writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+    with writer:
+        connection = writer.add_connection("/camera/image_raw", "sensor_msgs/msg/Image", typestore=store)
+        for i, view in enumerate(views):
+            message = _image(store.types, view, "rgb8", START + i * PERIOD)
+            writer.write(connection, START + i * PERIOD, store.serialize_cdr(message, "sensor_msgs/msg/Image"))
+    (folder / "metadata.yaml").unlink()  # as a recorder killed before it could write it
+    return next(folder.glob("*.mcap"))
+
+
+@pytest.mark.parametrize("cut", [0.3, 0.5, 0.71, 0.9])
+def test_an_uncompressed_mcap_cut_anywhere_replays_every_whole_message(tmp_path, views, cut):
+    mcap = write_mcap(tmp_path / "mission", views, zstd=False)
+    data = mcap.read_bytes()
+    keep = int(len(data) * cut)
+    mcap.write_bytes(data[:keep])
+    # a message is whole when its pixels, the last bytes of its record, are all before the cut
+    whole = sum(data.find(view.tobytes()) + view.nbytes <= keep for view in views)
+    assert 0 < whole < FRAMES
+    result = replay(tmp_path / "mission", tmp_path / "run")
+    assert result.exit_code == 0, result.output
+    records = frame_records(tmp_path / "run")
+    assert [r["bag_time"] for r in records] == [(START + i * PERIOD) / 1e9 for i in range(whole)]
+    (said,) = [line for line in result.stderr.splitlines() if "ends before its summary" in line]
+    assert f"(a recording cut short?): replaying its {whole} whole messages; its last " in said
+
+
+def test_a_zstd_mcap_cut_inside_a_chunk_replays_the_chunks_before_and_what_it_can_of_that_one(tmp_path, views):
+    mcap = write_mcap(tmp_path / "mission", views, zstd=True)
+    data = mcap.read_bytes()
+    mcap.write_bytes(data[: len(data) * 3 // 5])
+    result = replay(tmp_path / "mission", tmp_path / "run")
+    assert result.exit_code == 0, result.output
+    records = frame_records(tmp_path / "run")
+    assert 18 <= len(records) < FRAMES  # at least the first chunk's
+    assert [r["bag_time"] for r in records] == [(START + i * PERIOD) / 1e9 for i in range(len(records))]
+    assert f"replaying its {len(records)} whole messages" in result.stderr
+
+
+@pytest.mark.parametrize("compression", ["zstd", "lz4"])
+def test_a_compressed_chunk_cut_short_gives_what_its_written_part_holds(compression):
+    records = np.random.default_rng(0).integers(0, 16, 2**20, dtype=np.uint8).tobytes()  # 8 blocks of zstd's 128 KiB
+    if compression == "zstd":
+        try:
+            from compression import zstd
+        except ImportError:
+            from backports import zstd
+        packed = zstd.compress(records)
+    else:
+        packed = lz4.frame.compress(records)
+    assert _decompress(compression, packed, whole=True) == records
+    part = _decompress(compression, packed[: len(packed) * 2 // 3], whole=False)
+    assert 0 < len(part) < len(records) and records.startswith(part)
