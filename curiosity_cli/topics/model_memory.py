@@ -111,7 +111,7 @@ class CellMemory:
         cells = self._order[: self._n_observed].astype(np.int64)
         cells = cells[np.argsort(self._cell_first[cells], kind="stable")]
         counts = self._cell_count[cells]
-        first = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+        first = np.cumsum(counts) - counts
         source = np.repeat(self._cell_first[cells] - first, counts) + np.arange(int(counts.sum()))
         for array in (self._words, self._topics):
             array[: source.size] = array[source]
