@@ -414,12 +414,12 @@ def refine_batch_naive(state: NaiveModel, sweeps: int) -> None:
 def refine_realtime_naive(
     state: NaiveModel, budget: int, eta: float, picks: str = "uniform", window: int = 64, tau: float = 2.0,
 ) -> tuple[int, int]:
-    """Twin of ``refine_realtime_kernel``: (words sampled, picks)."""
+    """Twin of ``refine_realtime_kernel``: (words sampled, picks, words sampled at the newest time)."""
     times = sorted(set(state.times))
     groups = [[c for c, t in zip(state.order, state.times) if t == time] for time in times]
     picker = Stream(state.key, state.counter, state.free_stream)
     recent = picks == "recent"
-    done = picks = idle = 0
+    done = picks = idle = newest = 0
     while done + idle < budget:  # a pick without words spends one unit
         bits = picker.bits()
         if recent:
@@ -438,10 +438,11 @@ def refine_realtime_naive(
             gibbs_cell_naive(state, c, Stream(state.key, state.counter + 1 + picks, c))
         sampled = sum(len(state.words[c]) for c in group)
         done += sampled
+        newest += sampled if group is groups[-1] else 0
         idle += sampled == 0
         picks += 1
     state.counter += 1 + picks
-    return done, picks
+    return done, picks, newest
 
 
 def lda_gibbs_naive(docs, topics, n_topics, n_words, alpha, beta, streams):

@@ -199,6 +199,7 @@ def run(
                 "latency_ms": round(latency * 1000, 2),
                 "seconds": {k: round(v, 5) for k, v in decision.seconds.items()},
                 "words": decision.words,
+                "refined": decision.refined,
                 "state": None if state is None else {
                     "t": round(state.t, 3), "x": round(state.x, 4), "y": round(state.y, 4),
                     "heading": round(state.heading, 4), "depth": round(state.depth, 3),

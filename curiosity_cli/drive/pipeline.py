@@ -29,6 +29,9 @@ class Decision:
     command : Command
     words : int
         Words extracted from the frame.
+    refined : int
+        Word samples the frame itself got in its refinement; 0: eq. 6 never picked it, and
+        its perplexity reads the random topics its words were given.
     seconds : dict of str to float
         Time spent per stage: ``words``, ``model`` (add and refine), ``score``.
     """
@@ -38,6 +41,7 @@ class Decision:
     target: tuple[int, int]
     command: Command
     words: int
+    refined: int
     seconds: dict
 
 
@@ -97,6 +101,7 @@ class CuriosityPipeline:
             target=target,
             command=command,
             words=sum(w.size for w in cell_words),
+            refined=self.stream.refined,
             seconds={"words": extracted - start, "model": modelled - extracted, "score": done - modelled},
         )
 

@@ -6,7 +6,9 @@ cells, the paper's surprise, section 5.2) and the decayed curiosity score that s
 highest cell's), different quantities on axes of their own, under a strip of the most
 surprising frames, each linked to its peak. The time is the bag's record time, or the
 messages' header stamps (``clock``); the axis names the clock and the mission's start
-(UTC). Those frames are written whole as ``surprising/frame-NNNNNN.png``.
+(UTC). Those frames are written whole as ``surprising/frame-NNNNNN.png``. A frame whose
+own refinement never picked it (log ``refined`` 0) reads its random first topics, not
+a discovery: it is marked, and never one of the most surprising.
 """
 
 from __future__ import annotations
@@ -30,7 +32,8 @@ CLOCK_WORDS = {"bag": "bag time", "header": "header stamps"}
 
 def surprise_series(log: Path, clock: str = "bag") -> dict:
     """Per frame of a replay's log: ``frame``, ``time`` (seconds since the epoch on ``clock``), ``perplexity`` (cell
-    mean), ``score`` (cell max); and ``clock``, the clock used.
+    mean), ``score`` (cell max), ``refined`` (whether its words were refined in its own frame, or had none; logs
+    from before the field: every frame); and ``clock``, the clock used.
 
     ``bag``: the bag's record times; ``header``: the messages' header stamps. A bag whose
     record times are all equal (a recorder that stamped a batch at once) falls back to
@@ -55,16 +58,20 @@ def surprise_series(log: Path, clock: str = "bag") -> dict:
         "time": np.array([r[CLOCKS[used]] for r in records], np.float64),
         "perplexity": np.array([np.mean(r["perplexity"]) for r in records], np.float64),
         "score": np.array([np.max(r["scores"]) for r in records], np.float64),
+        "refined": np.array([r.get("refined", 1) > 0 or r["words"] == 0 for r in records], bool),
         "clock": used,
         "fell_back": fell_back,
     }
 
 
-def most_surprising(perplexity: np.ndarray, count: int = SURPRISING) -> list[int]:
-    """Indices of the ``count`` highest perplexities, each at least ``len / (2 count)`` frames from another, by time."""
+def most_surprising(perplexity: np.ndarray, count: int = SURPRISING, eligible: np.ndarray | None = None) -> list[int]:
+    """Indices of the ``count`` highest perplexities (of the ``eligible`` frames, default all), each at least
+    ``len / (2 count)`` frames from another, by time."""
     gap = max(1, len(perplexity) // (2 * count))
     chosen = []
     for index in np.argsort(-perplexity, kind="stable"):
+        if eligible is not None and not eligible[index]:
+            continue
         if all(abs(int(index) - other) >= gap for other in chosen):
             chosen.append(int(index))
         if len(chosen) == count:
@@ -90,6 +97,13 @@ def timeline_figure(series: dict, thumbnails: dict[int, np.ndarray], title: str)
     strip, surprise, score = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [1.1, 2, 1.4]})
     fig.suptitle(title, fontsize=10)
     surprise.plot(seconds, series["perplexity"], color="tab:blue", lw=1.2)
+    unrefined = ~series["refined"]
+    if unrefined.any():
+        surprise.plot(seconds[unrefined], series["perplexity"][unrefined], "x", ms=5, color="0.35")
+        surprise.set_title(
+            f"x: {unrefined.sum()} frame{'s' if unrefined.sum() > 1 else ''} no refinement picked (random topics, "
+            "not a discovery)", fontsize=8, loc="right", color="0.35",
+        )
     surprise.set_ylabel("topic perplexity\n(mean of the frame's cells)", fontsize=9)
     score.plot(seconds, series["score"], color="tab:orange", lw=1.2)
     score.set_ylabel("curiosity score\n(decayed, highest cell)", fontsize=9)
@@ -144,12 +158,12 @@ def write_timeline(folder: Path, camera, title: str, count: int = SURPRISING, cl
         from curiosity_cli.files import note
 
         note(f"{folder / RUN_LOG}: every frame has the same bag time; the timeline runs on the messages' header stamps")
-    chosen = most_surprising(series["perplexity"], count)
+    chosen = most_surprising(series["perplexity"], count, series["refined"])
     wanted = {int(series["frame"][i]): i for i in chosen}
     thumbnails, written = {}, []
     (folder / "surprising").mkdir(exist_ok=True)
     number = 0
-    while number <= max(wanted):
+    while wanted and number <= max(wanted):
         try:
             frame = camera.read()
         except BadMessage:

@@ -230,8 +230,8 @@ def refine_realtime_kernel(
 
     Returns
     -------
-    (int, int)
-        Words sampled and number of picks. Picks draw from stream
+    (int, int, int)
+        Words sampled, number of picks, and words sampled at the newest time. Picks draw from stream
         ``(counter, pick_stream)``: with probability ``eta`` (or always, with one time) the
         newest time, else a uniform earlier one (eq. 6); or, when ``recent``, with
         probability ``eta`` a uniform one of the newest ``window`` times, else time
@@ -247,6 +247,7 @@ def refine_realtime_kernel(
     done = 0
     idle = 0
     picks = 0
+    newest_done = 0
     while done + idle < budget:
         picker, bits = next_state(picker)
         if recent:
@@ -273,10 +274,12 @@ def refine_realtime_kernel(
             )
             sampled += cell_count[cell]
         done += sampled
+        if t == n_times - 1:
+            newest_done += sampled
         if sampled == 0:
             idle += 1
         picks += 1
-    return done, picks
+    return done, picks, newest_done
 
 
 @njit

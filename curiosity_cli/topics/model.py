@@ -499,7 +499,7 @@ class TopicModel(CellMemory):
         self._counter += sweeps
         return sweeps * self.n_words
 
-    def refine_realtime(self, word_budget: int, *, eta: float, picks: str = "uniform") -> int:
+    def refine_realtime(self, word_budget: int, *, eta: float, picks: str = "uniform", return_newest: bool = False):
         """Algorithm 2: refine picked observations until ``word_budget`` words are sampled.
 
         Each pick refines every cell observed at one observation time
@@ -523,10 +523,14 @@ class TopicModel(CellMemory):
         eta : float
             Refinement bias, 0 <= eta <= 1.
         picks : {'uniform', 'recent'}
+        return_newest : bool
+            Also return the words sampled at the newest observation time: 0 when no pick
+            chose it, and its words keep the topics they were given (a camera frame whose
+            perplexity then reads random topics).
 
         Returns
         -------
-        int
+        int, or (int, int) with ``return_newest``
             Words sampled: at least ``word_budget`` (the last pick overshoots by less
             than the words of one observation) unless some picks found no words.
         """
@@ -536,13 +540,13 @@ class TopicModel(CellMemory):
         eta = check_float("eta", eta, 0, 1)
         recent = check_choice("picks", picks, EXPLORE_READINGS["refine_picks"]) == "recent"
         if word_budget == 0 or self._n_observed == 0:
-            return 0
-        done, n_picks = refine_realtime_kernel(
-            word_budget, eta, self._order[: self._n_observed], self._time_groups(), *self._sampler_arrays(), np.uint64(self._counter), not self._frozen,
-            recent, RECENT_OBSERVATIONS, RECENT_TAU, self._free_stream,
+            return (0, 0) if return_newest else 0
+        done, n_picks, newest = refine_realtime_kernel(
+            word_budget, eta, self._order[: self._n_observed], self._time_groups(), *self._sampler_arrays(),
+            np.uint64(self._counter), not self._frozen, recent, RECENT_OBSERVATIONS, RECENT_TAU, self._free_stream,
         )
         self._counter += 1 + int(n_picks)
-        return int(done)
+        return (int(done), int(newest)) if return_newest else int(done)
 
     # ------------------------------------------------------------------ the whole state (persistence.py, compact_state.py)
 

@@ -250,6 +250,25 @@ def test_the_most_surprising_frames_are_peaks_apart():
     # 12 frames, 2 wanted: at least 3 frames apart, so 8.9 (next to 9) gives way to 7
     assert most_surprising(perplexity, 2) == [1, 5]
     assert most_surprising(perplexity, 3) == [1, 5, 8]
+    unrefined = np.arange(12) == 1  # its words kept their random topics: not a discovery
+    assert most_surprising(perplexity, 2, ~unrefined) == [2, 5]
+
+
+@pytest.mark.parametrize("budget", [0, 1])  # no refinement at all; one pick a frame, the newest or an earlier one
+def test_frames_no_refinement_picked_are_logged_marked_and_never_the_most_surprising(tmp_path, frames, budget):
+    from curiosity_cli.drive.timeline import surprise_series
+
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
+    assert replay(bag, tmp_path / "run", "--set", f"drive.samples_per_frame={budget}").exit_code == 0
+    records = frame_records(tmp_path / "run")
+    refined = [r["refined"] for r in records]
+    series = surprise_series(tmp_path / "run" / "log.jsonl")
+    assert series["refined"].tolist() == [n > 0 for n in refined]
+    shown = {int(p.stem.split("-")[1]) for p in (tmp_path / "run" / "surprising").glob("frame-*.png")}
+    assert shown == {i for i, n in enumerate(refined) if n > 0} if budget else not shown
+    if budget:
+        assert refined[0] == records[0]["words"]  # the first frame is the only time there is: always picked
+        assert 0 in refined[1:]
 
 
 def test_without_rosbags_the_error_names_the_extra(tmp_path, frames, monkeypatch):

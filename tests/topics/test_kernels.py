@@ -202,7 +202,7 @@ def test_refine_realtime_matches_twin(eta):
     twin = NaiveModel.of(model)
     done = model.refine_realtime(40, eta=eta)
     assert done >= 40
-    twin_done, _ = refine_realtime_naive(twin, 40, eta)
+    twin_done, _, _ = refine_realtime_naive(twin, 40, eta)
     assert done == twin_done
     assert_matches(model, twin)
 
@@ -214,8 +214,9 @@ def test_refine_realtime_with_observation_times_matches_twin():
         for cell in range(frame * 4, frame * 4 + 4):
             model.add_cell(cell, rng.integers(0, 10, rng.integers(1, 5)), time=2 * frame)
     twin = NaiveModel.of(model)
-    done = model.refine_realtime(60, eta=0.4)
-    assert done == refine_realtime_naive(twin, 60, 0.4)[0]
+    done, newest = model.refine_realtime(60, eta=0.4, return_newest=True)
+    twin_done, _, twin_newest = refine_realtime_naive(twin, 60, 0.4)
+    assert (done, newest) == (twin_done, twin_newest) and 0 < newest < done
     assert_matches(model, twin)
 
 
