@@ -101,7 +101,7 @@ def timeline_figure(series: dict, thumbnails: dict[int, np.ndarray], title: str)
     if unrefined.any():
         surprise.plot(seconds[unrefined], series["perplexity"][unrefined], "x", ms=5, color="0.35")
         surprise.set_title(
-            f"x: {unrefined.sum()} frame{'s' if unrefined.sum() > 1 else ''} no refinement picked (random topics, "
+            f"x: {unrefined.sum()} frame{'s' if unrefined.sum() > 1 else ''} that no refinement picked (random topics: "
             "not a discovery)", fontsize=8, loc="right", color="0.35",
         )
     surprise.set_ylabel("topic perplexity\n(mean of the frame's cells)", fontsize=9)
