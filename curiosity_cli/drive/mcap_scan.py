@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 MAGIC = b"\x89MCAP0\r\n"
-_SCHEMA, _CHANNEL, _MESSAGE, _CHUNK, _FOOTER, _DATA_END = 0x03, 0x04, 0x05, 0x06, 0x02, 0x0F
+_HEADER, _FOOTER, _SCHEMA, _CHANNEL, _MESSAGE, _CHUNK, _DATA_END = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x0F
 
 
 class CutMcapError(Exception):
@@ -90,7 +90,8 @@ class CutMcap:
     Raises
     ------
     CutMcapError
-        Not an MCAP file (its magic), or a chunk the format does not allow.
+        Not an MCAP file (its magic and header) of ROS 2 messages (profile ``ros2``), one
+        that ends as a whole file does, or a chunk the format does not allow.
     """
 
     def __init__(self, path: Path):
@@ -98,6 +99,15 @@ class CutMcap:
         with self.path.open("rb") as file:
             if file.read(8) != MAGIC:
                 raise CutMcapError("no MCAP magic at its start")
+            header = file.read(9)
+            if len(header) < 9 or header[0] != _HEADER:
+                raise CutMcapError("no header record after its magic")
+            profile, _ = _string(memoryview(file.read(struct.unpack_from("<Q", header, 1)[0])), 0)
+            if profile != "ros2":
+                raise CutMcapError(f"profile {profile!r}; expected ros2 (CDR messages)")
+            file.seek(-8, 2)
+            if file.read(8) == MAGIC:
+                raise CutMcapError("it ends with its magic: not cut short")
         self._schemas: dict[int, tuple[str, str, bytes]] = {}
         self._channels: dict[int, tuple[str, int]] = {}
         self.unfinished = 0

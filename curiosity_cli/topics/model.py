@@ -586,8 +586,9 @@ class TopicModel(CellMemory):
         """Return to a state :meth:`full_state` gave, random state included.
 
         The state must come from a model with the same K, V, neighbour table and
-        frozenness; that is not checked here (the caller knows where it came from). The
-        arrays are copied.
+        frozenness (and, for one that grew, made with as many cells: its later draws
+        depend on that); that is not checked here (the caller knows where it came from).
+        The arrays are copied.
         """
         self._words = words.copy()
         self._topics = topics.copy()

@@ -80,3 +80,18 @@ def test_a_compressed_chunk_cut_short_gives_what_its_written_part_holds(compress
     assert _decompress(compression, packed, whole=True) == records
     part = _decompress(compression, packed[: len(packed) * 2 // 3], whole=False)
     assert 0 < len(part) < len(records) and records.startswith(part)
+
+
+def test_only_a_ros2_mcap_without_its_end_is_read_as_cut_short(tmp_path, views):
+    from curiosity_cli.drive.mcap_scan import CutMcap, CutMcapError
+
+    mcap = write_mcap(tmp_path / "mission", views[:3], zstd=False)
+    with pytest.raises(CutMcapError, match="ends with its magic: not cut short"):
+        CutMcap(mcap)
+    data = mcap.read_bytes()
+    foreign = data.replace(b"ros2", b"ros1", 1)  # the header's profile: ROS 1 messages are not CDR
+    mcap.write_bytes(foreign[:-100])
+    with pytest.raises(CutMcapError, match="profile 'ros1'; expected ros2"):
+        CutMcap(mcap)
+    mcap.write_bytes(data[:-100])
+    assert CutMcap(mcap).message_count == 3
