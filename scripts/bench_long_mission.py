@@ -103,7 +103,6 @@ def model_child(words_file: Path, memory: int | None, frames: int, checkpoints: 
 
 
 def run_model(words_file: Path, settings: list, frames: int) -> None:
-    checkpoints = sorted({c for c in (frames // 10, frames // 4, frames // 2, frames) if c > 1})
     results = {}
     for label, memory in settings:
         command = [sys.executable, __file__, "--child", str(words_file), "--memory", str(memory), "--frames", str(frames)]
