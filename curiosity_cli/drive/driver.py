@@ -224,7 +224,7 @@ def run(
             on_frame(frames, decision)
             frames += 1
             if max_frames is not None and frames >= max_frames:
-                outcome = Outcome("max frames", frames, f"{frames} frames", None)
+                outcome = Outcome("max frames", frames, "--max-frames reached", None)
     except BaseException as exc:
         error = " ".join(str(exc).split()) or type(exc).__name__
         raise

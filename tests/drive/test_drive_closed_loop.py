@@ -35,7 +35,7 @@ def test_drive_steers_the_simulated_robot_and_writes_video_pngs_and_log(tmp_path
     video = tmp_path / "run.mp4"
     result = drive(out, "--serial", robot.port, *SIM, "--max-frames", "12", "--video-out", str(video), "--png-every", "5")
     assert result.returncode == 0, result.stderr
-    assert "drove 12 frames: 12 frames; STOP acknowledged" in result.stdout
+    assert "drove 12 frames: --max-frames reached; STOP acknowledged" in result.stdout
     assert "connected to curiosity-sim" in result.stderr
 
     rows = frame_rows(out)
