@@ -107,6 +107,8 @@ def timeline_figure(series: dict, thumbnails: dict[int, np.ndarray], title: str)
     surprise.set_ylabel("topic perplexity\n(mean of the frame's cells)", fontsize=9)
     score.plot(seconds, series["score"], color="tab:orange", lw=1.2)
     score.set_ylabel("curiosity score\n(decayed, highest cell)", fontsize=9)
+    for panel in (surprise, score):  # from 1, the least perplexity there is: a steady view's noise looks like noise
+        panel.set_ylim(bottom=1)
     start = datetime.fromtimestamp(series["time"][0], timezone.utc).strftime("%Y-%m-%d %H:%M:%S.%f")[:-3]
     fell_back = " (the record times are all equal)" if series.get("fell_back") else ""
     score.set_xlabel(f"{CLOCK_WORDS[series['clock']]}{fell_back}: seconds since the first frame, {start} UTC")

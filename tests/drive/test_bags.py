@@ -241,6 +241,7 @@ def test_a_replay_draws_its_surprise_timeline_with_the_most_surprising_frames(tm
     assert surprise.get_ylabel().startswith("topic perplexity") and score.get_ylabel().startswith("curiosity score")
     assert score.get_xlabel() == "bag time: seconds since the first frame, 2023-11-14 22:13:20.000 UTC"
     assert surprise.get_legend() is None and score.get_legend() is None and len(strip.artists) == 1
+    assert surprise.get_ylim()[0] == score.get_ylim()[0] == 1  # not zoomed into noise
 
 
 def test_the_most_surprising_frames_are_peaks_apart():
