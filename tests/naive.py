@@ -544,6 +544,29 @@ def recount(model) -> dict:
     return {"nwk": nwk, "nk": nk, "ncz": ncz, "ng": ng}
 
 
+def neighbour_table_problem_naive(table: np.ndarray) -> str | None:
+    """Twin of ``check_neighbours``' graph checks on a table of valid entries: its message, or None.
+
+    Through the table's directed edges, sorted: a cell listing itself, an edge listed
+    twice, and the smallest edge whose reverse is not listed."""
+    n_cells = table.shape[0]
+    cell, column = np.nonzero(table >= 0)
+    other = table[cell, column]
+    if np.any(other == cell):
+        return f"neighbours: cell {cell[other == cell][0]} lists itself"
+    edges = cell.astype(np.int64) * n_cells + other
+    unique = np.unique(edges)
+    if unique.size != edges.size:
+        return "neighbours: a cell lists the same neighbour twice"
+    missing = np.setdiff1d(unique, other.astype(np.int64) * n_cells + cell)
+    if missing.size:
+        return (
+            f"neighbours: not symmetric: cell {missing[0] // n_cells} lists {missing[0] % n_cells}, "
+            "but not the other way round"
+        )
+    return None
+
+
 # --------------------------------------------------------------------------- chains in lock-step
 # Twins of curiosity_cli/topics/_chain_kernels.py, one chain at a time, on a frozen NaiveModel
 # (state.frozen set): the kernels advance many chains together, and each must be this.

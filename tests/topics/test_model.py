@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from naive import recount
+from naive import neighbour_table_problem_naive, recount
 
 from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.errors import ParameterError
@@ -421,6 +421,27 @@ def test_stream_neighbours_add_previous_and_next_frame():
     )
     np.testing.assert_array_equal(stream_neighbours(SquareGrid(1, 1), 2, spatial=0), [[-1, 1], [0, -1]])
     check_neighbours(stream_neighbours(SquareGrid(3, 4), 5))
+
+
+@settings(max_examples=200, deadline=None)
+@given(seed=st.integers(0, 2**32), n_cells=st.integers(1, 7), width=st.integers(0, 4), damage=st.integers(0, 3))
+def test_neighbour_tables_are_checked_as_their_sorted_edges_say(seed, n_cells, width, damage):
+    rng = np.random.default_rng(seed)
+    if damage == 0 and width:  # a random symmetric graph: each edge listed in both rows, where there is room
+        table = np.full((n_cells, width), -1)
+        for a, b in rng.permutation([(a, b) for a in range(n_cells) for b in range(a + 1, n_cells)]).reshape(-1, 2):
+            free_a, free_b = np.flatnonzero(table[a] < 0), np.flatnonzero(table[b] < 0)
+            if free_a.size and free_b.size and rng.random() < 0.6:
+                table[a, rng.choice(free_a)], table[b, rng.choice(free_b)] = b, a
+    else:  # anything: self-loops, repeats and one-way links drawn at random
+        table = rng.integers(-1, n_cells, (n_cells, width))
+    problem = neighbour_table_problem_naive(table)
+    if problem is None:
+        np.testing.assert_array_equal(check_neighbours(table), table)
+    else:
+        with pytest.raises(ParameterError) as info:
+            check_neighbours(table)
+        assert str(info.value) == problem
 
 
 def test_a_ring_of_frames_links_the_last_frame_to_the_first():
