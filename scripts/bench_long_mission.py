@@ -10,7 +10,8 @@ does, with the shipped config's model and drive settings (``configs/paper-grid.y
            words (extracted once): resident memory (VmRSS) and its peak (VmHWM) as the
            frames arrive, and the median time of ``StreamModel.add_frame`` (add, grow or
            forget, refine within drive.samples_per_frame) over the last 500 frames
-           before each checkpoint. Default: an hour at 10 Hz, 36 000 frames.
+           before each checkpoint, and the slowest one since the checkpoint before
+           (a frame that grew the table). Default: an hour at 10 Hz, 36 000 frames.
   replay   a ``--replay``-frame MCAP bag of those views (JPEG), replayed through
            ``curiosity drive --dry-run --camera BAG`` once per setting, alternating:
            wall time, frames per second, the median stage times from the log, and the
@@ -88,7 +89,7 @@ def model_child(words_file: Path, memory: int | None, frames: int, checkpoints: 
     )
     model.add_frame(views[0])  # compiles the kernels before anything is measured
     start_rss = memory_mb()[0]
-    seconds, rows = [], []
+    seconds, rows, since = [], [], 0
     for frame in range(1, frames + 1):
         began = time.perf_counter()
         model.add_frame(views[frame % len(views)])
@@ -98,7 +99,9 @@ def model_child(words_file: Path, memory: int | None, frames: int, checkpoints: 
             rows.append({
                 "frames": frame + 1, "rss_mb": rss - start_rss, "peak_mb": peak - start_rss,
                 "ms": 1000 * statistics.median(seconds[-500:]), "words": model.model.n_words,
+                "longest_ms": 1000 * max(seconds[since:]),
             })
+            since = len(seconds)
     return {"rows": rows, "words_per_frame": float(saved["counts"].sum() / len(views))}
 
 
@@ -109,11 +112,15 @@ def run_model(words_file: Path, settings: list, frames: int) -> None:
         results[label] = json.loads(subprocess.run(command, check=True, capture_output=True, text=True).stdout)
     first = next(iter(results.values()))
     print(f"\nmodel only: {frames} frames of {first['words_per_frame']:.0f} words (memory in MB above the "
-          "process after its first frame; ms: median add_frame over the 500 frames before)")
-    header = "".join(f"{label + ' MB':>22}{'ms':>8}" for label in results)
+          "process after its first frame; ms: median add_frame over the 500 frames before; longest: the slowest "
+          "add_frame since the checkpoint before, where the table grew)")
+    header = "".join(f"{label + ' MB':>22}{'ms':>8}{'longest':>9}" for label in results)
     print(f"{'frames':>8}{header}")
     for i, checkpoint in enumerate(first["rows"]):
-        cells = "".join(f"{r['rows'][i]['rss_mb']:>22.0f}{r['rows'][i]['ms']:>8.1f}" for r in results.values())
+        cells = "".join(
+            f"{r['rows'][i]['rss_mb']:>22.0f}{r['rows'][i]['ms']:>8.1f}{r['rows'][i]['longest_ms']:>9.0f}"
+            for r in results.values()
+        )
         print(f"{checkpoint['frames']:>8}{cells}")
     for label, result in results.items():
         rows = result["rows"]

@@ -624,14 +624,13 @@ class TopicModel(CellMemory):
 
     def _time_groups(self) -> np.ndarray:
         """(T + 1,) int64: where each of the T observation times' cells start in the order
-        added, then ``n_observed``. Extended over the cells added since the last call, so
-        that a stream's refinement per frame costs no more as its frames accumulate."""
+        added, then ``n_observed`` (at least 1). Extended over the cells added since the last
+        call, so that a stream's refinement per frame costs no more as its frames accumulate."""
         n, known = self._n_observed, self._grouped
         times = self._times
         if known == 0:
             self._n_groups = 0
-            starts = np.flatnonzero(np.diff(times[:n])) + 1 if n else np.zeros(0, np.int64)
-            starts = np.concatenate([[0], starts]) if n else starts
+            starts = np.concatenate([[0], np.flatnonzero(np.diff(times[:n])) + 1])
         else:
             starts = np.flatnonzero(times[known:n] != times[known - 1 : n - 1]) + known
         end = self._n_groups + starts.size
