@@ -40,11 +40,14 @@ overrides, its folders refuse the new config as any experiment does; give it a n
 
 The report
 ----------
-``SWEEP.md`` leads with the specification curve (:func:`specification_lead`): the figure
-``specification-curve.png`` (and ``.pdf``), the table of its points, also written as
-``specifications.csv``, and the sentence counting the specifications in which topic
-perplexity leads every walker at p < 0.05 and those whose interval holds the paper's
-ratio (:mod:`curiosity_cli.evaluate.specification_curve`). It takes the place of the
+``SWEEP.md`` leads with the specification curve (:func:`specification_lead`): topic
+perplexity against each of the paper's other walkers (the decision), and the ratio to the
+next best with its null reference (a summary); the figure ``specification-curve.png``
+(and ``.pdf``), the table of its points, also written as ``specifications.csv``, and the
+sentence counting the specifications in which topic perplexity leads every walker at
+p < 0.05, those whose interval holds the paper's ratio, and where the points lie against
+their null reference (:mod:`curiosity_cli.evaluate.specification_curve`); then the same
+against Z_b (``specifications-batch.csv``, ``specification-curve-batch.png``). It takes the place of the
 sweep's sensitivity table, which would repeat the same pooled numbers in the same rows;
 ``sensitivity.csv`` is still written. Every number comes from one pooling of each
 specification's seeds (:func:`curiosity_cli.sweep_report.pool_treatments`), over the
@@ -73,8 +76,9 @@ if TYPE_CHECKING:
 
 #: How a combination's overrides and a sweep's report name its specification: ``specification=NAME``.
 SPECIFICATION = "specification"
-#: The table and the figure of a study's curve, in its sweep folder.
+#: The table and the figure of a study's curve, in its sweep folder: MI against human labels, and against Z_b.
 TABLE, FIGURE = "specifications.csv", "specification-curve"
+BATCH_TABLE, BATCH_FIGURE = "specifications-batch.csv", "specification-curve-batch"
 #: A name leaves room in its folders' names (at most MAX_NAME) for ``specification-`` and the swept values.
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,79}$")
 
@@ -202,7 +206,8 @@ def study_size(sweep: Sweep) -> str:
 
 
 def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatment]) -> list[str]:
-    """Write ``specifications.csv`` and the figure, and return the section ``SWEEP.md`` leads with.
+    """Write ``specifications.csv``, ``specifications-batch.csv`` and their figures, and return
+    the section ``SWEEP.md`` leads with.
 
     Parameters
     ----------
@@ -219,56 +224,82 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
     list of str
         Markdown lines.
     """
-    from curiosity_cli.evaluate.specification_curve import STEERING_WALKER, curve_sentence, curve_table
+    from curiosity_cli.evaluate.specification_curve import VERSUS, curve_sentence, curve_table
     from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
     from curiosity_cli.plots.specification_curve import write_specification_curve
-    from curiosity_cli.sweep_report import number, p_text
 
     folder = Path(folder)
     pooled = [t for t in treatments if t.pooled is not None]
-    table = curve_table([(t.values, t.pooled) for t in pooled])
-    with atomic_path(folder / TABLE) as tmp:
-        table.to_csv(tmp, index=False)
     names = list(pooled[0].values) if pooled else [SPECIFICATION]  # specification, then any other swept key
-    # a point's specification as the figure names it: its values, e.g. "clamp" or "clamp, 16"
-    table = table.assign(label=[", ".join(map(str, v)) for v in table[names].itertuples(index=False)] if pooled else [])
     choices = {", ".join(t.values.values()): _choices(sweep, t) for t in pooled}
     seeds = sorted({s for t in pooled for s in t.pooled.seeds})
+    datasets = list(dict.fromkeys(d for t in pooled for d in t.pooled.headline["dataset"]))  # the config's order
+    versus = ", ".join(w.replace("-", " ") for w in VERSUS)
     lines = [
         "## Specification curve",
         "",
         f"Every specification `{display_path(sweep.config_path)}` declares ({len(sweep.specifications)}), on every "
         f"map, seeds {', '.join(map(str, seeds)) or '(none finished)'} pooled as replicates (a restart is paired with the same "
-        "restart of the same seed). A point per specification and map: topic perplexity's mean MI against human "
-        f"labels at {HEADLINE_LENGTH} steps over the next best of the paper's other walkers (random walk, "
-        "stochastic coverage, word perplexity), with its 95 % bootstrap interval over the pairs, sorted by ratio; "
-        "dashed, the paper's ratio for the map each stands in for; filled where topic perplexity leads every other "
-        "walker at p < 0.05. Below, the value of each varied key each specification used (Simonsohn, Simmons & "
-        f"Nelson's specification-curve analysis). The table is `{TABLE}`.",
+        f"restart of the same seed), MI at {HEADLINE_LENGTH} steps. **The decision** compares topic perplexity with "
+        f"each of the paper's other walkers ({versus}), named before anything ran: the ratio of mean MI with its "
+        "95 % studentized bootstrap interval and the paired Wilcoxon p against each; it *leads* only where its "
+        "mean is higher and p < 0.05 against every one. **The curve** shows a summary: the ratio to the next best "
+        "of them, chosen after seeing the data and so biased toward \"no lead\", with its 95 % bootstrap interval "
+        "(the next best chosen again in each resample) and, in grey behind each point, its **null reference**: "
+        "where the ratio lies when the walkers do not differ (their labels permuted within each restart; band: "
+        "95 %, dash: median), with the share of permutations at least as high as the observed ratio (`null p`). "
+        "Dashed, the paper's ratio for the map each stands in for; filled, the points that lead. Below the curve, "
+        "the value of each varied key each specification used (Simonsohn, Simmons & Nelson's specification-curve "
+        f"analysis). The tables are `{TABLE}` (human labels) and `{BATCH_TABLE}` (Z_b).",
         "",
     ]
-    if len(table):
-        datasets = list(dict.fromkeys(d for t in pooled for d in t.pooled.headline["dataset"]))  # the config's order
-        write_specification_curve(table, choices, folder / FIGURE, label="label", datasets=datasets)
-        lines += [f"![specification curve]({FIGURE}.png)", ""]
-    lines += [
-        "| # | " + " | ".join(names) + " | map | ratio [95 % CI] | paper's ratio | next best | p | pairs | detectable lead "
-        f"| distinct cells: topic perplexity / stochastic coverage | steering: {STEERING_WALKER} | leads all |",
-        "|---|" + "---|" * len(names) + "---|" * 10,
+    for against, table_name, figure, words in (
+        ("human", TABLE, FIGURE, "human labels"), ("batch", BATCH_TABLE, BATCH_FIGURE, "Z_b"),
+    ):
+        table = curve_table([(t.values, t.pooled) for t in pooled], against=against)
+        with atomic_path(folder / table_name) as tmp:
+            table.to_csv(tmp, index=False)
+        if against == "batch":
+            lines += [
+                "### Against Z_b", "",
+                "The same curve with MI against the batch labelling Z_b of each map, the paper's other measure:", "",
+            ]
+        if len(table):
+            table = table.assign(label=[", ".join(map(str, v)) for v in table[names].itertuples(index=False)])
+            write_specification_curve(table, choices, folder / figure, label="label", datasets=datasets, against=words)
+            lines += [f"![specification curve, MI against {words}]({figure}.png)", ""]
+        lines += _curve_rows(table, names) + ["", curve_sentence(table), ""]
+    lines += [f"- `{', '.join(t.values.values())}`: not pooled: {t.error}" for t in treatments if t.pooled is None]
+    return lines + [""] * any(t.pooled is None for t in treatments)
+
+
+def _curve_rows(table, names: list[str]) -> list[str]:
+    """The curve's points as a Markdown table: each walker compared alone, then the next-best summary."""
+    from curiosity_cli.evaluate.specification_curve import STEERING_WALKER, VERSUS
+    from curiosity_cli.sweep_report import number, p_text
+
+    def versus(r: dict, walker: str) -> str:
+        low, high = r[f"ratio_{walker}_low"], r[f"ratio_{walker}_high"]
+        return f"{number(r[f'ratio_{walker}'])} [{number(low)}, {number(high)}], p = {p_text(r[f'p_{walker}'])}"
+
+    lines = [
+        "| # | " + " | ".join(names) + " | map | " + " | ".join(f"vs {w}" for w in VERSUS)
+        + " | leads each | next best: ratio [95 % CI] | null: median [95 %], p | paper's ratio | pairs "
+        f"| detectable lead | distinct cells: topic perplexity / stochastic coverage | steering: {STEERING_WALKER} |",
+        "|---|" + "---|" * len(names) + "---|" * (len(VERSUS) + 9),
     ]
     for i, r in enumerate(table.to_dict("records"), start=1):
         lead = r["detectable_ratio"] - 1
         lines.append("| " + " | ".join([
-            str(i), *(f"`{r[k]}`" for k in names), r["dataset"],
-            f"{number(r['ratio'])} [{number(r['ratio_ci_low'])}, {number(r['ratio_ci_high'])}]",
-            number(r["paper_ratio"]), r["next_best"], p_text(r["p_value"]), str(r["pairs"]),
-            f"{number(100 * lead, 0)} %" if lead == lead else "",
+            str(i), *(f"`{r[k]}`" for k in names), r["dataset"], *(versus(r, w) for w in VERSUS),
+            "yes" if r["beats_all"] else "no",
+            f"{number(r['ratio'])} [{number(r['ratio_ci_low'])}, {number(r['ratio_ci_high'])}] ({r['next_best']})",
+            f"{number(r['null_median'])} [{number(r['null_low'])}, {number(r['null_high'])}], {p_text(r['null_p'])}",
+            number(r["paper_ratio"]), str(r["pairs"]), f"{number(100 * lead, 0)} %" if lead == lead else "",
             f"{number(r[f'distinct_{STEERING_WALKER}'], 1)} / {number(r['distinct_stochastic-coverage'], 1)}",
-            number(r[f"steering_{STEERING_WALKER}"], 3), "yes" if r["beats_all"] else "no",
+            number(r[f"steering_{STEERING_WALKER}"], 3),
         ]) + " |")
-    lines += ["", curve_sentence(table), ""]
-    lines += [f"- `{', '.join(t.values.values())}`: not pooled: {t.error}" for t in treatments if t.pooled is None]
-    return lines + [""] * any(t.pooled is None for t in treatments)
+    return lines
 
 
 def _choices(sweep: Sweep, treatment: Treatment) -> dict[str, str]:

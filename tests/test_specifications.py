@@ -12,7 +12,7 @@ from small_maps import edit_yaml
 from test_sweep import sweep, tiny_yaml
 
 from curiosity_cli.config import CONFIG_DIR
-from curiosity_cli.evaluate.power import ratio_interval
+from curiosity_cli.evaluate.comparisons import next_best_interval, next_best_null, ratio_interval
 from curiosity_cli.specifications import Specification, declared_specifications
 from curiosity_cli.sweep import declared_sweeps, parse_sweeps, plan_sweep
 
@@ -81,12 +81,17 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
 
     report = (folder / "SWEEP.md").read_text()
     assert report.startswith("# Specification curve of `tiny`: 2 specifications x 2 seeds (4 combinations)\n")
-    assert report.index("## Specification curve") < report.index("![specification curve](specification-curve.png)")
-    assert report.index("![specification curve]") < report.index("## Headlines")
+    human = report.index("![specification curve, MI against human labels](specification-curve.png)")
+    batch = report.index("![specification curve, MI against Z_b](specification-curve-batch.png)")
+    assert report.index("## Specification curve") < human < report.index("### Against Z_b") < batch < report.index("## Headlines")
     assert "## Sensitivity" not in report, "the curve's table has its rows and numbers"
     for suffix in (".png", ".pdf"):
         assert (folder / f"specification-curve{suffix}").stat().st_size > 1000
+        assert (folder / f"specification-curve-batch{suffix}").stat().st_size > 1000
+    batch_table = pd.read_csv(folder / "specifications-batch.csv", dtype={"seeds": str})
+    assert (batch_table["against"] == "batch").all() and len(batch_table) == 2
     table = pd.read_csv(folder / "specifications.csv", dtype={"seeds": str})
+    assert (table["against"] == "human").all()
     assert sorted(table["specification"]) == ["clamp", "default"] and (table["dataset"] == "own").all()
     assert table["ratio"].is_monotonic_increasing, "sorted by ratio, as the figure"
 
@@ -101,9 +106,21 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
         pairs = mi.pivot_table(index=["replicate", "restart"], columns="weight_function", values="mi_human")
         assert row["pairs"] == len(pairs) == 4
         assert row["p_value"] == pytest.approx(stats.wilcoxon(pairs["topic-perplexity"], pairs[next_best]).pvalue)
-        low, high = ratio_interval(pairs["topic-perplexity"].to_numpy(), pairs[next_best].to_numpy())
+        ours, rest = pairs["topic-perplexity"].to_numpy(), pairs.drop(columns="topic-perplexity").to_numpy()
+        low, high = next_best_interval(ours, rest)
         assert (row["ratio_ci_low"], row["ratio_ci_high"]) == pytest.approx((low, high))
+        null = next_best_null(ours, rest)
+        assert (row["null_median"], row["null_low"], row["null_high"], row["null_p"]) == pytest.approx(
+            (null.median, null.low, null.high, null.p_value)
+        )
         assert row["paper_ratio"] == 1.51 and row["paper_inside"] == (low <= 1.51 <= high)
+        for walker in ("random-walk", "stochastic-coverage"):  # each walker compared alone, by its own pairs
+            assert row[f"ratio_{walker}"] == pytest.approx(means["topic-perplexity"] / means[walker])
+            assert (row[f"ratio_{walker}_low"], row[f"ratio_{walker}_high"]) == pytest.approx(
+                ratio_interval(ours, pairs[walker].to_numpy()), nan_ok=True
+            )
+            assert row[f"p_{walker}"] == pytest.approx(stats.wilcoxon(ours, pairs[walker]).pvalue)
+        assert pd.isna(row["ratio_word-perplexity"]), "a paper walker the study did not run"
         # 4 pairs cannot reach p < 0.05 with Wilcoxon's test: no specification leads
         assert not row["beats_all"]
         walker = mi.groupby("weight_function")["distinct_cells"].mean()
@@ -111,10 +128,15 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
         assert row["distinct_stochastic-coverage"] == pytest.approx(walker["stochastic-coverage"])
         ours = steering[steering["weight_function"] == "topic-perplexity"]["steering"]
         assert len(ours) == 4 and row["steering_topic-perplexity"] == pytest.approx(ours.mean())
-        assert f"| `{row['specification']}` | own | {row['ratio']:.2f} [{row['ratio_ci_low']:.2f}, " in report
+        assert (
+            f"| `{row['specification']}` | own | {row['ratio_random-walk']:.2f} [" in report
+            and f"| {row['ratio']:.2f} [{row['ratio_ci_low']:.2f}, {row['ratio_ci_high']:.2f}] ({next_best}) | "
+            f"{row['null_median']:.2f} [" in report
+        )
     inside = int(table["paper_inside"].sum())
     assert "leads every other walker at p < 0.05" in report and "in 0 of 2 on own: 0 of 2 specification-map pairs" in report
     assert f"the paper's ratio lies inside the 95 % interval in {inside} of 2 on own (Montreal1: 1.51)" in report
+    assert "Against its null reference (the walkers' labels permuted within each restart), the ratio to the next best has p" in report
 
     finished = sorted(folder.glob("*/runs/*/*/restart-*/*")) + sorted(folder.glob("*/labels/*/*/*.npz"))
     assert len(finished) > 4 * 3 * 2

@@ -48,4 +48,4 @@ def evaluate(
         "classes.csv, classes_summary.csv, headline.csv"
     )
     for row in result.headline.to_dict("records"):
-        typer.echo(verdict(row))
+        typer.echo(verdict(row, result.effects))

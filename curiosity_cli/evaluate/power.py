@@ -1,8 +1,9 @@
-"""How sure a headline is: the ratio's bootstrap interval, and what the experiment could detect.
+"""What an experiment could detect: the power of its paired comparison.
 
-A ratio of mean MI (topic perplexity over the next best walker) from 10 or 20 paired
+A ratio of mean MI (topic perplexity over another walker) from 10 or 20 paired
 restarts is noisy; a verdict of "no lead" means little unless it says how large a lead
-the same experiment would have found. These functions answer that from the observed
+the same experiment would have found (the ratio's intervals and its null reference:
+:mod:`~curiosity_cli.evaluate.comparisons`). These functions answer that from the observed
 paired differences, under a two-sided paired Student-t test (the Wilcoxon test the
 report uses needs about 5 % more pairs for normally distributed differences).
 """
@@ -15,45 +16,10 @@ import numpy as np
 POWER = 0.8
 #: The lead whose pairs a headline says it would need: 10 % above the next best.
 TARGET_LEAD = 0.10
-#: Bootstrap resamples of the ratio's interval; fixed, with a fixed seed, so a report is
-#: the same every time it is written.
-RESAMPLES = 10_000
 _MOST_PAIRS = 1_000_000
 # scipy's non-central t is NaN far in the tail at one degree of freedom; two pairs say
 # too little to quote a power anyway
 _FEWEST_PAIRS = 3
-
-
-def ratio_interval(a: np.ndarray, b: np.ndarray, confidence: float = 0.95, resamples: int = RESAMPLES) -> tuple[float, float]:
-    """Percentile bootstrap interval of ``mean(a) / mean(b)``, resampling pairs.
-
-    Parameters
-    ----------
-    a, b : (n,) float ndarrays
-        Paired values: the same restart of two walkers.
-    confidence : float
-        Of the interval, in (0, 1).
-    resamples : int
-        Bootstrap resamples, drawn from a fixed seed.
-
-    Returns
-    -------
-    (float, float)
-        Lower and upper bound; NaN for fewer than two pairs, or when a resample's
-        ``b`` has mean 0.
-    """
-    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
-    if a.shape != b.shape or a.ndim != 1:
-        raise ValueError(f"a, b: got shapes {a.shape} and {b.shape}, expected two (n,) arrays of pairs")
-    if a.size < 2:
-        return np.nan, np.nan
-    picks = np.random.default_rng(0).integers(0, a.size, (resamples, a.size))
-    with np.errstate(divide="ignore", invalid="ignore"):  # a resample whose b is all 0 has no ratio
-        ratios = a[picks].mean(axis=1) / b[picks].mean(axis=1)
-    if not np.isfinite(ratios).all():
-        return np.nan, np.nan
-    low, high = np.quantile(ratios, [(1 - confidence) / 2, (1 + confidence) / 2])
-    return float(low), float(high)
 
 
 def t_test_power(difference: float, sd: float, pairs: int, alpha: float = 0.05) -> float:

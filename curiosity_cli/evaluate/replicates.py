@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from curiosity_cli.errors import RERUN
 from curiosity_cli.evaluate.statistics import paired_tests, summarise, summarise_revisits, summarise_steering
-from curiosity_cli.evaluate.tables import EvaluationError, headline, headline_length, paired_effects, with_power
+from curiosity_cli.evaluate.tables import EvaluationError, headline, headline_length, paired_effects, with_uncertainty
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.experiment.layout import ExperimentFolder
@@ -36,7 +36,13 @@ class Pooled:
     ----------
     headline : pandas.DataFrame
         :func:`~curiosity_cli.evaluate.tables.headline` with
-        :func:`~curiosity_cli.evaluate.tables.with_power`'s columns, over every pair.
+        :func:`~curiosity_cli.evaluate.tables.with_uncertainty`'s columns, over every pair:
+        against human labels (against Z_b on a map without them).
+    batch_headline : pandas.DataFrame
+        The same against Z_b, on every map.
+    effects : pandas.DataFrame
+        :func:`~curiosity_cli.evaluate.tables.paired_effects` over every pair: topic
+        perplexity against each other walker.
     revisits : pandas.DataFrame
         :func:`~curiosity_cli.evaluate.tables.summarise_revisits` over every run.
     seeds : tuple of int
@@ -46,9 +52,18 @@ class Pooled:
     """
 
     headline: pd.DataFrame
+    batch_headline: pd.DataFrame
+    effects: pd.DataFrame
     revisits: pd.DataFrame
     seeds: tuple[int, ...]
     steering: pd.DataFrame
+
+    def versus(self, dataset: str, against: str) -> pd.DataFrame:
+        """Topic perplexity against each other walker on ``dataset`` at the headline's length
+        (``effects.csv``'s rows, indexed by ``other``)."""
+        rows = self.effects[(self.effects["dataset"] == dataset) & (self.effects["against"] == against)]
+        rows = rows[rows["path_length"] == headline_length(rows["path_length"].unique())]
+        return rows.set_index("other")
 
     def mean_distinct_cells(self, dataset: str, walker: str) -> float:
         """The walker's mean distinct cells in 80 steps (the headline length) over every pooled run; NaN without."""
@@ -108,8 +123,10 @@ def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Poo
         steering = steering[steering["weight_function"].isin(walkers)]
     tests = paired_tests(mi)
     paper_maps = Experiment.open(folders[0]).paper_maps()
-    top = with_power(headline(summarise(mi), tests, paper_maps, paired_effects(mi, tests)), mi)
-    return Pooled(top, summarise_revisits(mi), tuple(sorted(seeds)), summarise_steering(steering))
+    summary, effects = summarise(mi), paired_effects(mi, tests)
+    top = with_uncertainty(headline(summary, tests, paper_maps, effects), mi)
+    batch = with_uncertainty(headline(summary, tests, paper_maps, effects, against="batch"), mi)
+    return Pooled(top, batch, effects, summarise_revisits(mi), tuple(sorted(seeds)), summarise_steering(steering))
 
 
 def _read(path: Path):

@@ -70,14 +70,20 @@ def _text(value) -> str:
     return value if isinstance(value, str) else ""
 
 
-def verdict(row: Mapping) -> str:
-    """One map's verdict in words, from its ``headline.csv`` row.
+def verdict(row: Mapping, effects=None) -> str:
+    """One map's verdict in words, from its ``headline.csv`` row and ``effects.csv``.
 
-    E.g. ``zurich-zh17: topic perplexity does not beat every walker at 80 steps: 0.02
-    bits below word-perplexity (95 % CI −0.05 to +0.01), p = 0.48; ratio 0.95 against
-    the paper's 1.51 on Montreal1.`` "Beats" is :func:`~curiosity_cli.evaluate.tables.headline`'s
-    ``beats_all``: a higher mean than every other walker and a paired Wilcoxon p below
-    0.05 against each; the numbers are against the next best walker.
+    E.g. ``zurich-zh17: topic perplexity does not beat every walker at 80 steps; against
+    each alone, MI ratio random-walk 1.10 (95 % CI 1.01 to 1.20), p = 0.04,
+    stochastic-coverage 0.97 (...), p = 0.62, word-perplexity 0.95 (...), p = 0.48; the
+    next best, word-perplexity: 0.02 bits below (95 % CI −0.05 to +0.01), p = 0.48; ratio
+    0.95 (...; walkers that do not differ give 0.96, 95 % 0.90 to 1.02: null p = 0.58)
+    against the paper's 1.51 on Montreal1.`` "Beats" is
+    :func:`~curiosity_cli.evaluate.tables.headline`'s ``beats_all``: a higher mean than
+    every other walker and a paired Wilcoxon p below 0.05 against each, the walkers
+    compared one by one (``effects``: the rows of :func:`~curiosity_cli.evaluate.tables.paired_effects`;
+    without them, only the next best's numbers are given); the next best's ratio is a
+    summary, read against its null reference (:mod:`~curiosity_cli.evaluate.comparisons`).
     """
     dataset, against, next_best = row["dataset"], row["against"], row["next_best"]
     where = f"{dataset}" if against == "human" else f"{dataset} (MI against Z_b: the map has no human labels)"
@@ -89,6 +95,9 @@ def verdict(row: Mapping) -> str:
         claim = f"topic perplexity leads every other walker at {steps}, but not clearly"
     else:
         claim = f"topic perplexity does not beat every walker at {steps}"
+    each = _each_walker(row, effects)
+    if each:
+        claim += f"; against each alone, MI ratio {each}"
     diff = row["mean_difference"]
     if np.isfinite(diff):
         side = "above" if diff >= 0 else "below"
@@ -105,7 +114,13 @@ def verdict(row: Mapping) -> str:
         text += f"; not clearly ahead of {', '.join(others)} either"
     text += f"; ratio {row['ratio']:.2f}"
     if np.isfinite(row.get("ratio_ci_low", np.nan)):
-        text += f" ({100 * CONFIDENCE:.0f} % CI {row['ratio_ci_low']:.2f} to {row['ratio_ci_high']:.2f})"
+        text += f" ({100 * CONFIDENCE:.0f} % CI {row['ratio_ci_low']:.2f} to {row['ratio_ci_high']:.2f}"
+        if np.isfinite(row.get("null_median", np.nan)):
+            text += (
+                f"; walkers that do not differ give {row['null_median']:.2f}, {100 * CONFIDENCE:.0f} % "
+                f"{row['null_low']:.2f} to {row['null_high']:.2f}: null {_p(row['null_p'])}"
+            )
+        text += ")"
     if _text(row["paper_map"]) and np.isfinite(row["paper_ratio"]):
         text += f" against the paper's {row['paper_ratio']:.2f} on {row['paper_map']}"
         if against != "human":
@@ -119,6 +134,24 @@ def verdict(row: Mapping) -> str:
             f"({row['best_ceiling']}, {row['ceiling_mi']:.2f} bits)."
         )
     return text + power_sentence(row)
+
+
+def _each_walker(row: Mapping, effects) -> str:
+    """Topic perplexity against each other walker at the row's length and labels, in words; "" without ``effects``."""
+    if effects is None or effects.empty:
+        return ""
+    rows = effects[
+        (effects["dataset"] == row["dataset"]) & (effects["path_length"] == row["path_length"])
+        & (effects["against"] == row["against"])
+    ]
+    parts = []
+    for r in rows.to_dict("records"):
+        interval = (
+            f" ({100 * CONFIDENCE:.0f} % CI {r['ratio_ci_low']:.2f} to {r['ratio_ci_high']:.2f})"
+            if np.isfinite(r.get("ratio_ci_low", np.nan)) else ""
+        )
+        parts.append(f"{r['other']} {r['ratio']:.2f}{interval}, {_p(r['p_value'])}")
+    return ", ".join(parts)
 
 
 def power_sentence(row: Mapping) -> str:
@@ -149,20 +182,24 @@ def _no_verdict(summary, dataset: str) -> str:
     return f"{dataset}: no verdict: no other walker to compare with."
 
 
-def _verdicts(summary, top, coverage: str) -> list[str]:
+def _verdicts(summary, top, effects, coverage: str) -> list[str]:
     """The answer first, a line per map; then how to read it."""
     lines = ["## Verdict", ""]
     rows = {r["dataset"]: r for r in top.to_dict("records")}
     for dataset in dict.fromkeys(summary["dataset"]):
-        lines.append(f"- {verdict(rows[dataset]) if dataset in rows else _no_verdict(summary, dataset)}")
+        lines.append(f"- {verdict(rows[dataset], effects) if dataset in rows else _no_verdict(summary, dataset)}")
     return lines + [
         "",
         f"Does {HEADLINE_WEIGHT} beat every other walker at {HEADLINE_LENGTH} steps? Mean MI against human labels "
-        "(against the batch labels Z_b where a map has none). The difference is the mean paired difference to the "
-        f"next best walker (paired by restart, which share start cells) with its {100 * CONFIDENCE:.0f} % Student-t "
-        "confidence interval, p its paired Wilcoxon signed-rank p; \"beats\" means a higher mean than every other "
-        f"walker with p < {ALPHA} against each. The ratio is of the two means, with its {100 * CONFIDENCE:.0f} % "
-        "interval from a bootstrap over the pairs, beside the paper's for the map the dataset stands in for. The "
+        "(against the batch labels Z_b where a map has none), paired by restart (which share start cells). It is "
+        "compared with each other walker the config runs, one by one: the ratio of the means with its "
+        f"{100 * CONFIDENCE:.0f} % studentized bootstrap interval and the paired Wilcoxon signed-rank p; \"beats\" "
+        f"means a higher mean than every other walker with p < {ALPHA} against each. Then the next best walker: the "
+        f"mean paired difference with its {100 * CONFIDENCE:.0f} % Student-t confidence interval and p, and the "
+        "ratio of the two means, beside the paper's for the map the dataset stands in for. The next best is chosen "
+        "after seeing the data, so that ratio leans toward \"no lead\": its interval chooses the next best again "
+        "in each bootstrap resample, and its null reference says what walkers that do not differ give (their labels "
+        "permuted within each restart), with the share of permutations at least as high (null p). The "
         f"smallest lead detectable at {100 * POWER:.0f} % power, and the pairs a {100 * TARGET_LEAD:.0f} % lead "
         "needs, are for a paired t-test at p < 0.05 with the spread of the paired differences observed here "
         "(evaluate/power.py); seeds run as a sweep pool their pairs in SWEEP.md. How eq. 8 treats a visited "
@@ -387,8 +424,10 @@ def _headline_table(top) -> list[str]:
         "## Headline",
         "",
         f"Mean MI of {HEADLINE_WEIGHT} exploration at {HEADLINE_LENGTH} steps, or a map's longest path below it "
-        "(steps), against human labels, or Z_b on a map without them, divided by the next best walker's; the mean "
-        "paired difference to it with its 95 % CI; its share of the better ceiling's MI:",
+        "(steps), against human labels, or Z_b on a map without them, divided by the next best walker's; the ratio "
+        "walkers that do not differ give (null median, its 95 % band, and the share of permutations at least as "
+        "high: null p); the mean paired difference to the next best with its 95 % CI; its share of the better "
+        "ceiling's MI:",
         "",
     ]
     if top.empty:
@@ -397,9 +436,9 @@ def _headline_table(top) -> list[str]:
             "ratio)", "",
         ]
     lines += [
-        "| dataset | steps | against | ratio | next best | difference (95 % CI) | paired Wilcoxon p (pairs) | beats every "
-        "walker | share of ceiling | paper's map | paper's ratio |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| dataset | steps | against | ratio | null median [95 %], null p | next best | difference (95 % CI) | paired "
+        "Wilcoxon p (pairs) | beats every walker | share of ceiling | paper's map | paper's ratio |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in top.to_dict("records"):
         paper = f"{r['paper_ratio']:.2f}" if np.isfinite(r["paper_ratio"]) else ""
@@ -410,8 +449,12 @@ def _headline_table(top) -> list[str]:
             if np.isfinite(r["ci_low"]):
                 diff += f" ({_signed(r['ci_low'])} to {_signed(r['ci_high'])})"
         share = f"{100 * r['ceiling_share']:.0f} % of {r['best_ceiling']}" if np.isfinite(r["ceiling_share"]) else ""
+        null = (
+            f"{r['null_median']:.2f} [{r['null_low']:.2f}, {r['null_high']:.2f}], {_p(r['null_p'])}"
+            if np.isfinite(r.get("null_median", np.nan)) else ""
+        )
         lines.append(
-            f"| {r['dataset']} | {int(r['path_length'])} | {r['against']} | {r['ratio']:.2f} | {r['next_best']} | {diff} | {p} ({r['pairs']}) | "
+            f"| {r['dataset']} | {int(r['path_length'])} | {r['against']} | {r['ratio']:.2f} | {null} | {r['next_best']} | {diff} | {p} ({r['pairs']}) | "
             f"{'yes' if r['beats_all'] else 'no'} | {share} | {_text(r['paper_map'])} | {paper} |"
         )
     return lines + [""]
@@ -541,7 +584,7 @@ def write_report(
         f"`{config.explore.coverage}`.",
         "",
     ]
-    lines += _verdicts(summary, top, config.explore.coverage)
+    lines += _verdicts(summary, top, evaluation.effects, config.explore.coverage)
     lines += _headline_table(top)
     lines += _maps_table(evaluation.maps)
     lines += ["## Mutual information (bits, mean ± 95 % CI half-width)", "", *_labelling_note(config), "",

@@ -27,9 +27,11 @@ Written under ``results/<experiment>/``:
   signed-rank test over the restarts both have (paired by restart, which share start
   cells). Ceilings (:data:`~curiosity_cli.explore.weights.CEILINGS`) are not walkers
   and take no part.
-- ``effects.csv``: per (dataset, path length, against), topic perplexity's MI minus each
-  other walker's, paired by restart: the mean difference with its 95 % Student-t
-  confidence interval, beside the Wilcoxon p of ``tests.csv``.
+- ``effects.csv``: per (dataset, path length, against), topic perplexity against each
+  other walker, paired by restart: the mean difference with its 95 % Student-t
+  confidence interval, the ratio of the means with its 95 % studentized bootstrap
+  interval, and the Wilcoxon p of ``tests.csv`` (:func:`paired_effects`): the
+  pre-specified comparisons a lead is decided by.
 - ``convergence.csv``: per (dataset, path length, against), over the runs labelled
   twice: ``n``, the mean MI of each chain (``uniform``, ``placed``), their mean
   difference with its standard error, and whether it is within
@@ -46,7 +48,9 @@ Written under ``results/<experiment>/``:
   the paired difference to it with its CI and Wilcoxon p, whether topic perplexity beats
   every other walker (higher mean and p < 0.05 against each), its share of the better
   ceiling's MI, and the paper's ratio for the map the dataset stands in for (1.51, 1.20
-  and 1.05); then how sure the ratio is (:func:`with_power`): its bootstrap interval,
+  and 1.05); then how sure the ratio is (:func:`with_uncertainty`): its bootstrap
+  interval with the next best chosen in every resample, its null reference (median,
+  interval and p with the walkers exchangeable, :mod:`~curiosity_cli.evaluate.comparisons`),
   the smallest ratio detectable at 80 % power and the pairs a 10 % lead would need.
 - ``tables.json``: each table's size and SHA-256 and those of every file and map fact the
   tables were made from (:meth:`~curiosity_cli.experiment.experiment.Experiment.record_tables`),
@@ -363,17 +367,21 @@ def _unlabelled_runs(layout: ExperimentFolder, files: list[Path], planned: list[
 
 
 def paired_effects(mi, tests=None):
-    """Topic perplexity's MI minus each other walker's, paired by restart (ceilings left out).
+    """Topic perplexity against each other walker, paired by restart (ceilings left out).
 
     Per (dataset, path length, against, other walker): ``n`` pairs, the two means over
     those pairs, the mean paired difference with its 95 % Student-t CI
-    (:func:`~curiosity_cli.evaluate.statistics.paired_difference`) and the Wilcoxon p of the same pairs from ``tests``
-    (computed with :func:`~curiosity_cli.evaluate.statistics.paired_tests` when not given).
+    (:func:`~curiosity_cli.evaluate.statistics.paired_difference`), the ratio of the
+    means with its 95 % studentized paired-bootstrap interval
+    (:func:`~curiosity_cli.evaluate.comparisons.ratio_interval`) and the Wilcoxon p of
+    the same pairs from ``tests`` (computed with
+    :func:`~curiosity_cli.evaluate.statistics.paired_tests` when not given): each walker
+    a pre-specified comparison (:mod:`~curiosity_cli.evaluate.comparisons`).
     """
     import pandas as pd
 
-    columns = ["dataset", "path_length", "against", "other", "n", "topic_perplexity", "other_mean",
-               "mean_difference", "ci_low", "ci_high", "p_value"]
+    from curiosity_cli.evaluate.comparisons import ratio_interval
+
     tests = paired_tests(mi) if tests is None else tests
     rows = []
     for against, dataset, length, block in paired_blocks(mi):
@@ -383,30 +391,44 @@ def paired_effects(mi, tests=None):
             pair = block[[HEADLINE_WEIGHT, other]].dropna()
             if pair.empty:
                 continue
-            mean, low, high = paired_difference(pair[HEADLINE_WEIGHT].to_numpy(), pair[other].to_numpy())
+            ours, theirs = pair[HEADLINE_WEIGHT].to_numpy(), pair[other].to_numpy()
+            mean, low, high = paired_difference(ours, theirs)
+            ratio_low, ratio_high = ratio_interval(ours, theirs)
             rows.append({
                 "dataset": dataset, "path_length": length, "against": against, "other": other, "n": len(pair),
-                "topic_perplexity": float(pair[HEADLINE_WEIGHT].mean()), "other_mean": float(pair[other].mean()),
+                "topic_perplexity": float(ours.mean()), "other_mean": float(theirs.mean()),
                 "mean_difference": mean, "ci_low": low, "ci_high": high,
+                "ratio": float(ours.mean() / theirs.mean()) if theirs.mean() > 0 else np.nan,
+                "ratio_ci_low": ratio_low, "ratio_ci_high": ratio_high,
                 "p_value": wilcoxon_p(tests, dataset, length, against, HEADLINE_WEIGHT, other)[0],
             })
-    return pd.DataFrame(rows, columns=columns)
+    return pd.DataFrame(rows, columns=EFFECT_COLUMNS)
 
 
+#: ``effects.csv``'s columns (:func:`paired_effects`).
+EFFECT_COLUMNS = [
+    "dataset", "path_length", "against", "other", "n", "topic_perplexity", "other_mean", "mean_difference", "ci_low",
+    "ci_high", "ratio", "ratio_ci_low", "ratio_ci_high", "p_value",
+]
 HEADLINE_COLUMNS = [
     "dataset", "path_length", "against", "topic_perplexity", "next_best", "next_best_mi", "ratio", "mean_difference", "ci_low",
     "ci_high", "p_value", "pairs", "beats_all", "not_beaten", "best_ceiling", "ceiling_mi", "ceiling_share",
     "paper_map", "paper_ratio",
 ]
-#: The columns :func:`with_power` adds to the headline.
-POWER_COLUMNS = ["ratio_ci_low", "ratio_ci_high", "detectable_ratio", "pairs_for_lead"]
+#: The columns :func:`with_uncertainty` adds to the headline.
+UNCERTAINTY_COLUMNS = [
+    "ratio_ci_low", "ratio_ci_high", "null_median", "null_low", "null_high", "null_p", "detectable_ratio", "pairs_for_lead",
+]
 
 
-def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
+def headline(summary, tests, stands_in_for: dict[str, str], effects=None, against: str | None = None):
     """Per dataset: topic perplexity's mean MI at 80 steps (``path_length``: or the map's longest
     checkpoint below 80, :func:`headline_length`) over the next best walker's.
 
-    Against human labels, or against Z_b on a map without them (``against``). With the
+    Against human labels, or against Z_b on a map without them (``against`` None); or
+    against the labels ``against`` names (``"human"`` or ``"batch"``: a map without
+    them gets no row). The next best is chosen after seeing the data: the ratio is a
+    summary, read against its null reference (:func:`with_uncertainty`). With the
     paired Wilcoxon p of topic perplexity against that next best; the mean paired
     difference to it and its 95 % CI (from ``effects``, NaN without); ``beats_all``:
     topic perplexity's mean is above every other walker's with a paired Wilcoxon p below
@@ -426,8 +448,8 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
         block = every[every["path_length"] == length]
         if block.empty:
             continue
-        against = "human" if (block["against"] == "human").any() else "batch"
-        means = block[block["against"] == against].set_index("weight_function")["mean"]
+        read = against or ("human" if (block["against"] == "human").any() else "batch")
+        means = block[block["against"] == read].set_index("weight_function")["mean"]
         ceilings = means[means.index.isin(CEILINGS)]
         walkers = means[~means.index.isin(CEILINGS)]
         if HEADLINE_WEIGHT not in walkers or len(walkers) < 2:
@@ -435,20 +457,20 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
         ours = walkers[HEADLINE_WEIGHT]
         others = walkers.drop(HEADLINE_WEIGHT).sort_values(ascending=False, kind="stable")
         next_best = others.index[0]
-        p_values = {o: wilcoxon_p(tests, dataset, length, against, HEADLINE_WEIGHT, o) for o in others.index}
+        p_values = {o: wilcoxon_p(tests, dataset, length, read, HEADLINE_WEIGHT, o) for o in others.index}
         not_beaten = [o for o in others.index if not (ours > others[o] and p_values[o][0] < ALPHA)]
         effect = None
         if effects is not None:
             match = effects[
                 (effects["dataset"] == dataset) & (effects["path_length"] == length)
-                & (effects["against"] == against) & (effects["other"] == next_best)
+                & (effects["against"] == read) & (effects["other"] == next_best)
             ]
             effect = match.iloc[0] if len(match) else None
         best_ceiling = ceilings.idxmax() if len(ceilings) and ceilings.notna().any() else ""
         ceiling_mi = ceilings[best_ceiling] if best_ceiling else np.nan
         paper = PAPER_MAPS.get(stands_in_for.get(dataset, ""))
         rows.append({
-            "dataset": dataset, "path_length": length, "against": against, "topic_perplexity": ours, "next_best": next_best,
+            "dataset": dataset, "path_length": length, "against": read, "topic_perplexity": ours, "next_best": next_best,
             "next_best_mi": others.iloc[0], "ratio": ours / others.iloc[0] if others.iloc[0] > 0 else np.nan,
             "mean_difference": effect["mean_difference"] if effect is not None else np.nan,
             "ci_low": effect["ci_low"] if effect is not None else np.nan,
@@ -462,29 +484,47 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None):
     return pd.DataFrame(rows, columns=HEADLINE_COLUMNS)
 
 
-def with_power(top, mi):
-    """``top`` (:func:`headline`) with how sure each ratio is (:mod:`~curiosity_cli.evaluate.power`).
+def with_uncertainty(top, mi):
+    """``top`` (:func:`headline`) with how sure each ratio is, and where "no difference" lies.
 
-    From the pairs of topic perplexity and the next best walker at the headline's length: the ratio's
-    95 % paired-bootstrap interval (``ratio_ci_low``, ``ratio_ci_high``), the smallest
-    ratio the experiment could have detected at 80 % power (``detectable_ratio``), and
-    the pairs a 10 % lead would need (``pairs_for_lead``, NaN beyond a million).
+    From the restarts at the headline's length where every walker has an MI (the
+    walkers' mean MI per restart, ceilings left out):
+
+    - ``ratio_ci_low``, ``ratio_ci_high``: the next-best ratio's 95 % paired-bootstrap
+      interval, the next best chosen again in every resample
+      (:func:`~curiosity_cli.evaluate.comparisons.next_best_interval`);
+    - ``null_median``, ``null_low``, ``null_high``, ``null_p``: the ratio's null
+      reference, the walkers' labels permuted within each restart
+      (:func:`~curiosity_cli.evaluate.comparisons.next_best_null`): its median and 95 %
+      interval, and the share of permutations at least as high as the observed ratio;
+    - ``detectable_ratio``: the smallest ratio the experiment could have detected at 80 %
+      power against the observed next best, and ``pairs_for_lead``: the pairs a 10 % lead
+      would need (NaN beyond a million) (:mod:`~curiosity_cli.evaluate.power`).
     """
-    from curiosity_cli.evaluate.power import TARGET_LEAD, detectable_difference, pairs_needed, ratio_interval
+    from curiosity_cli.evaluate.comparisons import next_best_interval, next_best_null
+    from curiosity_cli.evaluate.power import TARGET_LEAD, detectable_difference, pairs_needed
 
-    columns = {name: [] for name in POWER_COLUMNS}
+    columns = {name: [] for name in UNCERTAINTY_COLUMNS}
     blocks = {(against, dataset, length): block for against, dataset, length, block in paired_blocks(mi)}
     for row in top.itertuples():
-        pair = blocks[(row.against, row.dataset, row.path_length)][[HEADLINE_WEIGHT, row.next_best]].dropna().to_numpy()
-        ours, theirs = pair[:, 0], pair[:, 1]
-        sd = float(np.std(ours - theirs, ddof=1)) if len(pair) > 1 else np.nan
+        block = blocks[(row.against, row.dataset, row.path_length)]
+        complete = block.dropna()
+        ours, others = complete[HEADLINE_WEIGHT].to_numpy(), complete.drop(columns=HEADLINE_WEIGHT).to_numpy()
+        low, high = next_best_interval(ours, others)
+        null = next_best_null(ours, others)
+        pair = block[[HEADLINE_WEIGHT, row.next_best]].dropna().to_numpy()
+        ours_nb, theirs = pair[:, 0], pair[:, 1]
+        sd = float(np.std(ours_nb - theirs, ddof=1)) if len(pair) > 1 else np.nan
         baseline = float(theirs.mean())
-        low, high = ratio_interval(ours, theirs)
         needed = pairs_needed(TARGET_LEAD * baseline, sd)
-        columns["ratio_ci_low"].append(low)
-        columns["ratio_ci_high"].append(high)
-        columns["detectable_ratio"].append(1 + detectable_difference(sd, len(pair)) / baseline if baseline > 0 else np.nan)
-        columns["pairs_for_lead"].append(np.nan if needed is None else needed)
+        values = {
+            "ratio_ci_low": low, "ratio_ci_high": high, "null_median": null.median, "null_low": null.low,
+            "null_high": null.high, "null_p": null.p_value,
+            "detectable_ratio": 1 + detectable_difference(sd, len(pair)) / baseline if baseline > 0 else np.nan,
+            "pairs_for_lead": np.nan if needed is None else needed,
+        }
+        for name in UNCERTAINTY_COLUMNS:
+            columns[name].append(values[name])
     return top.assign(**columns)
 
 
@@ -575,7 +615,7 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
         tests = paired_tests(mi)
         effects = paired_effects(mi, tests)
         maps = read_maps(folder)
-        top = with_power(headline(summary, tests, experiment.paper_maps(), effects), mi)
+        top = with_uncertainty(headline(summary, tests, experiment.paper_maps(), effects), mi)
         revisits = summarise_revisits(mi)
         convergence = label_convergence(mi)
         tables = {

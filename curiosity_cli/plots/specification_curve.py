@@ -1,10 +1,13 @@
 """The specification-curve figure (Simonsohn, Simmons & Nelson, 2020) of a study.
 
-Top: one point per specification and map, topic perplexity's ratio at 80 steps with its
-95 % interval, sorted by ratio (:func:`curiosity_cli.evaluate.specification_curve.curve_table`),
-coloured by map; a filled point where topic perplexity leads every other walker at
-p < 0.05, a hollow one elsewhere; the paper's ratio of each paper map our maps stand in
-for as a dashed line named by it, and 1 (no lead) in grey. Below, aligned with the points, a panel of dots: a
+Top: one point per specification and map, topic perplexity's ratio at 80 steps to the
+next best walker with its 95 % interval, sorted by ratio
+(:func:`curiosity_cli.evaluate.specification_curve.curve_table`), coloured by map; behind
+each, in grey, its null reference: the 95 % band and the median (a dash) of the ratio
+when the walkers are exchangeable, where "no difference" lies; a filled point where
+topic perplexity leads every other walker at p < 0.05 (each compared alone), a hollow
+one elsewhere; the paper's ratio of each paper map our maps stand in for as a dashed
+line named by it, and 1 in grey. Below, aligned with the points, a panel of dots: a
 row per map and per value of each varied key, a dot where the point's specification used it.
 """
 
@@ -21,6 +24,7 @@ _NAMED = 40
 
 def specification_curve_figure(
     table, choices: Mapping[str, Mapping[str, str]], label: str = "specification", datasets: list[str] | None = None,
+    against: str = "human labels",
 ):
     """The figure (module docstring).
 
@@ -28,8 +32,8 @@ def specification_curve_figure(
     ----------
     table : pandas.DataFrame
         :func:`~curiosity_cli.evaluate.specification_curve.curve_table`, in its order (its
-        ``dataset``, ``ratio``, ``ratio_ci_low``, ``ratio_ci_high``, ``beats_all``,
-        ``paper_map`` and ``paper_ratio``), with a column ``label`` naming each row's
+        ``dataset``, ``ratio``, ``ratio_ci_low``, ``ratio_ci_high``, ``null_median``,
+        ``null_low``, ``null_high``, ``beats_all``, ``paper_map`` and ``paper_ratio``), with a column ``label`` naming each row's
         specification.
     choices : mapping of str to mapping of str to str
         Per specification (as ``label`` names it): each varied key and the value it used,
@@ -38,6 +42,8 @@ def specification_curve_figure(
         The column of ``table`` naming the specification.
     datasets : list of str, optional
         The maps in the order of the panel's rows and colours; default as they first come in ``table``.
+    against : str
+        What the MI was measured against, in words, for the axis.
 
     Returns
     -------
@@ -47,6 +53,7 @@ def specification_curve_figure(
     import numpy as np
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
     datasets = [d for d in dict.fromkeys([*(datasets or []), *table["dataset"]]) if (table["dataset"] == d).any()]
     colours = {d: matplotlib.colormaps["tab10"](i % 10) for i, d in enumerate(datasets)}
@@ -69,6 +76,9 @@ def specification_curve_figure(
             f"{paper.paper_map} (paper): {paper.paper_ratio:.2f}", (0, paper.paper_ratio), xycoords=("axes fraction", "data"),
             xytext=(4, 2), textcoords="offset points", fontsize=8, color="0.25",
         )
+    null_low, null_high = table["null_low"].to_numpy(float), table["null_high"].to_numpy(float)
+    top.bar(x, null_high - null_low, bottom=null_low, width=0.7, color="0.88", zorder=0)
+    top.scatter(x, table["null_median"].to_numpy(float), marker="_", s=60, color="0.45", zorder=1)
     for dataset in datasets:
         at = (table["dataset"] == dataset).to_numpy()
         ratio = table.loc[at, "ratio"].to_numpy(float)
@@ -77,12 +87,13 @@ def specification_curve_figure(
         leads = table.loc[at, "beats_all"].astype(bool).to_numpy()
         top.scatter(x[at][leads], ratio[leads], color=colours[dataset], s=26, zorder=3)
         top.scatter(x[at][~leads], ratio[~leads], facecolor="white", edgecolor=colours[dataset], s=26, zorder=3)
-    top.set_ylabel("MI ratio at 80 steps:\ntopic perplexity / next best")
+    top.set_ylabel(f"MI ratio at 80 steps ({against}):\ntopic perplexity / next best")
     top.grid(True, axis="y", color="0.92")
     handles = [Line2D([], [], color=colours[d], marker="o", linestyle="", label=d) for d in datasets]
     handles += [
+        Patch(color="0.88", label="no difference: the ratio's 95 % null band, median dashed"),
         Line2D([], [], color="0.25", linestyle="--", label="the paper's ratio of the map ours stand in for"),
-        Line2D([], [], color="0.3", marker="o", linestyle="", label="leads every walker, p < 0.05"),
+        Line2D([], [], color="0.3", marker="o", linestyle="", label="leads each walker, p < 0.05"),
         Line2D([], [], markeredgecolor="0.3", markerfacecolor="white", marker="o", linestyle="", label="does not"),
     ]
     fig.legend(handles=handles, loc="outside lower center", fontsize=8, frameon=False, ncols=min(len(handles), 3))
@@ -102,14 +113,17 @@ def specification_curve_figure(
     else:
         dots.set_xticks([])
     dots.set_xlabel("specification and map, sorted by ratio")
-    fig.suptitle("Specification curve: topic perplexity's lead at 80 steps\n(seeds pooled; 95 % bootstrap intervals)")
+    fig.suptitle(
+        f"Specification curve: topic perplexity's lead at 80 steps, MI against {against}\n"
+        "(seeds pooled; 95 % bootstrap intervals, the next best chosen in each resample)"
+    )
     return fig
 
 
 def write_specification_curve(
     table, choices: Mapping[str, Mapping[str, str]], stem: Path, label: str = "specification",
-    datasets: list[str] | None = None,
+    datasets: list[str] | None = None, against: str = "human labels",
 ) -> list[Path]:
     """Write :func:`specification_curve_figure` as ``stem``.png and ``stem``.pdf; returns both paths."""
     with figure_style():
-        return save_figure(specification_curve_figure(table, choices, label, datasets), Path(stem))
+        return save_figure(specification_curve_figure(table, choices, label, datasets, against), Path(stem))

@@ -12,7 +12,7 @@ from scipy import stats
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.evaluate.report import verdict, write_report
 from curiosity_cli.evaluate.statistics import paired_difference, paired_tests, summarise, summarise_classes
-from curiosity_cli.evaluate.tables import Evaluation, headline, paired_effects, with_power
+from curiosity_cli.evaluate.tables import Evaluation, headline, paired_effects, with_uncertainty
 from curiosity_cli.explore.weights import CEILINGS
 
 WALKERS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity", "lawnmower")
@@ -85,7 +85,7 @@ def tables():
     summary, tests = summarise(mi), paired_tests(mi)
     effects = paired_effects(mi, tests)
     top = headline(summary, tests, {"win": "Montreal1", "loss": "SouthBellairs", "unlabelled": "Montreal2"}, effects)
-    return mi, summary, tests, effects, with_power(top, mi)
+    return mi, summary, tests, effects, with_uncertainty(top, mi)
 
 
 def test_effects_are_topic_perplexity_minus_each_walker_paired_by_restart_and_leave_ceilings_out():
@@ -116,15 +116,25 @@ def test_the_headline_compares_walkers_only_and_falls_back_to_batch_labels():
 
 
 def test_the_verdict_of_a_clear_win():
-    *_, top = tables()
+    _, _, _, effects, top = tables()
     row = top.set_index("dataset").loc["win"].to_dict() | {"dataset": "win"}
     low, high = row["ci_low"], row["ci_high"]
     assert 0 < low < high
     assert row["ratio_ci_low"] < row["ratio"] < row["ratio_ci_high"] and 1 < row["detectable_ratio"] < row["ratio"]
-    assert verdict(row) == (
-        f"win: topic perplexity beats every other walker at 80 steps: 0.10 bits above stochastic-coverage, the next "
+    # the walkers that do not differ, permuted: the observed ratio is above their median and their p is small
+    assert row["null_low"] < row["null_median"] < row["ratio"] and row["null_p"] < 0.05
+    each = effects[(effects.dataset == "win") & (effects.path_length == 80) & (effects.against == "human")]
+    alone = ", ".join(
+        f"{r.other} {r.ratio:.2f} (95 % CI {r.ratio_ci_low:.2f} to {r.ratio_ci_high:.2f}), p = {r.p_value:.3f}"
+        for r in each.itertuples()
+    )
+    assert verdict(row, effects) == (
+        f"win: topic perplexity beats every other walker at 80 steps; against each alone, MI ratio {alone}: 0.10 bits "
+        f"above stochastic-coverage, the next "
         f"best (95 % CI +{low:.2f} to +{high:.2f}), p = 0.002; ratio {row['ratio']:.2f} (95 % CI "
-        f"{row['ratio_ci_low']:.2f} to {row['ratio_ci_high']:.2f}) against the paper's 1.51 on "
+        f"{row['ratio_ci_low']:.2f} to {row['ratio_ci_high']:.2f}; walkers that do not differ give "
+        f"{row['null_median']:.2f}, 95 % {row['null_low']:.2f} to {row['null_high']:.2f}: null p = {row['null_p']:.2f}) "
+        f"against the paper's 1.51 on "
         f"Montreal1. It reaches {100 * row['ceiling_share']:.0f} % of the better ceiling's MI ({CEILINGS[0]}, "
         f"{row['ceiling_mi']:.2f} bits). With 10 pairs it could detect a lead of "
         f"{100 * (row['detectable_ratio'] - 1):.0f} % or more at 80 % power; a 10 % lead would need "
@@ -196,7 +206,8 @@ def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
     bullets = [line for line in lines if line.startswith("- ")]
     assert bullets[0].startswith("- win: topic perplexity beats every other walker at 80 steps")
     assert bullets[1].startswith(
-        "- loss: topic perplexity does not beat every walker at 40 steps (its longest path; the paper reads 80): "
+        "- loss: topic perplexity does not beat every walker at 40 steps (its longest path; the paper reads 80); "
+        "against each alone, MI ratio lawnmower "
     )
     assert "| loss | 40 | human | " in report and "| win | 80 | human | " in report  # the headline table says which
     assert bullets[2].startswith("- unlabelled (MI against Z_b")
@@ -224,7 +235,7 @@ def test_too_few_pairs_for_any_test_to_reach_p_005_are_said_plainly():
     mi = synthetic_mi()
     mi = mi[(mi.restart < 2) & (mi.dataset == "win")]  # 2 pairs: the smallest p is 0.5
     summary, tests = summarise(mi), paired_tests(mi)
-    top = with_power(headline(summary, tests, {"win": "Montreal1"}, paired_effects(mi, tests)), mi)
+    top = with_uncertainty(headline(summary, tests, {"win": "Montreal1"}, paired_effects(mi, tests)), mi)
     row = top.iloc[0].to_dict()
     assert row["pairs"] == 2 and row["p_value"] == pytest.approx(0.5)
     assert "p = 0.50 (with 2 pairs no paired test can reach p < 0.05: the smallest p is 0.5);" in verdict(row)

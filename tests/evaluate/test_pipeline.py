@@ -232,7 +232,7 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
     report = (folder / "REPORT.md").read_text()
     assert "## Mutual information" in report and "| own | topic-perplexity |" in report and "](figures/" in report
     assert report.splitlines()[4] == "## Verdict"  # right after the title and one line of context
-    assert "- own: topic perplexity" in report and " at 12 steps (its longest path; the paper reads 80): " in report
+    assert "- own: topic perplexity" in report and " at 12 steps (its longest path; the paper reads 80); against each alone, MI ratio " in report
     # the labels' settings (the --set above) and the convergence rule are stated
     assert "Labels: a run's first checkpoint's Z_p is 2 frozen-Φ Gibbs sweeps from random topics" in report
     assert "end at the same mean MI" in report

@@ -16,6 +16,9 @@ def test_points_follow_the_table_and_the_dots_mark_each_rows_map_and_values():
         "ratio": [0.9, 1.0, 1.1, 1.3],
         "ratio_ci_low": [0.8, 0.9, 1.0, 1.2],
         "ratio_ci_high": [1.0, 1.1, 1.2, 1.4],
+        "null_median": [0.96, 0.97, 0.95, 0.96],
+        "null_low": [0.85, 0.88, 0.84, 0.86],
+        "null_high": [1.05, 1.06, 1.04, 1.07],
         "beats_all": [False, False, False, True],
         "paper_map": ["Montreal1", "Montreal1", "Montreal2", "Montreal2"],
         "paper_ratio": [1.51, 1.51, 1.20, 1.20],
@@ -34,8 +37,14 @@ def test_points_follow_the_table_and_the_dots_mark_each_rows_map_and_values():
     )
     expected = sorted([(0, 1), (0, 3), (0, 4), (1, 1), (1, 2), (1, 4), (2, 0), (2, 3), (2, 4), (3, 0), (3, 2), (3, 4)])
     assert used == expected
-    points = np.concatenate([c.get_offsets() for c in top.collections if isinstance(c, PathCollection)])
+    scatters = [c for c in top.collections if isinstance(c, PathCollection)]
+    nulls, points = scatters[0], np.concatenate([c.get_offsets() for c in scatters[1:]])
     assert sorted(map(tuple, points.tolist())) == [(0, 0.9), (1, 1.0), (2, 1.1), (3, 1.3)]
+    # behind each point its null reference: a band from null_low to null_high, the median marked
+    assert nulls.get_offsets().tolist() == [[0, 0.96], [1, 0.97], [2, 0.95], [3, 0.96]]
+    bands = [(round(b.get_x() + b.get_width() / 2, 6), round(b.get_y(), 6), round(b.get_y() + b.get_height(), 6))
+             for b in top.patches]
+    assert bands == [(0, 0.85, 1.05), (1, 0.88, 1.06), (2, 0.84, 1.04), (3, 0.86, 1.07)]
     paper_lines = sorted(round(line.get_ydata()[0], 2) for line in top.get_lines() if line.get_linestyle() == "--")
     assert paper_lines == [1.2, 1.51]
     assert sorted(t.get_text() for t in top.texts) == ["Montreal1 (paper): 1.51", "Montreal2 (paper): 1.20"]
