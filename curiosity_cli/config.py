@@ -122,22 +122,41 @@ LABEL_DEVICES = ("cpu", "cuda", "auto")
 #: - ``candidates``: the cells ``G(c)`` a walker scores, 4 (up, down, left, right) or 8;
 #: - ``candidate_context``: the counts eq. 12's temporary labels of a candidate are drawn
 #:   against, ``neighbourhood`` (the model's ``n_Gk`` of the candidate) or ``own`` (its
-#:   own temporary labels only), and ``candidate_sweeps`` the Gibbs passes over them;
+#:   own temporary labels only), and ``candidate_sweeps`` the passes over them;
+#: - ``candidate_labels``: each temporary label drawn from eq. 5 (``sample``) or its most
+#:   likely topic under eq. 5 (``argmax``, as the authors' ``estimate()``);
+#: - ``candidate_words``: the candidate's words ``held-out`` of the model while it is scored
+#:   (the paper's "without adding") or ``added`` to it, in Φ and the path's topics too, as
+#:   the authors' code scores words it has already added;
 #: - ``path_topics``: P(k | path), ``smoothed`` ``(n_k + α) / (N + Kα)`` or ``counts`` ``n_k / N``;
 #: - ``revisits``: a revisited cell's words enter the model ``once`` or ``again`` each visit;
-#: - ``refine_picks``: which observations realtime refinement picks, ``uniform`` (eq. 6) or
-#:   ``recent`` (the authors' refinery).
+#: - ``refine_picks``: which observations realtime refinement picks, ``uniform`` (eq. 6),
+#:   ``recent`` (the authors' refinery) or ``recent-64-ours`` (our earlier translation of
+#:   it: :data:`RECENT_NEWEST`).
 EXPLORE_READINGS = {
     "candidates": (4, 8),
     "candidate_context": ("neighbourhood", "own"),
+    "candidate_labels": ("sample", "argmax"),
+    "candidate_words": ("held-out", "added"),
     "path_topics": ("smoothed", "counts"),
     "revisits": ("once", "again"),
-    "refine_picks": ("uniform", "recent"),
+    "refine_picks": ("uniform", "recent", "recent-64-ours"),
 }
 #: What a run recipe leaves out: each reading at what every run did before its key existed
 #: (the first value of each, and one pass over the temporary labels), so that the runs of
 #: older experiments stay current (a run's recipe names a reading only when it is another).
 UNRECORDED_READINGS = {key: values[0] for key, values in EXPLORE_READINGS.items()} | {"candidate_sweeps": 1}
+
+#: For each ``refine_picks`` reading after ``uniform``: how many of the newest observation
+#: times its η branch picks among, uniformly (else it draws a time by age from Beta(τ = 2,
+#: 1)). The authors' refinery (rost-ros ``refinery.hpp``, ``dowork_parallel_refine_online2``)
+#: picks among the cells of the last observation, ``observation_size`` = 64 cells of a
+#: camera frame; a step of the map walker observes one cell, so ``recent`` picks the newest
+#: time. ``recent-64-ours`` is our earlier translation, 64 observation times, not the
+#: authors'. A run's recipe records the number (:meth:`ExploreConfig.run_settings`): the
+#: runs made when ``recent`` meant 64 recorded none, so they are made again, never taken as
+#: current.
+RECENT_NEWEST = {"recent": 1, "recent-64-ours": 64}
 
 #: Where a config's ORB words are (``words.orb_detector``): at ORB's keypoints, or at every
 #: point of a regular grid (:mod:`curiosity_cli.words.orb_grid`), as near the density of the
@@ -256,6 +275,8 @@ class ExploreConfig:
     candidates: int = spec(choices=EXPLORE_READINGS["candidates"])
     candidate_context: str = spec(choices=EXPLORE_READINGS["candidate_context"])
     candidate_sweeps: int = spec(min=1)
+    candidate_labels: str = spec(choices=EXPLORE_READINGS["candidate_labels"])
+    candidate_words: str = spec(choices=EXPLORE_READINGS["candidate_words"])
     path_topics: str = spec(choices=EXPLORE_READINGS["path_topics"])
     revisits: str = spec(choices=EXPLORE_READINGS["revisits"])
     refine_picks: str = spec(choices=EXPLORE_READINGS["refine_picks"])
@@ -264,13 +285,18 @@ class ExploreConfig:
         """The keys a run's numbers depend on.
 
         Every key but ``min_d2`` unless the reading reads it (the clamp), and but a reading of
-        :data:`UNRECORDED_READINGS` at the value every run had before its key existed.
+        :data:`UNRECORDED_READINGS` at the value every run had before its key existed; and,
+        with a ``refine_picks`` of :data:`RECENT_NEWEST`, ``refine_newest``: its number of
+        newest times, which a run made when ``recent`` picked among 64 lacks.
         """
-        return {
+        settings = {
             key: value for key, value in to_dict(self).items()
             if (key != "min_d2" or COVERAGE_READINGS[self.coverage].reads_min_d2)
             and UNRECORDED_READINGS.get(key, _NO_DEFAULT) != value
         }
+        if self.refine_picks in RECENT_NEWEST:
+            settings["refine_newest"] = RECENT_NEWEST[self.refine_picks]
+        return settings
 
 
 @dataclass(frozen=True)

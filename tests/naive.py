@@ -412,20 +412,24 @@ def refine_batch_naive(state: NaiveModel, sweeps: int) -> None:
 
 
 def refine_realtime_naive(
-    state: NaiveModel, budget: int, eta: float, picks: str = "uniform", window: int = 64, tau: float = 2.0,
-) -> tuple[int, int]:
-    """Twin of ``refine_realtime_kernel``: (words sampled, picks, words sampled at the newest time)."""
+    state: NaiveModel, budget: int, eta: float, picks: str = "uniform", tau: float = 2.0,
+) -> tuple[int, int, int]:
+    """Twin of ``refine_realtime_kernel``: (words sampled, picks, words sampled at the newest time).
+
+    ``recent`` picks the newest time with probability ``eta``, ``recent-64-ours`` one of
+    the newest 64."""
     times = sorted(set(state.times))
     groups = [[c for c, t in zip(state.order, state.times) if t == time] for time in times]
     picker = Stream(state.key, state.counter, state.free_stream)
-    recent = picks == "recent"
+    recent = picks in ("recent", "recent-64-ours")
+    window = 64 if picks == "recent-64-ours" else 1
     done = picks = idle = newest = 0
     while done + idle < budget:  # a pick without words spends one unit
         bits = picker.bits()
         if recent:
-            newest = unit64(bits) < eta
+            take_newest = unit64(bits) < eta
             bits = picker.bits()
-            if newest:
+            if take_newest:
                 last = min(window, len(groups))
                 group = groups[len(groups) - last + below(bits, last)]
             else:
@@ -507,20 +511,33 @@ def word_perplexity_naive(state: NaiveModel, words) -> float:
 
 def topic_perplexity_naive(
     state: NaiveModel, words, cell: int, context: str = "neighbourhood", sweeps: int = 1, path_topics: str = "smoothed",
+    labels: str = "sample", words_in_model: str = "held-out",
 ) -> tuple[float, np.ndarray]:
-    """Twin of ``topic_perplexity_kernel``: (eq. 12, the temporary topics)."""
+    """Twin of ``topic_perplexity_kernel``: (eq. 12, the temporary topics).
+
+    With ``added``, a word's temporary topic counts in Φ as in the neighbourhood: the
+    counts of every other word at its current topic, the word itself left out."""
     nwk, nk, ncz = count_topics(state)
     around = neighbourhood(state, ncz, cell) if context == "neighbourhood" else np.zeros(state.n_topics, np.int64)
     stream = Stream(state.key, state.counter, state.free_stream + 1 + cell)
+    counted = words_in_model == "added" and state.frozen is None
     topics = [-1] * len(words)
     for sweep in range(sweeps):
         for i, w in enumerate(words):
             if sweep:
                 around[topics[i]] -= 1
-            topics[i] = lane_draw(eq5_weights(state, nwk, nk, around, w), stream.bits())
+            placed = [(v, z) for j, (v, z) in enumerate(zip(words, topics)) if counted and j != i and z >= 0]
+            nwk_now, nk_now = nwk.copy(), nk.copy()
+            for v, z in placed:
+                nwk_now[v, z] += 1
+                nk_now[z] += 1
+            p = eq5_weights(state, nwk_now, nk_now, around, w)
+            topics[i] = int(np.argmax(p)) if labels == "argmax" else lane_draw(p, stream.bits())
             around[topics[i]] += 1
     if state.frozen is not None:
         nk = state.frozen.sum(axis=0)
+    elif counted:
+        nk = nk + np.bincount(topics, minlength=state.n_topics)
     if path_topics == "smoothed":
         path = (nk + state.alpha) / (nk.sum() + state.n_topics * state.alpha)
     elif any(nk[z] == 0 for z in topics):

@@ -20,9 +20,10 @@ probability ``eta``, else a uniformly random earlier one) within a fixed budget 
 samples, so a run does not depend on the machine's speed, nor a frame's cost on the
 mission's length. Now and then no pick chooses the newest frame (with ``eta`` 0.5 and
 ten picks a frame, one frame in about a thousand): its words keep the random topics
-they were given, and its perplexity says so (:attr:`StreamModel.refined` is 0). Not the authors' refinery (``picks="recent"``): it picks one of the
-newest 64 *observations*, which for a stream are frames, so the newest frame would be
-refined in about one pick in a hundred, and its perplexity read from topics still
+they were given, and its perplexity says so (:attr:`StreamModel.refined` is 0). Not our
+earlier translation of the authors' refinery (``picks="recent-64-ours"``): it picks one
+of the newest 64 *observations*, which for a stream are frames, so the newest frame would
+be refined in about one pick in a hundred, and its perplexity read from topics still
 nearly as random as they were drawn.
 """
 

@@ -14,7 +14,8 @@ Each step ``t`` (0-based) of a run of ``path_length`` steps, with the walker in 
    and with ``explore.candidates`` 8 the diagonals, those that exist) with the run's
    weight function (:mod:`curiosity_cli.explore.weights`), under the run's reading of
    eq. 8; topic perplexity (eq. 12) under the readings ``explore.candidate_context``,
-   ``candidate_sweeps`` and ``path_topics`` (:func:`~curiosity_cli.topics.perplexity.topic_perplexity`). A step
+   ``candidate_sweeps``, ``candidate_labels``, ``candidate_words`` and ``path_topics``
+   (:func:`~curiosity_cli.topics.perplexity.topic_perplexity`). A step
    whose neighbours are all visited is counted as boxed in; under the literal reading,
    which leaves them all weight 0, they are scored again by that module's boxed-in rule.
 4. **Move** to a neighbour drawn with probability proportional to its weight
@@ -266,7 +267,8 @@ def explore(
             topic_perplexity=np.array([
                 topic_perplexity(
                     topic_model, store.cell_words(g), g, context=settings.candidate_context,
-                    sweeps=settings.candidate_sweeps, path_topics=settings.path_topics,
+                    sweeps=settings.candidate_sweeps, labels=settings.candidate_labels,
+                    words_in_model=settings.candidate_words, path_topics=settings.path_topics,
                 )
                 for g in cells
             ]),

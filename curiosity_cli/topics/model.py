@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from curiosity_cli.checks import check_choice, check_float, check_int
-from curiosity_cli.config import EXPLORE_READINGS
+from curiosity_cli.config import EXPLORE_READINGS, RECENT_NEWEST
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics.batch_sweeps import aligned_zeros, batch_phases, sweep_phases
 from curiosity_cli.topics.model_checks import (
@@ -43,10 +43,9 @@ from curiosity_cli.topics.neighbours import check_neighbours
 
 _MIN_CAPACITY = 1024
 #: The authors' ROST refinery (rost_topics/include/rost/refinery.hpp, ``parallel_refine_online2``,
-#: with rost_txy_image_node.cpp's defaults): refine one of the newest ``observation_size`` = 64
-#: cells with probability ``p_refine_last_observation`` (0.5, the paper's η), else a cell drawn by
-#: age from Beta(``tau`` = 2, 1). :meth:`TopicModel.refine_realtime` with ``picks="recent"``.
-RECENT_OBSERVATIONS = 64
+#: with rost_txy_image_node.cpp's defaults): a cell of the last observation with probability
+#: ``p_refine_last_observation`` (0.5, the paper's η), else a cell drawn by age from Beta(``tau``
+#: = 2, 1). :meth:`TopicModel.refine_realtime` with ``picks="recent"`` (or ``"recent-64-ours"``).
 RECENT_TAU = 2.0
 
 
@@ -508,10 +507,13 @@ class TopicModel(CellMemory):
         - ``uniform``: the newest time with probability ``eta``, else a uniformly random
           earlier one (eq. 6; with a single time, always that one);
         - ``recent``: as the authors' ROST refinery (``parallel_refine_online2``), with
-          probability ``eta`` a uniform one of the newest :data:`RECENT_OBSERVATIONS`
-          times, else one drawn by age from Beta(:data:`RECENT_TAU`, 1) over all ``T``
-          times (time ``floor(T u^(1/τ))``, ``u`` uniform), so recent observations are
-          refined more often and old ones still now and then.
+          probability ``eta`` the newest time (the last observation), else one drawn by
+          age from Beta(:data:`RECENT_TAU`, 1) over all ``T`` times (time
+          ``floor(T u^(1/τ))``, ``u`` uniform), so recent observations are refined more
+          often and old ones still now and then;
+        - ``recent-64-ours``: as ``recent``, but with probability ``eta`` a uniform one
+          of the newest 64 times (our earlier translation of the refinery's
+          ``observation_size``; :data:`~curiosity_cli.config.RECENT_NEWEST`).
 
         Deterministic.
 
@@ -522,7 +524,7 @@ class TopicModel(CellMemory):
             no words (so the call ends even if every cell it can pick is empty).
         eta : float
             Refinement bias, 0 <= eta <= 1.
-        picks : {'uniform', 'recent'}
+        picks : {'uniform', 'recent', 'recent-64-ours'}
         return_newest : bool
             Also return the words sampled at the newest observation time: 0 when no pick
             chose it, and its words keep the topics they were given (a camera frame whose
@@ -538,12 +540,13 @@ class TopicModel(CellMemory):
 
         word_budget = check_int("word_budget", word_budget, 0)
         eta = check_float("eta", eta, 0, 1)
-        recent = check_choice("picks", picks, EXPLORE_READINGS["refine_picks"]) == "recent"
+        picks = check_choice("picks", picks, EXPLORE_READINGS["refine_picks"])
         if word_budget == 0 or self._n_observed == 0:
             return (0, 0) if return_newest else 0
         done, n_picks, newest = refine_realtime_kernel(
             word_budget, eta, self._order[: self._n_observed], self._time_groups(), *self._sampler_arrays(),
-            np.uint64(self._counter), not self._frozen, recent, RECENT_OBSERVATIONS, RECENT_TAU, self._free_stream,
+            np.uint64(self._counter), not self._frozen, picks in RECENT_NEWEST, RECENT_NEWEST.get(picks, 0), RECENT_TAU,
+            self._free_stream,
         )
         self._counter += 1 + int(n_picks)
         return (int(done), int(newest)) if return_newest else int(done)

@@ -1,10 +1,12 @@
 """The paper's open choices of exploration, each a named reading (``explore.candidates``,
-``candidate_context``, ``candidate_sweeps``, ``path_topics``, ``revisits``, ``refine_picks``):
-each against a hand computation, and the defaults against the runs made before they existed."""
+``candidate_context``, ``candidate_sweeps``, ``candidate_labels``, ``candidate_words``,
+``path_topics``, ``revisits``, ``refine_picks``): each against a hand computation, and the
+defaults against the runs made before they existed."""
 
 from __future__ import annotations
 
 import hashlib
+import math
 import re
 
 import numpy as np
@@ -12,8 +14,10 @@ import pytest
 from small_maps import small_config, two_region_store
 
 from curiosity_cli.config import CONFIG_DIR, UNRECORDED_READINGS, load_config
-from curiosity_cli.experiment.recipes import run_recipe
+from curiosity_cli.experiment.recipes import Recipe, run_recipe
 from curiosity_cli.explore.walker import explore, move_probabilities
+from curiosity_cli.maps.cell_grid import SquareGrid
+from curiosity_cli.topics import TopicModel
 from curiosity_cli.topics.map_model import map_topic_model
 from curiosity_cli.topics.perplexity import topic_perplexity
 
@@ -58,8 +62,9 @@ def test_the_default_of_every_reading_gives_the_runs_made_before_the_readings(co
 def test_each_reading_changes_the_runs():
     base = runs_digest()
     for key, value in [
-        ("candidates", 8), ("candidate_context", "own"), ("candidate_sweeps", 10), ("path_topics", "counts"),
-        ("revisits", "again"), ("refine_picks", "recent"),
+        ("candidates", 8), ("candidate_context", "own"), ("candidate_sweeps", 10), ("candidate_labels", "argmax"),
+        ("candidate_words", "added"), ("path_topics", "counts"), ("revisits", "again"), ("refine_picks", "recent"),
+        ("refine_picks", "recent-64-ours"),
     ]:
         assert runs_digest(**{key: value}) != base, key
 
@@ -116,6 +121,94 @@ def test_temporary_labels_with_and_without_the_neighbourhood():
     assert totals[own].mean() < totals[near].mean()
 
 
+def labelled_model(cells: dict) -> TopicModel:
+    """2 topics, 3 words, α = β = 0.5, on a 1 x 3 grid; ``cells`` maps a cell to its (words, topics)."""
+    model = TopicModel(2, 3, SquareGrid(1, 3).neighbour_table(), alpha=0.5, beta=0.5, seed=0)
+    for cell, (words, _) in cells.items():
+        model.add_cell(cell, words)
+    state = model.full_state()
+    counts = {name: np.zeros_like(state[name]) for name in ("nwk", "nk", "ncz", "ng")}
+    for cell, (words, topics) in cells.items():
+        first = state["cell_first"][cell]
+        state["topics"][first : first + len(topics)] = topics
+        for w, z in zip(words, topics):
+            counts["nwk"][w, z] += 1
+            counts["nk"][z] += 1
+            counts["ncz"][cell, z] += 1
+    for cell, row in enumerate(model.neighbours):
+        counts["ng"][cell] = counts["ncz"][cell] + sum(counts["ncz"][d] for d in row if d >= 0)
+    model.set_full_state(**state | counts)
+    return model
+
+
+@pytest.mark.parametrize(
+    ("context", "words_in_model", "topics", "smoothed", "counts"),
+    [
+        # Cell 0 holds words 0, 0 at topic 0; topic 1 holds nothing. Eq. 5's weight of topic k
+        # for word w is (n_kw + β) / (n_k + Vβ) · (local_k + α), Vβ = 1.5. The candidate, at
+        # cell 1, holds words 2 then 0.
+        # own, held out: word 2: 0.5/3.5 · 0.5 = 0.071 against 0.5/1.5 · 0.5 = 0.167: topic 1;
+        # word 0: 2.5/3.5 · 0.5 = 0.357 against 0.5/1.5 · 1.5 = 0.5: topic 1. P(1 | path) is
+        # (0 + 0.5) / (2 + 1) = 1/6 smoothed (perplexity 6), 0 / 2 by counts (infinite).
+        ("own", "held-out", [1, 1], 6.0, math.inf),
+        # own, added: word 2 as before, topic 1, which then holds it (n_1 = 1); word 0:
+        # 0.357 against 0.5/2.5 · 1.5 = 0.3: topic 0. The path's n = (2 + 1, 0 + 1), N = 4:
+        # smoothed P = 3.5/5, 1.5/5 (perplexity 1 / √0.21); counts 3/4, 1/4 (4 / √3).
+        ("own", "added", [1, 0], 1 / math.sqrt(0.21), 4 / math.sqrt(3)),
+        # neighbourhood: cell 1's counts (2, 0), from cell 0. Held out: word 2: 0.5/3.5 · 2.5 =
+        # 0.357 against 0.167, topic 0; word 0 too (2.5/3.5 · 3.5 against 0.167). P(0 | path)
+        # = 2.5/3 smoothed (perplexity 1.2), 2/2 by counts (1).
+        ("neighbourhood", "held-out", [0, 0], 1.2, 1.0),
+        # added: the same labels (word 0: 2.5/4.5 · 3.5 against 0.167), and n = (4, 0), N = 4:
+        # P(0 | path) = 4.5/5 smoothed, 4/4 by counts
+        ("neighbourhood", "added", [0, 0], 1 / 0.9, 1.0),
+    ],
+)
+def test_argmax_labels_of_held_out_and_added_words_by_hand(context, words_in_model, topics, smoothed, counts):
+    model = labelled_model({0: ([0, 0], [0, 0])})
+    assert model.topic_totals().tolist() == [2, 0]
+    before = model.full_state()
+    for path_topics, expected in (("smoothed", smoothed), ("counts", counts)):
+        value, labels = topic_perplexity(
+            model, [2, 0], 1, context=context, labels="argmax", words_in_model=words_in_model, path_topics=path_topics,
+            return_topics=True,
+        )
+        assert labels.tolist() == topics
+        assert value == pytest.approx(expected, rel=1e-12)
+    # the added words left the model, and its random state did not move
+    after = model.full_state()
+    assert after["counter"] == before["counter"]
+    for name in ("topics", "nwk", "nk", "ncz", "ng"):
+        np.testing.assert_array_equal(after[name], before[name], err_msg=name)
+
+
+def test_argmax_sweeps_choose_each_label_again_by_hand():
+    # Topic 0 holds words 0, 2 (cell 0), topic 1 words 1, 1, 2 (cell 2): Φ_0 = (2.5, 0.5, 1.5) / 3.5,
+    # Φ_1 = (0.5, 2.5, 1.5) / 4.5. The candidate's words 2 then 1, each against the other's label
+    # only (own), held out. Pass 1: word 2: Φ_0(2) · 0.5 = 0.214 against Φ_1(2) · 0.5 = 0.167,
+    # topic 0; word 1: Φ_0(1) · 1.5 = 0.214 against Φ_1(1) · 0.5 = 0.278, topic 1. Pass 2:
+    # word 2, with word 1 at topic 1: 0.214 against Φ_1(2) · 1.5 = 0.5, topic 1; word 1: 0.071
+    # against 0.833, topic 1. P(k | path), smoothed: (2.5, 3.5) / 6.
+    model = labelled_model({0: ([0, 2], [0, 0]), 2: ([1, 1, 2], [1, 1, 1])})
+    for sweeps, topics in ((1, [0, 1]), (2, [1, 1]), (5, [1, 1])):
+        value, labels = topic_perplexity(
+            model, [2, 1], 1, context="own", sweeps=sweeps, labels="argmax", return_topics=True
+        )
+        assert labels.tolist() == topics
+        path = np.array([2.5, 3.5]) / 6
+        assert value == pytest.approx(math.exp(-np.mean(np.log(path[topics]))), rel=1e-12)
+    assert topic_perplexity(model, [2, 1], 1, context="own", sweeps=2, labels="argmax") == pytest.approx(12 / 7)
+
+
+def test_added_words_are_never_infinitely_surprising_under_counts():
+    # held out, the walker meets candidates of topics its path has not seen (the test below);
+    # added, a candidate's own words make every label's count at least 1
+    e = run("topic-perplexity", path_topics="counts", candidate_words="added", path_length=40, checkpoints=(40,))
+    assert np.isfinite(e.topic_perplexity).all() and (e.topic_perplexity >= 1).all()
+    held_out = run("topic-perplexity", path_topics="counts", path_length=40, checkpoints=(40,))
+    assert np.isinf(held_out.topic_perplexity).any()
+
+
 def test_counts_path_topics_make_unseen_topics_infinite_and_the_walker_takes_them():
     e = run("topic-perplexity", path_topics="counts", path_length=40, checkpoints=(40,))
     infinite = np.isinf(e.topic_perplexity)
@@ -142,15 +235,50 @@ def test_a_reading_enters_the_run_recipe_only_when_it_is_not_the_default():
     assert "candidates" not in inputs and "path_topics" not in inputs
 
 
+def test_a_run_made_when_recent_picked_among_64_observations_is_not_current():
+    # the run.json recipe of quick.yaml's run with refine_picks: recent as commit fdd091f wrote
+    # it, when recent picked among the newest 64 observation times
+    old = {"recipe": {"digest": "be2140a9958332cf", "inputs": {
+        "dataset": "m", "restart": 0, "seed": 0, "store": "store", "vocabulary_hashes": [],
+        "weight_function": "topic-perplexity",
+        "model": {"alpha": 0.1, "beta": 0.1, "eta": 0.5, "spatial_neighbours": 4, "topics": 64},
+        "explore": {
+            "checkpoints": [10, 20, 40, 80, 160], "coverage": "literal", "path_length": 160, "refine_picks": "recent",
+            "samples_per_step": 100000, "step_seconds": None,
+        },
+    }}}
+    assert Recipe(old["recipe"]["inputs"]).digest == old["recipe"]["digest"]
+    now = run_recipe(
+        load_config(CONFIG_DIR / "quick.yaml", ["explore.refine_picks=recent"]), "m", "store", [], "topic-perplexity", 0
+    )
+    assert now.inputs["explore"]["refine_newest"] == 1
+    assert "explore.refine_newest was absent, now 1" in now.changes(old)
+    # nor is it current as ours, which says so by name
+    ours = run_recipe(
+        load_config(CONFIG_DIR / "quick.yaml", ["explore.refine_picks=recent-64-ours"]), "m", "store", [],
+        "topic-perplexity", 0,
+    )
+    assert ours.inputs["explore"]["refine_newest"] == 64
+    assert "explore.refine_picks was 'recent', now 'recent-64-ours'" in ours.changes(old)
+    # uniform records neither key, as before
+    default = run_recipe(load_config(CONFIG_DIR / "quick.yaml"), "m", "store", [], "topic-perplexity", 0)
+    assert "refine_newest" not in default.inputs["explore"] and "refine_picks" not in default.inputs["explore"]
+
+
 @pytest.mark.parametrize(
     ("override", "message"),
     [
         ("explore.candidates=6", "explore.candidates: got 6 (int), expected one of 4, 8"),
         ("explore.candidate_context=cells", "explore.candidate_context: got 'cells' (str), expected one of neighbourhood, own"),
         ("explore.candidate_sweeps=0", "explore.candidate_sweeps: got 0 (int), expected an integer >= 1"),
+        ("explore.candidate_labels=mode", "explore.candidate_labels: got 'mode' (str), expected one of sample, argmax"),
+        ("explore.candidate_words=kept", "explore.candidate_words: got 'kept' (str), expected one of held-out, added"),
         ("explore.path_topics=raw", "explore.path_topics: got 'raw' (str), expected one of smoothed, counts"),
         ("explore.revisits=twice", "explore.revisits: got 'twice' (str), expected one of once, again"),
-        ("explore.refine_picks=newest", "explore.refine_picks: got 'newest' (str), expected one of uniform, recent"),
+        (
+            "explore.refine_picks=newest",
+            "explore.refine_picks: got 'newest' (str), expected one of uniform, recent, recent-64-ours",
+        ),
     ],
 )
 def test_bad_readings_are_named(override, message):
@@ -162,7 +290,8 @@ def test_bad_readings_are_named(override, message):
 
 def test_a_run_under_the_authors_readings_is_the_same_for_the_same_seed():
     settings = dict(
-        candidate_context="own", candidate_sweeps=10, path_topics="counts", revisits="again", refine_picks="recent"
+        candidate_labels="argmax", candidate_words="added", path_topics="counts", revisits="again",
+        refine_picks="recent",
     )
     a, b = run(**settings), run(**settings)
     for field in _FIELDS:
@@ -173,8 +302,8 @@ def test_rost_yaml_sets_every_reading_as_the_authors_code():
     # each value is the one configs/rost.yaml cites from the authors' ROST code
     rost = load_config(CONFIG_DIR / "rost.yaml")
     assert {key: getattr(rost.explore, key) for key in UNRECORDED_READINGS} == {
-        "candidates": 4, "candidate_context": "own", "candidate_sweeps": 10, "path_topics": "counts",
-        "revisits": "again", "refine_picks": "recent",
+        "candidates": 4, "candidate_context": "neighbourhood", "candidate_sweeps": 1, "candidate_labels": "argmax",
+        "candidate_words": "added", "path_topics": "counts", "revisits": "again", "refine_picks": "recent",
     }
     assert (rost.model.topics, rost.model.alpha, rost.model.beta, rost.model.eta) == (64, 0.1, 0.1, 0.5)
     assert rost.words.colour_words and rost.words.orb_detector == "keypoints"

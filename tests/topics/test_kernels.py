@@ -368,23 +368,28 @@ def test_add_words_needs_an_observed_cell():
         model.add_words(unobserved, [1, 2])
 
 
+@pytest.mark.parametrize("picks", ["recent", "recent-64-ours"])
 @pytest.mark.parametrize("eta", [0.0, 0.5, 1.0])
-def test_recent_refinement_picks_match_twin(eta):
+def test_recent_refinement_picks_match_twin(eta, picks):
     rng = np.random.default_rng(12)
     model = TopicModel(5, 10, SquareGrid(10, 10).neighbour_table(), alpha=0.3, beta=0.2, seed=12)
     for t, cell in enumerate(rng.permutation(100)[:80]):
         model.add_cell(int(cell), rng.integers(0, 10, rng.integers(1, 4)), time=t)
     twin = NaiveModel.of(model)
-    done = model.refine_realtime(500, eta=eta, picks="recent")
-    assert done == refine_realtime_naive(twin, 500, eta, "recent")[0]
+    done, newest = model.refine_realtime(500, eta=eta, picks=picks, return_newest=True)
+    assert (done, newest) == tuple(refine_realtime_naive(twin, 500, eta, picks)[::2])
     assert_matches(model, twin)
+    if eta == 1.0 and picks == "recent":
+        assert newest == done  # every pick is the last observation, as the authors' refinery with one cell a step
 
 
-def test_recent_picks_follow_the_stated_probabilities():
+@pytest.mark.parametrize("window", [1, 64])
+def test_recent_picks_follow_the_stated_probabilities(window):
     # 100 observation times, one word each: count which time each pick refines through the
     # twin's picker (the kernel matches the twin above). With eta = 0.5, P(time t) is
-    # 0.5 / 64 for each of the newest 64 plus 0.5 * ((t + 1)^2 - t^2) / 100^2 from Beta(2, 1).
-    n_times, n_picks, window = 100, 200_000, 64
+    # 0.5 / window for each of the newest `window` (recent: 1; recent-64-ours: 64) plus
+    # 0.5 * ((t + 1)^2 - t^2) / 100^2 from Beta(2, 1).
+    n_times, n_picks = 100, 200_000
     picker = Stream(mix(5), 0, 100)
     counts = np.zeros(n_times)
     for _ in range(n_picks):
@@ -406,5 +411,5 @@ def test_recent_picks_follow_the_stated_probabilities():
 
 
 def test_refinement_picks_are_checked():
-    with pytest.raises(ParameterError, match="^picks: got 'newest', expected one of uniform, recent$"):
+    with pytest.raises(ParameterError, match="^picks: got 'newest', expected one of uniform, recent, recent-64-ours$"):
         small_model(1).refine_realtime(10, eta=0.5, picks="newest")

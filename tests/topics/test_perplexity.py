@@ -92,7 +92,9 @@ def test_perplexity_calls_do_not_change_the_model():
     before = path_model(4)
     for cell in [1, 2, 4, 14, 5]:
         word_perplexity(model, [1, 2, 3, 4])
-        topic_perplexity(model, np.arange(12), cell)
+        for labels in ("sample", "argmax"):
+            for words_in_model in ("held-out", "added"):
+                topic_perplexity(model, np.arange(12), cell, sweeps=2, labels=labels, words_in_model=words_in_model)
     assert_same_state(model, before)
     model.refine_realtime(50, eta=0.5)
     before.refine_realtime(50, eta=0.5)
@@ -119,22 +121,61 @@ def test_perplexities_name_the_bad_parameter():
         topic_perplexity(model, [1], 16)
 
 
-# --- the readings of eq. 12 (explore.candidate_context, candidate_sweeps, path_topics) ---------
+# --- the readings of eq. 12 (explore.candidate_context, candidate_sweeps, candidate_labels, candidate_words,
+# path_topics) ---------
 
 
 @pytest.mark.parametrize("context", ["neighbourhood", "own"])
 @pytest.mark.parametrize("sweeps", [1, 3])
 @pytest.mark.parametrize("path_topics", ["smoothed", "counts"])
-def test_topic_perplexity_readings_match_twin(context, sweeps, path_topics):
+@pytest.mark.parametrize("labels", ["sample", "argmax"])
+@pytest.mark.parametrize("words_in_model", ["held-out", "added"])
+def test_topic_perplexity_readings_match_twin(context, sweeps, path_topics, labels, words_in_model):
     model = path_model(4)
     words = np.random.default_rng(5).integers(0, 12, 30)
     for cell in (6, 2, 15):  # on the path, beside it, away from it
         value, topics = topic_perplexity(
-            model, words, cell, context=context, sweeps=sweeps, path_topics=path_topics, return_topics=True
+            model, words, cell, context=context, sweeps=sweeps, labels=labels, words_in_model=words_in_model,
+            path_topics=path_topics, return_topics=True,
         )
-        twin_value, twin_topics = topic_perplexity_naive(NaiveModel.of(model), words, cell, context, sweeps, path_topics)
+        twin_value, twin_topics = topic_perplexity_naive(
+            NaiveModel.of(model), words, cell, context, sweeps, path_topics, labels, words_in_model
+        )
         np.testing.assert_array_equal(topics, twin_topics)
         assert value == pytest.approx(twin_value, rel=1e-12) or value == twin_value == math.inf
+
+
+@pytest.mark.parametrize("labels", ["sample", "argmax"])
+def test_added_words_of_a_frozen_model_count_only_in_the_neighbourhood(labels):
+    # a frozen model's Φ and totals stay as they are when it adds words, so also here
+    model = path_model(2, frozen=np.arange(60).reshape(12, 5) % 7)
+    words = np.random.default_rng(3).integers(0, 12, 40)
+    for cell in (1, 9):
+        added = topic_perplexity(model, words, cell, labels=labels, words_in_model="added", return_topics=True)
+        held_out = topic_perplexity(model, words, cell, labels=labels, return_topics=True)
+        twin = topic_perplexity_naive(NaiveModel.of(model), words, cell, labels=labels, words_in_model="added")
+        np.testing.assert_array_equal(added[1], twin[1])
+        np.testing.assert_array_equal(added[1], held_out[1])
+        assert added[0] == held_out[0] == pytest.approx(twin[0], rel=1e-12)
+
+
+def test_argmax_labels_draw_nothing():
+    # the same counts at another random state: other sampled labels, the same argmax ones
+    model, later = path_model(6), path_model(6)
+    state = later.full_state()
+    later.set_full_state(**state | {"counter": state["counter"] + 7})
+    words = np.random.default_rng(6).integers(0, 12, 30)
+    for words_in_model in ("held-out", "added"):
+        sampled = [
+            topic_perplexity(m, words, 2, words_in_model=words_in_model, return_topics=True)[1] for m in (model, later)
+        ]
+        assert not np.array_equal(*sampled)
+        first, again = (
+            topic_perplexity(m, words, 2, labels="argmax", words_in_model=words_in_model, return_topics=True)
+            for m in (model, later)
+        )
+        np.testing.assert_array_equal(first[1], again[1])
+        assert first[0] == again[0]
 
 
 def test_own_context_ignores_the_neighbourhood_by_hand():
@@ -193,3 +234,7 @@ def test_reading_arguments_are_checked():
         topic_perplexity(model, [1], 0, sweeps=0)
     with pytest.raises(ParameterError, match="^path_topics: got 'raw'"):
         topic_perplexity(model, [1], 0, path_topics="raw")
+    with pytest.raises(ParameterError, match="^labels: got 'mode', expected one of sample, argmax$"):
+        topic_perplexity(model, [1], 0, labels="mode")
+    with pytest.raises(ParameterError, match="^words_in_model: got 'kept', expected one of held-out, added$"):
+        topic_perplexity(model, [1], 0, words_in_model="kept")
