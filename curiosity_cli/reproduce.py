@@ -58,6 +58,6 @@ def reproduce(
             config, folder, cache_dir=cache_dir, force=force, workers=workers, on_stage=stage, on_done=done
         )
     stage("evaluating", 0)
-    evaluate_experiment(folder)
+    evaluate_experiment(folder, cache_dir=cache_dir)
     stage("plotting", 0)
     return write_figures(folder).report

@@ -79,6 +79,8 @@ SPECIFICATION = "specification"
 #: The table and the figure of a study's curve, in its sweep folder: MI against human labels, and against Z_b.
 TABLE, FIGURE = "specifications.csv", "specification-curve"
 BATCH_TABLE, BATCH_FIGURE = "specifications-batch.csv", "specification-curve-batch"
+#: The mechanism's figure (SWEEP.md's "Does surprise point at what is new?").
+MECHANISM_FIGURE = "mechanism"
 #: A name leaves room in its folders' names (at most MAX_NAME) for ``specification-`` and the swept values.
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,79}$")
 
@@ -269,8 +271,52 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
             write_specification_curve(table, choices, folder / figure, label="label", datasets=datasets, against=words)
             lines += [f"![specification curve, MI against {words}]({figure}.png)", ""]
         lines += _curve_rows(table, names) + ["", curve_sentence(table), ""]
+        if against == "human":
+            lines += _mechanism_section(table, names, folder, datasets)
     lines += [f"- `{', '.join(t.values.values())}`: not pooled: {t.error}" for t in treatments if t.pooled is None]
     return lines + [""] * any(t.pooled is None for t in treatments)
+
+
+def _mechanism_section(table, names: list[str], folder: Path, datasets: list[str]) -> list[str]:
+    """SWEEP.md's "Does surprise point at what is new?": topic perplexity's mechanism per specification and map,
+    a figure and a table (:mod:`~curiosity_cli.evaluate.mechanism`), beside its MI ratio to each walker."""
+    from curiosity_cli.evaluate.specification_curve import VERSUS
+    from curiosity_cli.plots.mechanism import write_mechanism_figure
+    from curiosity_cli.sweep_report import number
+
+    lines = [
+        "## Does surprise point at what is new?",
+        "",
+        "Per specification and map, over topic perplexity's pooled runs at "
+        "80 steps (`mechanism.csv` of each experiment): **M1** the within-step AUC of its score for the candidates "
+        "holding a human class new to the path against the other unvisited candidates (0.5: it cannot tell them "
+        "apart); **M2** the share of moves with such a candidate next to the walker (how often there was anything "
+        "new to point at); **M3** the chance it put on them beyond what stochastic coverage would have (did it act "
+        "on it); **M5** the share of its candidates whose topic perplexity was infinite; beside them its MI ratio "
+        "to each walker. Where M1 is above 0.5 but M2 or M3 is small, surprise points at the new but the walker "
+        "rarely has, or takes, the chance to follow it.",
+        "",
+    ]
+    if table.empty:
+        return lines + ["(no specification pooled)", ""]
+    figure = table.assign(
+        specification=table["label"],
+        **{f"mi_ratio_{w}": table[f"ratio_{w}"] for w in VERSUS},
+    )
+    if figure[["auc", "opportunity", "gain"]].notna().any(axis=None):
+        write_mechanism_figure(figure, folder / MECHANISM_FIGURE, datasets=datasets)
+        lines += [f"![mechanism per specification and map]({MECHANISM_FIGURE}.png)", ""]
+    lines += [
+        "| " + " | ".join(names) + " | map | M1 AUC | M2 opportunity | M3 gain | M5 infinite | "
+        + " | ".join(f"MI ratio to {w}" for w in VERSUS) + " |",
+        "|" + "---|" * (len(names) + 5 + len(VERSUS)),
+    ]
+    for r in table.to_dict("records"):
+        lines.append("| " + " | ".join([
+            *(f"`{r[k]}`" for k in names), r["dataset"], number(r["auc"]), number(r["opportunity"]),
+            number(r["gain"], 3), number(r["infinite_share"]), *(number(r[f"ratio_{w}"]) for w in VERSUS),
+        ]) + " |")
+    return lines + [""]
 
 
 def _curve_rows(table, names: list[str]) -> list[str]:

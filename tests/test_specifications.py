@@ -128,6 +128,12 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
         assert row["distinct_stochastic-coverage"] == pytest.approx(walker["stochastic-coverage"])
         ours = steering[steering["weight_function"] == "topic-perplexity"]["steering"]
         assert len(ours) == 4 and row["steering_topic-perplexity"] == pytest.approx(ours.mean())
+        mechanism = pd.concat(
+            pd.read_csv(folder / f"specification-{row['specification']}_seed-{s}" / "mechanism.csv") for s in (1, 2)
+        ).query("path_length == 80 and weight_function == 'topic-perplexity'")
+        assert len(mechanism) == 4
+        for measure in ("auc", "opportunity", "gain", "infinite_share"):
+            assert row[measure] == pytest.approx(mechanism[measure].mean(), nan_ok=True)
         assert (
             f"| `{row['specification']}` | own | {row['ratio_random-walk']:.2f} [" in report
             and f"| {row['ratio']:.2f} [{row['ratio_ci_low']:.2f}, {row['ratio_ci_high']:.2f}] ({next_best}) | "
@@ -137,6 +143,8 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
     assert "leads every other walker at p < 0.05" in report and "in 0 of 2 on own: 0 of 2 specification-map pairs" in report
     assert f"the paper's ratio lies inside the 95 % interval in {inside} of 2 on own (Montreal1: 1.51)" in report
     assert "Against its null reference (the walkers' labels permuted within each restart), the ratio to the next best has p" in report
+    assert report.index("## Does surprise point at what is new?") < report.index("### Against Z_b")
+    assert (folder / "mechanism.png").stat().st_size > 1000
 
     finished = sorted(folder.glob("*/runs/*/*/restart-*/*")) + sorted(folder.glob("*/labels/*/*/*.npz"))
     assert len(finished) > 4 * 3 * 2

@@ -251,12 +251,13 @@ def label(
     )
 
 
-def evaluate(folder: Path = DEFAULT_EXPERIMENT, *, partial: bool = False) -> Evaluation:
+def evaluate(folder: Path = DEFAULT_EXPERIMENT, *, partial: bool = False, cache_dir: Path = DEFAULT_CACHE) -> Evaluation:
     """``curiosity evaluate``: MI, statistics and tables of a labelled experiment; ``partial`` leaves out (and
-    lists) the runs without usable labels. As :func:`~curiosity_cli.evaluate.tables.evaluate_experiment`."""
+    lists) the runs without usable labels; ``cache_dir`` holds the word stores (the mechanism table reads
+    each cell's words). As :func:`~curiosity_cli.evaluate.tables.evaluate_experiment`."""
     from curiosity_cli.evaluate.tables import evaluate_experiment
 
-    return evaluate_experiment(folder_argument(folder), partial=partial)
+    return evaluate_experiment(folder_argument(folder), partial=partial, cache_dir=folder_argument(cache_dir, "cache_dir"))
 
 
 def plot(folder: Path = DEFAULT_EXPERIMENT) -> WrittenFigures:

@@ -9,6 +9,7 @@ import typer
 from curiosity_cli.cli import app, usage_errors
 from curiosity_cli.cli.label import EXPERIMENT
 from curiosity_cli.experiment.layout import ExperimentFolder
+from curiosity_cli.paths import DEFAULT_CACHE
 
 #: Skipped pieces named on the terminal (skipped.json lists them all).
 _SHOWN = 3
@@ -19,6 +20,7 @@ _SHOWN = 3
 def evaluate(
     folder: Path = EXPERIMENT,
     partial: bool = typer.Option(False, "--partial", help="Evaluate the runs that have usable labels, leaving out (and listing) those that do not."),
+    cache_dir: Path = typer.Option(DEFAULT_CACHE, "--cache-dir", help="Where word stores are kept."),
 ) -> None:
     """Mutual information of the path labelings against human and batch labels, with statistics.
 
@@ -32,7 +34,7 @@ def evaluate(
     from curiosity_cli.files import display_path
 
     try:
-        result = api.evaluate(folder, partial=partial)
+        result = api.evaluate(folder, partial=partial, cache_dir=cache_dir)
     except IncompleteLabelsError as exc:
         raise CuriosityError(
             f"{len(exc.left_out)} runs of the grid have no usable labels ({first_of(exc.left_out)}); `curiosity label` "

@@ -49,6 +49,8 @@ class Pooled:
         The replicates pooled.
     steering : pandas.DataFrame
         :func:`~curiosity_cli.evaluate.tables.summarise_steering` over every run's ``steering.csv``.
+    mechanism : pandas.DataFrame
+        :func:`~curiosity_cli.evaluate.mechanism.summarise_mechanism` over every run's ``mechanism.csv``.
     """
 
     headline: pd.DataFrame
@@ -57,6 +59,7 @@ class Pooled:
     revisits: pd.DataFrame
     seeds: tuple[int, ...]
     steering: pd.DataFrame
+    mechanism: pd.DataFrame
 
     def versus(self, dataset: str, against: str) -> pd.DataFrame:
         """Topic perplexity against each other walker on ``dataset`` at the headline's length
@@ -70,21 +73,26 @@ class Pooled:
         revisits = self.revisits[self.revisits["measure"] == "distinct_cells"]
         return _at_headline(revisits, dataset, walker)
 
+    def mean_mechanism(self, dataset: str, walker: str, measure: str) -> float:
+        """The walker's mean of a ``mechanism.csv`` measure at 80 steps (the headline length) over every pooled
+        run (:mod:`~curiosity_cli.evaluate.mechanism`); NaN without."""
+        return _at_headline(self.mechanism, dataset, walker, measure)
+
     def mean_steering(self, dataset: str, walker: str) -> float:
         """The walker's mean steering at 80 steps (the headline length) over every pooled run
         (:mod:`~curiosity_cli.evaluate.steering`); NaN without."""
         return _at_headline(self.steering, dataset, walker)
 
 
-def _at_headline(summary, dataset: str, walker: str) -> float:
-    """``mean`` of a summary's row for ``dataset``, ``walker`` and the headline's length; NaN if none."""
+def _at_headline(summary, dataset: str, walker: str, column: str = "mean") -> float:
+    """``column`` of a summary's row for ``dataset``, ``walker`` and the headline's length; NaN if none."""
     rows = summary[(summary["dataset"] == dataset) & (summary["weight_function"] == walker)]
-    match = rows[rows["path_length"] == headline_length(rows["path_length"].unique())]["mean"]
+    match = rows[rows["path_length"] == headline_length(rows["path_length"].unique())][column]
     return float(match.iloc[0]) if len(match) else float("nan")
 
 
 def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Pooled:
-    """Pool the ``mi.csv`` and ``steering.csv`` of experiment folders that differ only in their seed.
+    """Pool the ``mi.csv``, ``steering.csv`` and ``mechanism.csv`` of experiment folders that differ only in their seed.
 
     Parameters
     ----------
@@ -98,12 +106,14 @@ def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Poo
     Raises
     ------
     EvaluationError
-        A folder without ``mi.csv`` or ``steering.csv``, or from before ``mi.csv`` named
+        A folder without ``mi.csv``, ``steering.csv`` or ``mechanism.csv``, or from before ``mi.csv`` named
         its replicate, or two folders of the same seed (their pairs would count twice).
     """
     import pandas as pd
 
-    tables, steering = [], []
+    from curiosity_cli.evaluate.mechanism import summarise_mechanism
+
+    tables, steering, mechanism = [], [], []
     for folder in folders:
         mi = _read(ExperimentFolder(folder).table("mi"))
         if "replicate" not in mi or mi["replicate"].nunique() != 1:
@@ -113,20 +123,26 @@ def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Poo
             )
         tables.append(mi)
         steering.append(_read(ExperimentFolder(folder).table("steering")))
+        mechanism.append(_read(ExperimentFolder(folder).table("mechanism")))
     seeds = [int(mi["replicate"].iloc[0]) for mi in tables]
     if len(set(seeds)) != len(seeds):
         raise EvaluationError(f"seeds {seeds}: two experiments of the same seed cannot be pooled as replicates")
     mi = pd.concat(tables, ignore_index=True)
     steering = pd.concat(steering, ignore_index=True)
+    mechanism = pd.concat(mechanism, ignore_index=True)
     if walkers is not None:
         mi = mi[mi["weight_function"].isin(walkers) | mi["weight_function"].isin(CEILINGS)]
         steering = steering[steering["weight_function"].isin(walkers)]
+        mechanism = mechanism[mechanism["weight_function"].isin(walkers)]
     tests = paired_tests(mi)
     paper_maps = Experiment.open(folders[0]).paper_maps()
     summary, effects = summarise(mi), paired_effects(mi, tests)
     top = with_uncertainty(headline(summary, tests, paper_maps, effects), mi)
     batch = with_uncertainty(headline(summary, tests, paper_maps, effects, against="batch"), mi)
-    return Pooled(top, batch, effects, summarise_revisits(mi), tuple(sorted(seeds)), summarise_steering(steering))
+    return Pooled(
+        top, batch, effects, summarise_revisits(mi), tuple(sorted(seeds)), summarise_steering(steering),
+        summarise_mechanism(mechanism),
+    )
 
 
 def _read(path: Path):

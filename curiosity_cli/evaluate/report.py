@@ -512,6 +512,47 @@ def _revisits_section(revisits, lengths: list[int], config: ExperimentConfig) ->
     return lines
 
 
+def _mechanism_section(mechanism, lengths: list[int]) -> list[str]:
+    """Per map and walker at the headline's length (else the shortest), whether surprise pointed at what is new
+    (:mod:`~curiosity_cli.evaluate.mechanism`): the means over restarts of M1-M5."""
+    from curiosity_cli.evaluate.mechanism import summarise_mechanism
+
+    if mechanism is None or mechanism.empty:
+        return []
+    length = headline_length(lengths) or min(lengths)
+    summary = summarise_mechanism(mechanism)
+    summary = summary[summary["path_length"] == length]
+    if summary.empty:
+        return []
+    lines = [
+        "## Does surprise point at what is new?",
+        "",
+        f"Per map and walker, means over restarts at {length} steps (`mechanism.csv` has every run and length): "
+        "**M1** the within-step AUC of the walker's score (its own perplexity; topic perplexity's for walkers "
+        "without one) for the candidates holding a human class new to the path against the other unvisited "
+        "candidates (0.5: it cannot tell them apart); **M2** the share of moves with such a candidate; **M3** the "
+        "chance the walker put on them beyond stochastic coverage's, at those moves; **M4** the cells it entered "
+        "that held a class new to the path, and the classes it found; **M5** the share of its candidates with "
+        "infinite topic perplexity, and of those the share holding a word id the path had not seen.",
+        "",
+        "| map | walker | M1 AUC | M2 opportunity | M3 gain | M4 new-class cells | M4 classes found | M5 infinite "
+        "| M5 of those, unseen words |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in summary.to_dict("records"):
+        cells = [
+            _number(r["auc"]), _number(r["opportunity"]), _number(r["gain"], 3), _number(r["new_class_cells"], 1),
+            _number(r["classes_found"], 1), _number(r["infinite_share"]), _number(r["infinite_unseen"]),
+        ]
+        lines.append(f"| {r['dataset']} | {_label(r['weight_function'])} | " + " | ".join(cells) + " |")
+    return lines + [""]
+
+
+def _number(value, digits: int = 2) -> str:
+    """A table cell: ``digits`` decimals, empty for NaN."""
+    return f"{value:.{digits}f}" if np.isfinite(value) else ""
+
+
 def _steering_section(steering, lengths: list[int]) -> list[str]:
     """Per map and walker, the mean steering at the headline's length (else the shortest),
     with what it means (:mod:`~curiosity_cli.evaluate.steering`)."""
@@ -594,6 +635,7 @@ def write_report(
     lines += _mi_table(summary, "batch", lengths)
     lines += _revisits_section(evaluation.revisits, lengths, config)
     lines += _steering_section(evaluation.steering, lengths)
+    lines += _mechanism_section(evaluation.mechanism, lengths)
     lines += _convergence_section(evaluation.convergence, config)
     lines += _effects_table(evaluation.effects, lengths)
     lines += _classes_sections(evaluation.classes_summary)

@@ -21,8 +21,13 @@ against human labels (or, as a second curve, against Z_b):
   lies; the paired Wilcoxon p against that walker, the pairs, the smallest lead
   detectable at 80 % power and whether the paper's ratio for the map lies inside the
   interval (``paper_inside``);
-- the distinct cells of topic perplexity and stochastic coverage in 80 steps and topic
-  perplexity's steering (:mod:`~curiosity_cli.evaluate.steering`). Every number is the pooled headline's
+- the distinct cells of topic perplexity and stochastic coverage in 80 steps, topic
+  perplexity's steering (:mod:`~curiosity_cli.evaluate.steering`), and whether its
+  surprise points at what is new (:mod:`~curiosity_cli.evaluate.mechanism`): M1 the AUC
+  of its score for candidates holding a class new to the path, M2 the share of moves with
+  such a candidate, M3 the chance it put on them beyond stochastic coverage, M5 the share
+  of candidates with infinite perplexity (``auc``, ``opportunity``, ``gain``,
+  ``infinite_share``; means over the pooled runs). Every number is the pooled headline's
 (:func:`~curiosity_cli.evaluate.tables.headline`, :func:`~curiosity_cli.evaluate.tables.with_power`);
 this module only puts them in rows, sorted by ratio, and counts.
 """
@@ -46,6 +51,8 @@ if TYPE_CHECKING:
 #: The walkers whose distinct cells a curve's row gives, and the one whose steering it gives.
 DISTINCT_WALKERS = (HEADLINE_WEIGHT, "stochastic-coverage")
 STEERING_WALKER = HEADLINE_WEIGHT
+#: The mechanism's measures a curve's row gives, topic perplexity's (:mod:`~curiosity_cli.evaluate.mechanism`).
+MECHANISM_MEASURES = ("auc", "opportunity", "gain", "infinite_share")
 #: The walkers topic perplexity is compared with one by one, named before any run.
 VERSUS = tuple(w for w in PAPER_WALKERS if w != HEADLINE_WEIGHT)
 
@@ -61,7 +68,7 @@ CURVE_COLUMNS = (
     *(name for w in VERSUS for name in _versus_names(w)),
     "ratio", "ratio_ci_low", "ratio_ci_high", "null_median", "null_low", "null_high", "null_p", "p_value", "pairs",
     "next_best", "detectable_ratio", "pairs_for_lead", "paper_map", "paper_ratio", "paper_inside",
-    *(f"distinct_{w}" for w in DISTINCT_WALKERS), f"steering_{STEERING_WALKER}",
+    *(f"distinct_{w}" for w in DISTINCT_WALKERS), f"steering_{STEERING_WALKER}", *MECHANISM_MEASURES,
 )
 
 
@@ -98,6 +105,7 @@ def curve_table(specifications: Sequence[tuple[Mapping[str, str], Pooled]], agai
                 "paper_inside": _inside(r["paper_ratio"], r["ratio_ci_low"], r["ratio_ci_high"]),
                 **{f"distinct_{w}": pooled.mean_distinct_cells(dataset, w) for w in DISTINCT_WALKERS},
                 f"steering_{STEERING_WALKER}": pooled.mean_steering(dataset, STEERING_WALKER),
+                **{m: pooled.mean_mechanism(dataset, STEERING_WALKER, m) for m in MECHANISM_MEASURES},
             })
     table = pd.DataFrame(rows, columns=[*names, *CURVE_COLUMNS])
     return table.sort_values("ratio", kind="stable", na_position="last", ignore_index=True)

@@ -43,6 +43,14 @@ Written under ``results/<experiment>/``:
   moves and checkpoint length: the moves scored (``steps``) and the mean total-variation
   distance of the walker's step distribution from stochastic coverage's on the same
   candidates (``steering``, :mod:`~curiosity_cli.evaluate.steering`); none for planned walkers.
+- ``mechanism.csv``: per run of a walker that scores its moves and checkpoint length,
+  whether surprise points at what is new (:mod:`~curiosity_cli.evaluate.mechanism`): the
+  within-step AUC of the walker's score for candidates holding a class new to the path
+  (M1, ``auc``), the share of moves with such a candidate (M2, ``opportunity``), the
+  chance the walker put on them beyond stochastic coverage's (M3, ``gain``), new-class
+  cells entered and classes found (M4), and the share of candidates with infinite topic
+  perplexity and of those holding a word unseen on the path (M5). The word store is read
+  from ``cache_dir`` (extracted again if it is not there).
 - ``headline.csv``: per dataset, topic-perplexity MI at 80 steps (against human labels,
   or against Z_b on a map without them: ``against``) divided by the next best walker's,
   the paired difference to it with its CI and Wilcoxon p, whether topic perplexity beats
@@ -137,6 +145,7 @@ class Evaluation:
     convergence: pd.DataFrame | None = None
     revisits: pd.DataFrame | None = None
     steering: pd.DataFrame | None = None
+    mechanism: pd.DataFrame | None = None
 
 
 @dataclass(frozen=True)
@@ -148,6 +157,7 @@ class LabelRows:
     left_out: list[str]  # runs of the grid without usable labels, each naming the file at fault and why
     notes: list[str]  # label files of runs outside the grid, which change no number
     steering: list[dict]  # one per run that scored its moves and checkpoint (steering.csv)
+    mechanism: list[dict]  # likewise (mechanism.csv)
 
 
 def run_rows(
@@ -221,7 +231,7 @@ def run_rows(
     return rows, class_rows
 
 
-def label_rows(experiment: Experiment) -> LabelRows:
+def label_rows(experiment: Experiment, cache_dir: Path | None = None) -> LabelRows:
     """The table rows of every label file of an experiment, and the files left out, with why.
 
     Every label file must have been made from its run and its map's batch reference as
@@ -232,6 +242,8 @@ def label_rows(experiment: Experiment) -> LabelRows:
     Parameters
     ----------
     experiment : Experiment
+    cache_dir : Path, optional
+        Where the maps' word stores are cached (for ``mechanism.csv``); default the user cache.
 
     Raises
     ------
@@ -242,6 +254,7 @@ def label_rows(experiment: Experiment) -> LabelRows:
         A map of the config that cannot be loaded, naming it.
     """
     from curiosity_cli.label.label_files import examples_changed, read_label_file
+    from curiosity_cli.evaluate.mechanism import mechanism_rows, read_candidates
     from curiosity_cli.evaluate.steering import steering_rows
     from curiosity_cli.explore.runs import RunError, read_run
 
@@ -253,8 +266,9 @@ def label_rows(experiment: Experiment) -> LabelRows:
     planned = _planned_label_files(experiment)
     files, notes = _in_grid(layout, files, planned)
     skipped = []
-    rows, class_rows, steering, otherwise = [], [], [], []
+    rows, class_rows, steering, mechanism, otherwise = [], [], [], [], []
     batches = {}  # per map: what is wrong with its batch reference, None if nothing
+    surroundings = {}  # per map: its classes per cell and its words per cell, for mechanism.csv
     for path in files:
         try:
             meta, arrays = read_label_file(path)
@@ -295,7 +309,7 @@ def label_rows(experiment: Experiment) -> LabelRows:
             continue
         try:
             steps = (run.path, run.boxed_in())
-            candidates = run.candidates()
+            candidates = read_candidates(run)
         except RunError as exc:
             skipped.append(str(exc))
             continue
@@ -303,7 +317,11 @@ def label_rows(experiment: Experiment) -> LabelRows:
         rows += mi
         class_rows += classes
         if mi:
-            steering += steering_rows(mi[0], candidates, arrays["lengths"].tolist())
+            lengths = arrays["lengths"].tolist()
+            steering += steering_rows(mi[0], candidates, lengths)
+            if meta["dataset"] not in surroundings:
+                surroundings[meta["dataset"]] = _surroundings(experiment, meta["dataset"], cache_dir)
+            mechanism += mechanism_rows(mi[0], run.path, candidates, *surroundings[meta["dataset"]], lengths)
     if otherwise:
         raise EvaluationError(
             f"{len(otherwise)} label files or runs were made otherwise than {display_path(layout.config)} "
@@ -312,7 +330,24 @@ def label_rows(experiment: Experiment) -> LabelRows:
             rerun="label", force=False,
         )
     skipped += _unlabelled_runs(layout, files, planned)
-    return LabelRows(rows, class_rows, skipped, notes, steering)
+    return LabelRows(rows, class_rows, skipped, notes, steering, mechanism)
+
+
+def _surroundings(experiment: Experiment, dataset: str, cache_dir: Path | None) -> tuple:
+    """A map's human classes present per cell ((n_cells, C) bool, C = 0 without labels) and
+    its words per cell (the word store's ``cell_words``), for :func:`~curiosity_cli.evaluate.mechanism.mechanism_rows`."""
+    from curiosity_cli.evaluate.mechanism import class_presence
+    from curiosity_cli.label.classes import cell_class_pixels
+    from curiosity_cli.maps.map_data import load_map
+    from curiosity_cli.paths import DEFAULT_CACHE
+    from curiosity_cli.words.extract import extract_words
+
+    map_data = load_map(experiment.maps[dataset].entry)
+    store = extract_words(map_data, experiment.config.words, cache_dir=cache_dir or DEFAULT_CACHE).store
+    if map_data.labels is None:
+        return np.zeros((store.n_cells, 0), bool), store.cell_words
+    classes = max(c.id for c in map_data.legend) + 1
+    return class_presence(cell_class_pixels(map_data.labels, map_data.config.cell_width, classes)), store.cell_words
 
 
 def _batch_change(path: Path, recipe) -> str | None:
@@ -562,7 +597,7 @@ def read_maps(folder: Path):
         raise EvaluationError(f"{display_path(path)}: cannot read the table of maps: {exc}") from None
 
 
-def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
+def evaluate_experiment(folder: Path, *, partial: bool = False, cache_dir: Path | None = None) -> Evaluation:
     """Compute and write every table of an experiment folder (module docstring), and
     ``tables.json``: the tables' sizes and digests and what they were made from
     (:meth:`~curiosity_cli.experiment.experiment.Experiment.record_tables`).
@@ -575,6 +610,9 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
         (missing, corrupt or misplaced label files, broken runs), listing them in
         ``skipped.json`` and the ``skipped`` of the result. Without it such runs are an
         error: tables without them are not the experiment's.
+    cache_dir : Path, optional
+        Where the maps' word stores are cached (``mechanism.csv`` reads each cell's
+        words); default the user cache. A store that is not there is extracted again.
 
     Raises
     ------
@@ -598,16 +636,18 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
         experiment = Experiment.open(folder)
         layout = experiment.folder
         inputs = experiment.inputs()  # before reading: a file changed meanwhile makes the record stale, never wrong
-        found = label_rows(experiment)
+        found = label_rows(experiment, cache_dir)
         if found.left_out and not partial:
             raise IncompleteLabelsError(found.left_out)
         skipped = [*found.notes, *found.left_out]
         if not found.mi:
             raise EvaluationError(f"{display_path(layout.labels)}: every label file was left out: " + "; ".join(skipped))
+        from curiosity_cli.evaluate.mechanism import MECHANISM_COLUMNS
         from curiosity_cli.evaluate.steering import STEERING_COLUMNS
 
         mi = pd.DataFrame(found.mi).sort_values(KEYS, ignore_index=True)
         steering = pd.DataFrame(found.steering, columns=list(STEERING_COLUMNS)).sort_values(KEYS, ignore_index=True)
+        mechanism = pd.DataFrame(found.mechanism, columns=list(MECHANISM_COLUMNS)).sort_values(KEYS, ignore_index=True)
         class_columns = [*KEYS, "class_id", "class_name", "pixels", "found", "first_step", "topic", "recall"]
         classes = pd.DataFrame(found.classes, columns=class_columns).sort_values([*KEYS, "class_id"], ignore_index=True)
         summary = summarise(mi)
@@ -621,6 +661,7 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
         tables = {
             "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
             "effects": effects, "headline": top, "convergence": convergence, "revisits": revisits, "steering": steering,
+            "mechanism": mechanism,
         }
         # every file is written whole before any replaces its old self, and tables.json
         # records each one's digest: a failure (a full disk) leaves the old set or a mix that
@@ -640,7 +681,8 @@ def evaluate_experiment(folder: Path, *, partial: bool = False) -> Evaluation:
             temporary(layout.tables_record).write_text(record)
         record_stage_seconds(folder, "evaluate", time.perf_counter() - started, add=False)
         return Evaluation(
-            mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits, steering
+            mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits, steering,
+            mechanism,
         )
 
 
@@ -680,4 +722,5 @@ def read_evaluation(experiment: Experiment) -> Evaluation:
     return Evaluation(
         read("mi"), read("summary"), read("tests"), read("headline"), skipped, read_maps(layout.root), read("effects"),
         read("classes"), read("classes_summary"), read("convergence"), read("revisits"), read("steering"),
+        read("mechanism"),
     )

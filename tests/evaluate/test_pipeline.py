@@ -238,6 +238,14 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
     assert "end at the same mean MI" in report
     for section in ("## Paired effect sizes", "## Classes found at 12 steps", "## Mean recall at 12 steps"):
         assert section in report
+    # the mechanism: a row per run of a scoring walker and length; its classes found are mi.csv's, counted apart
+    mechanism, mi = pd.read_csv(folder / "mechanism.csv"), pd.read_csv(folder / "mi.csv")
+    assert len(mechanism) == len(mi) == 4 * 2 * 2, "the paper's 4 walkers all score their moves: 2 restarts, 2 lengths"
+    both = mechanism.merge(mi, on=["weight_function", "restart", "path_length"], suffixes=("", "_mi"))
+    assert len(both) == len(mechanism) and (both["classes_found"] == both["classes_found_mi"]).all()
+    assert mechanism["auc"].dropna().between(0, 1).all() and mechanism["opportunity"].between(0, 1).all()
+    assert (mechanism.loc[mechanism["weight_function"] == "stochastic-coverage", "gain"].dropna().abs() < 1e-12).all()
+    assert "## Does surprise point at what is new?" in report
     maps = pd.read_csv(folder / "maps.csv")
     store = load_store(tmp_path / "cache" / maps["store"].item())
     counts = store.count_by_type()
