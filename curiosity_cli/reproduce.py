@@ -24,6 +24,7 @@ def reproduce(
     scheduler: str | None = None,
     on_stage: Callable[[str, int], None] | None = None,
     on_done: Callable[[], None] | None = None,
+    reuse: bool = True,
 ) -> Path:
     """Run the whole pipeline for ``config`` and return the path of its ``REPORT.md``.
 
@@ -31,7 +32,8 @@ def reproduce(
     (see :class:`~curiosity_cli.workers.Workers`); both stages share the workers, so
     ``backend="dask"`` without a scheduler starts one local cluster, not two.
     ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
-    of it done, for a progress display.
+    of it done, for a progress display. ``reuse`` takes label files and batch references
+    another experiment computed from the same inputs (:mod:`~curiosity_cli.label.shared_items`).
     """
     from curiosity_cli.evaluate.tables import evaluate_experiment
     from curiosity_cli.explore.grid import run_grid
@@ -55,7 +57,7 @@ def reproduce(
             on_prepared=lambda to_run, skipped: stage(f"exploring ({skipped} runs already done)", to_run), on_run=done,
         )
         label_experiment(
-            config, folder, cache_dir=cache_dir, force=force, workers=workers, on_stage=stage, on_done=done
+            config, folder, cache_dir=cache_dir, force=force, workers=workers, on_stage=stage, on_done=done, reuse=reuse,
         )
     stage("evaluating", 0)
     evaluate_experiment(folder, cache_dir=cache_dir)

@@ -91,7 +91,7 @@ def main() -> None:
             with tempfile.TemporaryDirectory() as tmp:
                 results = args.results_dir or Path(tmp)
                 command = [sys.executable, "-m", "curiosity_cli", "reproduce", str(path), *sets, "--jobs", str(args.jobs),
-                           "--results-dir", str(results)]
+                           "--results-dir", str(results), "--no-reuse"]  # computed: no labels taken from a run before
                 began = time.perf_counter()
                 subprocess.run(command, check=True)
                 minutes = (time.perf_counter() - began) / 60

@@ -30,11 +30,21 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def run_quick(code: Path, jobs: int, results: Path) -> tuple[float, dict]:
-    """Seconds of one quick job, with ``code`` first on the path, and its REPORT.md stages."""
+    """Seconds of one quick job, with ``code`` first on the path, and its REPORT.md stages.
+
+    Its cache folder is its own, holding links to the word stores of the user cache: no run
+    extracts words again, and none takes the labels an earlier run computed (shared items).
+    """
+    from curiosity_cli.paths import DEFAULT_CACHE
+
+    cache = results / "cache"
+    cache.mkdir(parents=True)
+    for store in DEFAULT_CACHE.glob("*.npz"):
+        (cache / store.name).symlink_to(store)
     env = dict(os.environ)
     env["PYTHONPATH"] = str(code) + os.pathsep + env.get("PYTHONPATH", "")
     command = [sys.executable, "-c", "import sys; from curiosity_cli.cli import main; sys.argv[0] = 'curiosity'; main()",
-               "reproduce", "--quick", "--jobs", str(jobs), "--results-dir", str(results)]
+               "reproduce", "--quick", "--jobs", str(jobs), "--results-dir", str(results), "--cache-dir", str(cache)]
     began = time.perf_counter()
     subprocess.run(command, check=True, env=env, cwd=code, stdout=subprocess.DEVNULL)
     seconds = time.perf_counter() - began

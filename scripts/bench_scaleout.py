@@ -54,7 +54,7 @@ def timed_grid(config, results: Path, cache: Path, **backend) -> tuple[float, in
 
 def timed_labels(config, results: Path, cache: Path, **backend) -> tuple[float, int]:
     shutil.rmtree(results / config.name / "labels", ignore_errors=True)
-    done = label_experiment(config, results / config.name, cache_dir=cache, **backend)
+    done = label_experiment(config, results / config.name, cache_dir=cache, reuse=False, **backend)
     return done["seconds"], done["labelled"]
 
 

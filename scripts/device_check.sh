@@ -102,7 +102,7 @@ for device in "${devices[@]}"; do
     echo "--- label.device=$device, $t s at most"
     if [ $small = 1 ]; then
         tmp=$(mktemp -d)
-        timeout "$t" "$PY" -m curiosity_cli reproduce quick --results-dir "$tmp" --jobs 2 --set "datasets=[aerial-mosaic]" \
+        timeout "$t" "$PY" -m curiosity_cli reproduce quick --results-dir "$tmp" --jobs 2 --no-reuse --set "datasets=[aerial-mosaic]" \
             --set explore.restarts=2 --set explore.path_length=20 --set "explore.checkpoints=[10,20]" \
             --set label.sweeps=2 --set label.warm_sweeps=1 --set label.batch_sweeps=2 --set label.device=$device \
             > "$OUT/grid_$device.log" 2>&1

@@ -216,7 +216,7 @@ def main() -> None:
         source = on.get(0, folder)
         shutil.copytree(source, copy, ignore=shutil.ignore_patterns("labels"))  # the CPU's batch references reused
         began = time.perf_counter()
-        done = api.label(copy, overrides=[f"label.device={device}"], jobs=args.jobs)
+        done = api.label(copy, overrides=[f"label.device={device}"], jobs=args.jobs, reuse=False)  # computed on each device
         print(f"labelled {done['labelled']} runs on {device} in {time.perf_counter() - began:.1f} s", flush=True)
         on[side] = copy
     files = label_files(on[0])

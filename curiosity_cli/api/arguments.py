@@ -70,3 +70,10 @@ def optional_count(value, name: str, minimum: int = 1) -> int | None:
     from curiosity_cli.checks import check_int
 
     return None if value is None else check_int(name, value, minimum)
+
+
+def boolean(value, name: str) -> bool:
+    """``True`` or ``False`` (a string such as ``"no"`` is refused, not taken as true)."""
+    if isinstance(value, bool):
+        return value
+    raise ParameterError(f"{name}: got {_given(value)}, expected True or False")

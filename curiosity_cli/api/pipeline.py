@@ -14,7 +14,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from curiosity_cli.api.arguments import (
-    config_argument, folder_argument, name_or_path, optional_count, optional_path, overrides_argument, strings,
+    boolean, config_argument, folder_argument, name_or_path, optional_count, optional_path, overrides_argument, strings,
 )
 from curiosity_cli.errors import UsageError
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
@@ -229,13 +229,16 @@ def label(
     folder: Path = DEFAULT_EXPERIMENT, *, overrides: typing.Iterable[str] = (), jobs: int | None = None,
     force: bool = False, cache_dir: Path = DEFAULT_CACHE, backend: str = BACKEND, scheduler: str | None = None,
     converged: bool = False, on_stage: Callable[[str, int], None] | None = None, on_done: Callable[[], None] | None = None,
+    reuse: bool = True,
 ) -> dict:
     """``curiosity label``: Z_b per map and Z_p per run of an explored experiment folder.
 
     ``overrides`` may change only ``label.*`` keys, which the folder's ``config.yaml`` then
     records; ``converged`` is the converged schedule (``label.sweeps=256``,
-    ``label.warm_sweeps=null``). As :func:`~curiosity_cli.label.stage.label_experiment`,
-    which says what is returned and raised.
+    ``label.warm_sweeps=null``); ``reuse=False`` computes the label files and batch
+    references that another experiment already computed from the same inputs
+    (:mod:`~curiosity_cli.label.shared_items`). As
+    :func:`~curiosity_cli.label.stage.label_experiment`, which says what is returned and raised.
     """
     from curiosity_cli.config import with_converged_labels
     from curiosity_cli.experiment.saved_config import load_saved_config
@@ -247,7 +250,7 @@ def label(
     config = load_saved_config(folder, with_converged_labels(overrides) if converged else overrides)
     return label_experiment(
         config, folder, cache_dir=cache_dir, jobs=jobs, force=force, on_stage=on_stage, on_done=on_done,
-        backend=backend, scheduler=scheduler,
+        backend=backend, scheduler=scheduler, reuse=boolean(reuse, "reuse"),
     )
 
 
@@ -289,7 +292,7 @@ def reproduce(
     jobs: int | None = None, force: bool = False, backend: str = BACKEND, scheduler: str | None = None,
     results_dir: Path = DEFAULT_RESULTS, cache_dir: Path = DEFAULT_CACHE, converged: bool = False,
     on_stage: Callable[[str, int], None] | None = None, on_done: Callable[[], None] | None = None,
-    on_status: Callable[[str], None] | None = None,
+    on_status: Callable[[str], None] | None = None, reuse: bool = True,
 ) -> Path:
     """``curiosity reproduce``: explore, label, evaluate and plot; returns the path of ``REPORT.md``.
 
@@ -310,6 +313,9 @@ def reproduce(
         ``on_stage(description, units)`` when a stage starts, ``on_done()`` after each unit.
     on_status : callable, optional
         ``on_status(line)`` with a sweep's size and folder before it runs.
+    reuse : bool
+        Take label files and batch references another experiment computed from the same
+        inputs (:mod:`~curiosity_cli.label.shared_items`); False computes them all.
 
     Raises
     ------
@@ -323,7 +329,7 @@ def reproduce(
 
     _check_scheduler(backend, scheduler)
     config, overrides, sweeps = config_argument(config), overrides_argument(overrides), strings(sweeps, "sweeps", "seed=0,1")
-    jobs = optional_count(jobs, "jobs")
+    jobs, reuse = optional_count(jobs, "jobs"), boolean(reuse, "reuse")
     results_dir, cache_dir = folder_argument(results_dir, "results_dir"), folder_argument(cache_dir, "cache_dir")
     if converged:
         overrides = with_converged_labels(overrides)
@@ -338,11 +344,12 @@ def reproduce(
             return _reproduce_sweep(
                 config, overrides, sweeps, specifications, on_stage=on_stage, on_done=on_done, on_status=on_status,
                 results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, backend=backend, scheduler=scheduler,
+                reuse=reuse,
             )
         resolved = load_config(config, overrides)  # neither a sweep nor specifications, just read: one experiment
     return run_pipeline(
         resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-        backend=backend, scheduler=scheduler, on_stage=on_stage, on_done=on_done,
+        backend=backend, scheduler=scheduler, on_stage=on_stage, on_done=on_done, reuse=reuse,
     )
 
 

@@ -33,6 +33,7 @@ def reproduce(
     results_dir: Path = typer.Option(DEFAULT_RESULTS, "--results-dir", help="Experiment folders go here."),
     cache_dir: Path = typer.Option(DEFAULT_CACHE, "--cache-dir", help="Where word stores are kept."),
     converged: bool = typer.Option(False, "--converged", help="Converged labels: 256 sweeps from random topics at every checkpoint (label.sweeps=256, label.warm_sweeps=null), about ten times the labelling time."),
+    reuse: bool = typer.Option(True, "--reuse/--no-reuse", help="Take label files and batch references another experiment computed from the same inputs (kept in --cache-dir's shared/ folder); --no-reuse computes them all."),
 ) -> None:
     """Extract, explore, label, evaluate and plot, then write results/<experiment>/REPORT.md.
 
@@ -49,7 +50,7 @@ def reproduce(
         report = api.reproduce(
             config if config is not None else ("quick" if quick else "paper-grid"), overrides=overrides, sweeps=sweeps,
             jobs=jobs, force=force, backend=backend.value, scheduler=scheduler, results_dir=results_dir,
-            cache_dir=cache_dir, converged=converged, on_stage=progress.stage, on_done=progress.advance,
+            cache_dir=cache_dir, converged=converged, on_stage=progress.stage, on_done=progress.advance, reuse=reuse,
             on_status=lambda line: typer.echo(line, err=True),
         )
     typer.echo(f"wrote {display_path(report)}")

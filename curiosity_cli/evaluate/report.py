@@ -602,12 +602,13 @@ def _short_means(mi, restarts: int) -> list[str]:
 
 def write_report(
     folder: Path, config: ExperimentConfig, evaluation: Evaluation, figures: list[Path], figure_notes: list[str],
-    seconds: dict[str, float], provenance: dict,
+    seconds: dict[str, float], provenance: dict, shared: dict | None = None,
 ) -> Path:
     """Write ``folder/REPORT.md`` and return its path (``plot`` does, after the figures).
 
     ``figure_notes`` says which figures were left out and why (from ``write_figures``);
-    ``seconds`` the seconds of each stage and their total, empty when none were recorded.
+    ``seconds`` the seconds of each stage and their total, empty when none were recorded;
+    ``shared`` what the last ``label`` took from other experiments (``shared.json``), None if not recorded.
     """
     summary, tests, top = evaluation.summary, evaluation.tests, evaluation.headline
     # the lengths the paper discusses: 80 (about a map's width) and the longest
@@ -654,6 +655,12 @@ def write_report(
         lines += [f"| {stage} | {value:.0f} |" for stage, value in seconds.items()] + [""]
     else:
         lines += ["Not recorded (the stages ran before their times were kept).", ""]
+    if shared is not None:
+        lines += [
+            f"The last `label` that labelled anything took {shared['labels']} of its {shared['labelled']} label files and "
+            f"{shared['batches']} batch references from other experiments that had computed them from the same inputs "
+            "(the cache's `shared/` items: the same bytes; `label --no-reuse` computes them).", "",
+        ]
     lines += [
         "## Config",
         "",

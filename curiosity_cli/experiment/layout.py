@@ -8,7 +8,7 @@ are the models)::
         config.yaml  provenance.yaml  runs.csv  maps.csv          (explore)
         runs/<map>/<walker>/restart-NNN/                          (explore, one run)
             run.json  path.csv  candidates.csv  checkpoints.npz
-        batch/<map>.npz                                           (label, Z_b)
+        batch/<map>.npz  shared.json                              (label, Z_b; items taken from other experiments)
         labels/<map>/<walker>/restart-NNN.npz                     (label, Z_p tables)
         labels/<map>/examples/<walker>-restart-NNN-<length>.npz   (label, Z_p maps)
         <table>.csv  mi.parquet  skipped.json  tables.json        (evaluate)
@@ -98,6 +98,12 @@ class ExperimentFolder:
     @property
     def skipped(self) -> Path:
         return self.root / "skipped.json"
+
+    @property
+    def shared(self) -> Path:
+        """``shared.json``: how many label files and batch references the last ``label`` that made any took from
+        other experiments (:mod:`~curiosity_cli.label.shared_items`)."""
+        return self.root / "shared.json"
 
     @property
     def stage_seconds(self) -> Path:

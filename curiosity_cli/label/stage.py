@@ -31,6 +31,7 @@ identical.
 
 from __future__ import annotations
 
+import json
 import time
 from concurrent.futures import ThreadPoolExecutor
 from collections.abc import Callable, Sequence
@@ -48,11 +49,12 @@ from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT, LABEL_FORMAT, RECIPE_KEY, first_of, is_checked
 from curiosity_cli.experiment.saved_config import record_label_settings
 from curiosity_cli.experiment.stage_seconds import record_stage_seconds
-from curiosity_cli.files import display_path, note, open_npz, remove_leftovers
+from curiosity_cli.files import atomic_path, display_path, note, open_npz, remove_leftovers
 from curiosity_cli.label.batch_references import (
     BatchTask, WrittenBatch, batch_is_current, batch_task, compute_batch_references, write_batch,
 )
 from curiosity_cli.label.label_files import EXAMPLE_LENGTHS, NOT_LABELLED, SECOND_PREFIX, label_changes, write_labels
+from curiosity_cli.label.shared_items import BATCH, SharedItems, label_key
 from curiosity_cli.label.sampling import path_seed
 from curiosity_cli.paths import DEFAULT_CACHE
 
@@ -255,17 +257,24 @@ def label_block(
     for index, run in enumerate(runs):
         arrays_out = {"lengths": np.array(lengths[index], np.int32)}
         arrays_out.update({name: np.stack(table) for name, table in tables[index].items()})
-        meta = {
-            "format": LABEL_FORMAT, "dataset": inputs.name, "weight_function": run.meta["weight_function"],
-            "restart": run.meta["restart"], "run_seed": run.meta["seed"], "store": run.meta["store"],
-            "vocabulary_hashes": run.meta["vocabulary_hashes"], "sweeps": config.label.sweeps,
-            "warm_sweeps": config.label.warm_sweeps, "batch": Path(inputs.batch_path).name,
-        }
         if human is not None:
             arrays_out["class_first_step"] = class_first_steps(run.path, cell_classes, store, inputs.store_path)
-            meta["class_share_percent"] = CLASS_SHARE_PERCENT
-        out.append((arrays_out, examples[index], meta))
+        out.append((arrays_out, examples[index], label_meta(run.meta, inputs, config, human is not None)))
     return out
+
+
+def label_meta(run_meta: dict, inputs: MapInputs, config: ExperimentConfig, human: bool) -> dict:
+    """A run's label file's meta (its recipe aside): what it labels, and with what; ``human`` whether the map has
+    human labels (then the share that makes a class found)."""
+    meta = {
+        "format": LABEL_FORMAT, "dataset": inputs.name, "weight_function": run_meta["weight_function"],
+        "restart": run_meta["restart"], "run_seed": run_meta["seed"], "store": run_meta["store"],
+        "vocabulary_hashes": run_meta["vocabulary_hashes"], "sweeps": config.label.sweeps,
+        "warm_sweeps": config.label.warm_sweeps, "batch": Path(inputs.batch_path).name,
+    }
+    if human:
+        meta["class_share_percent"] = CLASS_SHARE_PERCENT
+    return meta
 
 
 def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordStore, store_path: str) -> np.ndarray:
@@ -299,6 +308,7 @@ def label_experiment(
     scheduler: str | None = None,
     workers: Workers | None = None,
     chains_per_block: int = CHAINS_PER_BLOCK,
+    reuse: bool = True,
 ) -> dict:
     """Label every finished run of an experiment (and each map's batch reference).
 
@@ -332,13 +342,19 @@ def label_experiment(
         On the CPU, the block size past which lock-step chains gain no more speed
         (:func:`~curiosity_cli.label.blocks.plan_blocks` cuts blocks around it);
         the labels do not depend on it.
+    reuse : bool
+        Take label files and batch references that another experiment already computed
+        from the same inputs from ``cache_dir``'s shared items, and keep what this one
+        computes there (:mod:`~curiosity_cli.label.shared_items`): the same bytes, timing
+        fields aside. False computes everything and keeps nothing.
 
     Returns
     -------
     dict
-        ``labelled``, ``skipped``, ``batch_reused`` counts, ``seconds``, and
-        ``relabelled``: a line per label file made again because it was made otherwise
-        (other settings, another run or batch reference), saying what changed.
+        ``labelled``, ``skipped``, ``batch_reused`` counts, ``seconds``, ``shared``
+        (the label files and batch references taken from the shared items: ``labels``,
+        ``batches``), and ``relabelled``: a line per label file made again because it was
+        made otherwise (other settings, another run or batch reference), saying what changed.
 
     Raises
     ------
@@ -394,7 +410,10 @@ def label_experiment(
                 info for info in stores.values()
                 if force or not batch_is_current(batch_files[info.name], batch_recipes[info.name])
             ]
-            skipped, to_label, recipes, relabelled = 0, {}, {}, []
+            shared = SharedItems(cache_dir) if reuse else None
+            shared_batches = [info for info in stale if _take_batch(shared, batch_files[info.name], batch_recipes[info.name])]
+            stale = [info for info in stale if info not in shared_batches]
+            skipped, to_label, recipes, relabelled, keys, taken = 0, {}, {}, [], {}, []
             for run in finished:
                 info = by_name[run.meta["dataset"]]
                 recipe = experiment.label_recipe(run.meta)
@@ -406,10 +425,17 @@ def label_experiment(
                 if change not in (None, NOT_LABELLED):
                     relabelled.append(f"{display_path(path)}: {change}")
                 try:
-                    to_label.setdefault(info.name, []).append(RunInputs.of(run, (info.vocabulary_size, config.model.topics)))
-                    recipes[run.folder] = recipe
+                    run_inputs = RunInputs.of(run, (info.vocabulary_size, config.model.topics))
                 except RunError as exc:
                     problems.append(str(exc))
+                    continue
+                recipes[run.folder] = recipe
+                if shared is not None:
+                    keys[run.folder] = label_key(recipe.inputs, run.meta, run_inputs.checkpoints, run_inputs.path)
+                    if (stored := shared.labels(keys[run.folder])) is not None:
+                        taken.append((run_inputs, *stored))
+                        continue
+                to_label.setdefault(info.name, []).append(run_inputs)
             if relabelled:
                 note(f"labelling {len(relabelled)} runs again whose label files were made otherwise, e.g. {relabelled[0]}")
             todo = len(runs) - skipped
@@ -419,6 +445,10 @@ def label_experiment(
                 )
                 for entry, info in stores.items()
             }
+            for run, arrays, examples in taken:  # the same file computing it would write
+                name = run.meta["dataset"]
+                meta = label_meta(run.meta, inputs[name], config, "class_first_step" in arrays)
+                write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
             blocks = []  # LabelTask: runs labelled in lock-step
             counts = {name: [1 + is_checked(config, run.meta["restart"]) for run in map_runs] for name, map_runs in to_label.items()}
             most = chains_per_block if device == "cpu" else block_chains(device)
@@ -466,7 +496,7 @@ def label_experiment(
             # the files are written by threads (zlib and SHA-256 let go of the GIL) while results arrive:
             # a GPU's block returns a whole map's runs at once
             with computed as results, ThreadPoolExecutor(WRITERS) as writers:
-                writes = []
+                writes, keeps = [], []
                 for task, outcome in results:
                     if isinstance(task, BatchTask):
                         if isinstance(outcome, str):  # its map's blocks would wait for it: stop them all
@@ -481,15 +511,30 @@ def label_experiment(
                             writers.submit(write_labels, folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
                             for run, (arrays, examples, meta) in zip(task.runs, outcome)
                         ]
+                        if shared is not None:
+                            keeps += [
+                                writers.submit(shared.keep_labels, keys[run.folder], arrays, examples)
+                                for run, (arrays, examples, _) in zip(task.runs, outcome)
+                            ]
                     if on_done is not None:
                         for _ in range(1 if isinstance(task, BatchTask) else len(task.runs)):
                             on_done()
                 for write in writes:
                     write.result()  # a file that could not be written stops the stage, as it did
                     labelled += 1
+                for keep in keeps:
+                    keep.result()
+            labelled += len(taken)
+            if shared is not None:  # what this call computed, for the next experiment that needs it
+                for info in stale:
+                    if batch_is_current(batch_files[info.name], batch_recipes[info.name]):
+                        shared.keep_file(BATCH, batch_recipes[info.name].digest, batch_files[info.name])
         seconds = time.perf_counter() - started
-        if todo or stale:  # a call that found every label file current made nothing
+        shared_counts = {"labels": len(taken), "batches": len(shared_batches), "labelled": labelled}
+        if todo or stale or shared_batches:  # a call that found every label file current made nothing
             record_stage_seconds(folder, "label", seconds, add=not force)
+            with atomic_path(layout.shared) as tmp:
+                tmp.write_text(json.dumps(shared_counts, indent=1) + "\n")
         if problems or left_out:
             failed = todo - labelled + len(left_out)
             raise LabelError(
@@ -498,8 +543,17 @@ def label_experiment(
             )
         return {
             "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": seconds,
-            "relabelled": relabelled,
+            "relabelled": relabelled, "shared": {k: shared_counts[k] for k in ("labels", "batches")},
         }
+
+
+def _take_batch(shared: SharedItems | None, path: Path, recipe) -> bool:
+    """Whether a map's batch reference was taken from the shared items (copied to ``path``, where it is current)."""
+    if shared is None or (stored := shared.find(BATCH, recipe.digest)) is None:
+        return False
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(stored.read_bytes())
+    return batch_is_current(path, recipe)
 
 
 def unexplored(run: Path, layout: ExperimentFolder) -> str:

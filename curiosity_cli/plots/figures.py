@@ -25,6 +25,7 @@ markers or bands in the MI figures.
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import time
 from pathlib import Path
@@ -263,7 +264,13 @@ def _write_report(experiment: Experiment, figures: WrittenFigures) -> Path | Non
     except EvaluationError as exc:
         figures.skipped.append(f"REPORT.md: {exc}")
         return None
-    return write_report(root, experiment.config, evaluation, list(figures), figures.skipped, seconds, provenance)
+    try:
+        shared = json.loads(experiment.folder.shared.read_text())
+    except (OSError, ValueError):  # labelled before items were shared, or the file is not readable: not said
+        shared = None
+    return write_report(
+        root, experiment.config, evaluation, list(figures), figures.skipped, seconds, provenance, shared,
+    )
 
 
 # --------------------------------------------------------------------------- the figures

@@ -53,7 +53,7 @@ def test_labels_on_a_cluster_equal_the_loky_labels_byte_for_byte(own_map, tmp_pa
     assert len([key for key in loky if key.startswith("labels/own/") and "/examples/" not in key]) == 8
 
     stages, done = [], []
-    summary = label_experiment(config, tmp_path / "dask" / config.name, cache_dir=cache, backend="dask",
+    summary = label_experiment(config, tmp_path / "dask" / config.name, cache_dir=cache, backend="dask", reuse=False,
                                scheduler=scheduler, on_stage=lambda *stage: stages.append(stage), on_done=lambda: done.append(1))
     assert (summary["labelled"], summary["skipped"], summary["batch_reused"]) == (8, 0, 0)
     assert stages == [("batch reference own", 8), ("labelling runs", 8)] and len(done) == 16
@@ -98,7 +98,7 @@ def test_reproduce_on_dask_explores_and_labels_on_one_local_cluster_as_loky_woul
 
     shutil.copytree(tmp_path / "dask" / "grid" / "runs", tmp_path / "loky" / "grid" / "runs")
     shutil.copy(tmp_path / "dask" / "grid" / "config.yaml", tmp_path / "loky" / "grid")
-    result = runner.invoke(app, ["label", str(tmp_path / "loky" / "grid"), *sets, "--jobs", "2",
+    result = runner.invoke(app, ["label", str(tmp_path / "loky" / "grid"), *sets, "--jobs", "2", "--no-reuse",
                                  "--cache-dir", str(tmp_path / "cache")])
     assert result.exit_code == 0 and "labelled 8 runs" in result.stdout, result.output
     assert label_contents(tmp_path / "loky" / "grid") == label_contents(tmp_path / "dask" / "grid")
@@ -127,7 +127,7 @@ def test_a_runs_labels_do_not_depend_on_the_block_it_was_labelled_in(own_map, tm
         copy = tmp_path / f"block-{chains_per_block}"
         shutil.copytree(folder, copy / config.name)
         label_experiment(config, copy / config.name, cache_dir=tmp_path / "first" / "cache", jobs=jobs,
-                         chains_per_block=chains_per_block)
+                         chains_per_block=chains_per_block, reuse=False)
         contents.append(label_contents(copy / config.name))
     assert len([key for key in contents[0] if "/examples/" not in key and key.startswith("labels/")]) == 8
     assert contents[1] == contents[0] and contents[2] == contents[0]

@@ -277,7 +277,7 @@ def test_a_reproduction_killed_while_labelling_resumes_to_the_tables_of_an_unint
     # chains), and sweeps enough that a block lasts long enough for the kill to land after the first
     command = [sys.executable, "-m", "curiosity_cli", "reproduce", str(config_path), "--jobs", "1",
                "--cache-dir", str(tmp_path / "cache"), "--set", "explore.restarts=10", "--set", "label.sweeps=200",
-               "--set", "label.warm_sweeps=50"]
+               "--set", "label.warm_sweeps=50", "--no-reuse"]  # computed, not taken from the whole one's shared items
     whole = subprocess.run([*command, "--results-dir", str(tmp_path / "whole")], capture_output=True, text=True)
     assert whole.returncode == 0, whole.stderr
 

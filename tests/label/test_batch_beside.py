@@ -26,7 +26,7 @@ def test_a_batch_reference_beside_the_blocks_gives_the_labels_it_gives_before_th
     label_experiment(config, folder, cache_dir=tmp_path / "beside" / "cache", jobs=2, on_stage=lambda *s: stages.append(s))
     assert stages == [("labelling runs beside the batch reference of own", 3)]
     label_experiment(config, tmp_path / "before" / "grid", cache_dir=tmp_path / "beside" / "cache", jobs=1,
-                     on_stage=lambda *s: stages.append(s))
+                     on_stage=lambda *s: stages.append(s), reuse=False)
     assert stages[1:] == [("batch reference own", 8), ("labelling runs", 2)]
     assert label_contents(folder) == label_contents(tmp_path / "before" / "grid")
 

@@ -1,0 +1,139 @@
+"""Label files and batch references shared between experiments, stored by what they depend on.
+
+A study runs the same walker under many specifications, and most of them change nothing
+that walker reads: its path and checkpoint counts Φ_p come out the same, and so would its
+labels. Every map's batch reference Z_b likewise depends only on the words, the model
+and the batch sweeps. So ``label`` keeps what it computes in the cache, beside the word
+stores, under a *key*: the digest of exactly what the item depends on, never of the
+settings of the experiment that first made it:
+
+- a batch reference: its recipe (:func:`~curiosity_cli.experiment.recipes.batch_recipe`);
+- a run's labels: its label recipe without the run's own recipe digest (which names every
+  setting of the run's specification), and in its place the run's content: its seed,
+  restart, walker, checkpoint lengths, path and Φ_p at each checkpoint
+  (:func:`label_key`). Two runs that read different settings and still made the same
+  path and counts share their labels; any difference in what labelling reads gives
+  another key.
+
+An experiment whose item is in the cache takes it instead of computing it, and writes
+it into its own folder as it would have written it (a label file with its own meta and
+recipe): the same bytes as a computed one, timing fields aside. Each stored file is
+named ``<key>.<sha256>.npz`` by its own digest, written under a temporary name and
+renamed into place, so two experiments storing one item at once leave one whole file,
+and one altered since (a disk error, an edit) no longer matches its name: it is named,
+removed and computed again, never used. ``reuse=False`` (``--no-reuse``) computes
+everything and stores nothing.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from curiosity_cli.experiment.wholeness import record
+from curiosity_cli.files import display_path, note, open_npz
+
+#: Where under the cache folder (``cache_dir``, beside the word stores) shared items live.
+SHARED_FOLDER = "shared"
+#: The kinds of item, each a folder of its own.
+BATCH, LABELS = "batch", "labels"
+_EXAMPLE = "example_"
+#: Hex digits of a file's SHA-256 in its name.
+_NAMED_DIGEST = 16
+
+
+def label_key(recipe_inputs: dict, run_meta: dict, checkpoints: dict, path: np.ndarray) -> str:
+    """The key of a run's labels: what labelling reads of the run and of the experiment.
+
+    Parameters
+    ----------
+    recipe_inputs : dict
+        The run's label recipe's inputs (:func:`~curiosity_cli.experiment.recipes.label_recipe`);
+        its ``run`` (the run recipe's digest) is replaced by the run's content.
+    run_meta : dict
+        Its ``run.json``: ``seed``, ``restart``, ``weight_function``, ``checkpoints``,
+        ``store``, ``n_topics``.
+    checkpoints : dict of int to SparseCounts
+        Φ_p at each checkpoint length.
+    path : (L,) int ndarray
+        The run's cells.
+    """
+    digest = hashlib.sha256()
+    for length in sorted(checkpoints):
+        counts = checkpoints[length]
+        for array in (counts.words, counts.topics, counts.counts):
+            digest.update(np.ascontiguousarray(array, np.int64).tobytes())
+        digest.update(np.asarray(counts.shape, np.int64).tobytes())
+    digest.update(np.ascontiguousarray(path, np.int64).tobytes())
+    content = {key: run_meta[key] for key in ("seed", "restart", "weight_function", "checkpoints", "store", "n_topics")}
+    inputs = {**{k: v for k, v in recipe_inputs.items() if k != "run"}, "run_content": content, "counts": digest.hexdigest()}
+    return hashlib.sha256(json.dumps(inputs, sort_keys=True, separators=(",", ":")).encode()).hexdigest()[:32]
+
+
+class SharedItems:
+    """The shared items under a cache folder (module docstring).
+
+    Parameters
+    ----------
+    cache_dir : Path
+        The cache of word stores; items go in its ``shared/`` folder.
+    """
+
+    def __init__(self, cache_dir: Path):
+        self.root = Path(cache_dir) / SHARED_FOLDER
+
+    def find(self, kind: str, key: str) -> Path | None:
+        """The stored file of an item, if there is one whose bytes still match its name; one that does not is
+        named on stderr and removed."""
+        folder = self.root / kind
+        for path in sorted(folder.glob(f"{key}.*.npz")) if folder.is_dir() else []:
+            try:
+                if record(path)["sha256"][:_NAMED_DIGEST] == path.name[len(key) + 1:-len(".npz")]:
+                    return path
+            except OSError:  # removed meanwhile by another experiment that found it altered
+                continue
+            note(f"{display_path(path)}: altered since it was stored (its digest is not its name's); computing it again")
+            path.unlink(missing_ok=True)
+        return None
+
+    def keep_file(self, kind: str, key: str, source: Path) -> None:
+        """Store a copy of ``source`` as the item ``key``."""
+        self._keep(kind, key, lambda tmp: tmp.write_bytes(Path(source).read_bytes()))
+
+    def labels(self, key: str) -> tuple[dict, dict] | None:
+        """A run's stored label arrays and example maps (``(arrays, examples)``, as
+        :func:`~curiosity_cli.label.stage.label_block` gives them), or None."""
+        path = self.find(LABELS, key)
+        if path is None:
+            return None
+        with open_npz(path) as npz:
+            arrays = {name: npz[name] for name in npz.files if not name.startswith(_EXAMPLE)}
+            examples = {int(name[len(_EXAMPLE):]): npz[name] for name in npz.files if name.startswith(_EXAMPLE)}
+        return arrays, examples
+
+    def keep_labels(self, key: str, arrays: dict, examples: dict) -> None:
+        """Store a run's label arrays and example maps as the item ``key``."""
+        def write(tmp: Path) -> None:
+            with open(tmp, "wb") as handle:
+                np.savez_compressed(handle, **arrays, **{f"{_EXAMPLE}{length}": pixels for length, pixels in examples.items()})
+
+        self._keep(LABELS, key, write)
+
+    def _keep(self, kind: str, key: str, write) -> None:
+        """Write an item under a temporary name, then rename it to ``<key>.<its sha256>.npz``: atomic, so two
+        writers of one item leave one whole file, and a killed one only a hidden ``.tmp`` file."""
+        folder = self.root / kind
+        folder.mkdir(parents=True, exist_ok=True)
+        handle, name = tempfile.mkstemp(dir=folder, prefix=f".{key}.", suffix=".tmp.npz")
+        os.close(handle)
+        tmp = Path(name)
+        try:
+            write(tmp)
+            os.replace(tmp, folder / f"{key}.{record(tmp)['sha256'][:_NAMED_DIGEST]}.npz")
+        finally:
+            tmp.unlink(missing_ok=True)
