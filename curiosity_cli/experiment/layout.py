@@ -13,6 +13,7 @@ are the models)::
         labels/<map>/examples/<walker>-restart-NNN-<length>.npz   (label, Z_p maps)
         <table>.csv  mi.parquet  skipped.json  tables.json        (evaluate)
         stage_seconds.json                                        (every stage: its time)
+        label_profile.json                                        (label: where its time went)
         figures/  REPORT.md                                       (plot)
 
 Where an experiment of a name lives by default is :mod:`curiosity_cli.paths`' business.
@@ -104,6 +105,12 @@ class ExperimentFolder:
         """``shared.json``: how many label files and batch references the last ``label`` that made any took from
         other experiments (:mod:`~curiosity_cli.label.shared_items`)."""
         return self.root / "shared.json"
+
+    @property
+    def label_profile(self) -> Path:
+        """``label_profile.json``: where the last ``label`` that labelled anything spent its seconds
+        (:mod:`~curiosity_cli.label.profile`)."""
+        return self.root / "label_profile.json"
 
     @property
     def stage_seconds(self) -> Path:

@@ -210,10 +210,13 @@ def _map_arrays(inputs: MapInputs, topics: int) -> MapArrays:
 
 def label_block(
     runs: list[RunInputs], inputs: MapInputs, arrays: MapArrays, config: ExperimentConfig, *, device: str = "cpu",
+    clock: dict | None = None,
 ) -> list[tuple]:
     """Z_p of every checkpoint of some runs of one map, as contingency tables; ``(tables, examples, meta)`` per run.
 
-    The chains run on ``device`` (``"cpu"`` or ``"cuda"``: the same bytes).
+    The chains run on ``device`` (``"cpu"`` or ``"cuda"``: the same bytes). ``clock``, when
+    given, gets the seconds spent in the chains' sweeps (``kernel``) and in the tables and
+    example maps made from their labels (``tables``, with any wait for a Z_b computed beside).
 
     ``inputs`` names the map's files, ``arrays`` holds their contents; the runs were made
     from the map's current word store (:func:`label_experiment` checks). Their chains,
@@ -240,7 +243,16 @@ def label_block(
         placed=[bool(prefix) for _, prefix in chains], sweeps=config.label.sweeps, warm_sweeps=config.label.warm_sweeps,
         device=device,
     )
-    for j, active, labels in labelled:
+    clock = {} if clock is None else clock
+    clock.update(kernel=0.0, tables=0.0)
+    while True:
+        began = time.perf_counter()
+        step = next(labelled, None)  # the chains sweep when asked for the next checkpoint's labels
+        clock["kernel"] += time.perf_counter() - began
+        if step is None:
+            break
+        began = time.perf_counter()
+        j, active, labels = step
         human_tables = None if human is None else human.tables(labels, k)
         batch_tables = batch.tables(labels, k)
         for column, c in enumerate(active):
@@ -253,6 +265,7 @@ def label_block(
                 length in EXAMPLE_LENGTHS or length == lengths[index][-1]
             ):
                 examples[index][length] = labels[pixel_words, column]
+        clock["tables"] += time.perf_counter() - began
     out = []
     for index, run in enumerate(runs):
         arrays_out = {"lengths": np.array(lengths[index], np.int32)}
@@ -380,8 +393,11 @@ def label_experiment(
     from curiosity_cli.experiment.lock import working_in
     from curiosity_cli.words.store import load_store
 
+    from curiosity_cli.label.profile import LabelProfile
+
     with working_in(folder, "label"):
         started = time.perf_counter()
+        profile = LabelProfile(started)
         device = resolve_device(config.label.device)  # before any work: a missing GPU is the only message
         computing = Workers.shared(workers, backend, scheduler, jobs)
         folder = Path(folder)
@@ -467,7 +483,9 @@ def label_experiment(
                 threads = max(1, (workers.jobs - len(blocks)) // len(stale))  # the job slots the blocks leave
                 tasks = [BatchTask(info, threads) for info in stale]
             else:
+                profile.mark("setup")
                 batch_problems = compute_batch_references(config, stale, batch_files, batch_recipes, workers, on_stage, on_done)
+                profile.mark("batch references before the blocks")
                 problems += batch_problems
                 failed_maps = {info.name for info in stale if info.name not in batch_files}
                 for task in [task for task in blocks if task.inputs.name in failed_maps]:
@@ -495,8 +513,11 @@ def label_experiment(
             )
             # the files are written by threads (zlib and SHA-256 let go of the GIL) while results arrive:
             # a GPU's block returns a whole map's runs at once
+            profile.jobs = workers.jobs
+            profile.mark("setup")
             with computed as results, ThreadPoolExecutor(WRITERS) as writers:
                 writes, keeps = [], []
+                results = profile.waiting(results)
                 for task, outcome in results:
                     if isinstance(task, BatchTask):
                         if isinstance(outcome, str):  # its map's blocks would wait for it: stop them all
@@ -507,34 +528,45 @@ def label_experiment(
                         problems += ["{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome
                                      for run in task.runs]
                     else:
+                        chains = [1 + is_checked(config, run.meta["restart"]) for run in task.runs]
+                        profile.block(
+                            sum(chains), sum(by_name[task.inputs.name].word_counts.values()),
+                            sum(c * _sweeps(config, len(run.meta["checkpoints"])) for c, run in zip(chains, task.runs)),
+                            len(task.runs), task.inputs.name, outcome.seconds,
+                        )
                         writes += [
                             writers.submit(write_labels, folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
-                            for run, (arrays, examples, meta) in zip(task.runs, outcome)
+                            for run, (arrays, examples, meta) in zip(task.runs, outcome.runs)
                         ]
                         if shared is not None:
                             keeps += [
                                 writers.submit(shared.keep_labels, keys[run.folder], arrays, examples)
-                                for run, (arrays, examples, _) in zip(task.runs, outcome)
+                                for run, (arrays, examples, _) in zip(task.runs, outcome.runs)
                             ]
                     if on_done is not None:
                         for _ in range(1 if isinstance(task, BatchTask) else len(task.runs)):
                             on_done()
+                profile.mark("handling results")
                 for write in writes:
                     write.result()  # a file that could not be written stops the stage, as it did
                     labelled += 1
                 for keep in keeps:
                     keep.result()
+            profile.mark("writing")
             labelled += len(taken)
             if shared is not None:  # what this call computed, for the next experiment that needs it
                 for info in stale:
                     if batch_is_current(batch_files[info.name], batch_recipes[info.name]):
                         shared.keep_file(BATCH, batch_recipes[info.name].digest, batch_files[info.name])
-        seconds = time.perf_counter() - started
         shared_counts = {"labels": len(taken), "batches": len(shared_batches), "labelled": labelled}
         if todo or stale or shared_batches:  # a call that found every label file current made nothing
-            record_stage_seconds(folder, "label", seconds, add=not force)
             with atomic_path(layout.shared) as tmp:
                 tmp.write_text(json.dumps(shared_counts, indent=1) + "\n")
+            profile.mark("closing")
+            profile.write(layout.label_profile)
+        seconds = time.perf_counter() - started
+        if todo or stale or shared_batches:
+            record_stage_seconds(folder, "label", seconds, add=not force)
         if problems or left_out:
             failed = todo - labelled + len(left_out)
             raise LabelError(
@@ -545,6 +577,13 @@ def label_experiment(
             "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": seconds,
             "relabelled": relabelled, "shared": {k: shared_counts[k] for k in ("labels", "batches")},
         }
+
+
+def _sweeps(config: ExperimentConfig, checkpoints: int) -> int:
+    """The sweeps of one chain over a run's ``checkpoints``: ``label.sweeps`` at the first, then ``warm_sweeps`` at
+    each later one (or ``sweeps`` again, from a cold start, without)."""
+    later = config.label.warm_sweeps if config.label.warm_sweeps is not None else config.label.sweeps
+    return config.label.sweeps + (checkpoints - 1) * later
 
 
 def _take_batch(shared: SharedItems | None, path: Path, recipe) -> bool:
@@ -622,9 +661,20 @@ def _stage_task(task: BatchTask | LabelTask, config: ExperimentConfig, shipped=N
     return _label_task(task, config, shipped)
 
 
-def _label_task(task: LabelTask, config: ExperimentConfig, arrays: MapArrays | None = None) -> list[tuple]:
-    """Label a block of runs in a worker on its device: ``(arrays, examples, meta)`` per run; ``arrays`` are its map's
-    when shipped (Dask), else made once per worker. One thread: the blocks keep every worker busy."""
+class LabelledBlock(NamedTuple):
+    """What a block's task returns: ``(arrays, examples, meta)`` per run, and where its seconds went in the worker:
+    ``reading`` (its map's arrays, made once per worker), ``kernel`` and ``tables`` (:func:`label_block`)."""
+
+    runs: list[tuple]
+    seconds: dict
+
+
+def _label_task(task: LabelTask, config: ExperimentConfig, arrays: MapArrays | None = None) -> LabelledBlock:
+    """Label a block of runs in a worker on its device; ``arrays`` are its map's when shipped (Dask), else made once
+    per worker. One thread: the blocks keep every worker busy."""
+    began = time.perf_counter()
     if arrays is None:
         arrays = _map_arrays(task.inputs, config.model.topics)
-    return label_block(task.runs, task.inputs, arrays, config, device=task.device)
+    seconds = {"reading": time.perf_counter() - began}
+    runs = label_block(task.runs, task.inputs, arrays, config, device=task.device, clock=seconds)
+    return LabelledBlock(runs, seconds)
