@@ -392,7 +392,6 @@ def label_experiment(
     from curiosity_cli.explore.runs import RunError
     from curiosity_cli.experiment.lock import working_in
     from curiosity_cli.words.store import load_store
-
     from curiosity_cli.label.profile import LabelProfile
 
     with working_in(folder, "label"):
