@@ -307,6 +307,17 @@ def test_misused_results_name_the_argument(evaluated, call, parameter):
     (lambda: api.open_experiment(3), "folder"),
     (lambda: api.drive(dry_run=True, max_frames=0), "max_frames"),
     (lambda: api.simrobot(None), "map_name"),
+    # a flag is True or False: "no" is not taken as true (issue 44)
+    (lambda: api.evaluate("results/quick", partial="no"), "partial"),
+    (lambda: api.label("results/quick", converged="yes"), "converged"),
+    (lambda: api.label("results/quick", reuse=0), "reuse"),
+    (lambda: api.label("results/quick", force="false"), "force"),
+    (lambda: api.explore("quick", force=1), "force"),
+    (lambda: api.extract("aerial-mosaic", force="no"), "force"),
+    (lambda: api.reproduce("quick", converged="no"), "converged"),
+    (lambda: api.reproduce("quick", reuse=None), "reuse"),
+    (lambda: api.drive(dry_run="yes"), "dry_run"),
+    (lambda: api.drive(dry_run=True, strict="no"), "strict"),
 ])
 def test_misused_functions_name_the_argument(call, parameter):
     with pytest.raises(ParameterError, match=rf"^{parameter}: got "):

@@ -132,6 +132,7 @@ def extract(
     dataset = name_or_path(dataset, "dataset")
     density, cache_dir = optional_path(density, "density"), folder_argument(cache_dir, "cache_dir")
     stride, cell_width = optional_count(stride, "stride"), optional_count(cell_width, "cell_width")
+    force = boolean(force, "force")
     if density is not None and density.suffix.lower() != ".png":
         raise UsageError(f"density: got {density}, expected a path ending in .png (the figure is a PNG)", parameter="density")
     words = load(config, overrides).words if _is_config(config) else load_words_config(config, overrides)
@@ -198,6 +199,7 @@ def explore(
     weights = None if weights is None else strings(weights, "weights", "topic-perplexity")
     restarts, steps, jobs = optional_count(restarts, "restarts"), optional_count(steps, "steps"), optional_count(jobs, "jobs")
     results_dir, cache_dir = folder_argument(results_dir, "results_dir"), folder_argument(cache_dir, "cache_dir")
+    force = boolean(force, "force")
     options = []
     if maps:
         try:
@@ -247,10 +249,11 @@ def label(
     _check_scheduler(backend, scheduler)
     folder, overrides = folder_argument(folder), overrides_argument(overrides)
     jobs, cache_dir = optional_count(jobs, "jobs"), folder_argument(cache_dir, "cache_dir")
+    force, converged, reuse = boolean(force, "force"), boolean(converged, "converged"), boolean(reuse, "reuse")
     config = load_saved_config(folder, with_converged_labels(overrides) if converged else overrides)
     return label_experiment(
         config, folder, cache_dir=cache_dir, jobs=jobs, force=force, on_stage=on_stage, on_done=on_done,
-        backend=backend, scheduler=scheduler, reuse=boolean(reuse, "reuse"),
+        backend=backend, scheduler=scheduler, reuse=reuse,
     )
 
 
@@ -260,7 +263,9 @@ def evaluate(folder: Path = DEFAULT_EXPERIMENT, *, partial: bool = False, cache_
     each cell's words). As :func:`~curiosity_cli.evaluate.tables.evaluate_experiment`."""
     from curiosity_cli.evaluate.tables import evaluate_experiment
 
-    return evaluate_experiment(folder_argument(folder), partial=partial, cache_dir=folder_argument(cache_dir, "cache_dir"))
+    return evaluate_experiment(
+        folder_argument(folder), partial=boolean(partial, "partial"), cache_dir=folder_argument(cache_dir, "cache_dir"),
+    )
 
 
 def plot(folder: Path = DEFAULT_EXPERIMENT) -> WrittenFigures:
@@ -330,6 +335,7 @@ def reproduce(
     _check_scheduler(backend, scheduler)
     config, overrides, sweeps = config_argument(config), overrides_argument(overrides), strings(sweeps, "sweeps", "seed=0,1")
     jobs, reuse = optional_count(jobs, "jobs"), boolean(reuse, "reuse")
+    force, converged = boolean(force, "force"), boolean(converged, "converged")
     results_dir, cache_dir = folder_argument(results_dir, "results_dir"), folder_argument(cache_dir, "cache_dir")
     if converged:
         overrides = with_converged_labels(overrides)

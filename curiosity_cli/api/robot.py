@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
 
-from curiosity_cli.api.arguments import folder_argument, name_or_path, optional_count, optional_path
+from curiosity_cli.api.arguments import boolean, folder_argument, name_or_path, optional_count, optional_path
 from curiosity_cli.api.pipeline import Config, load
 from curiosity_cli.errors import UsageError
 
@@ -92,6 +92,7 @@ def drive(
     from curiosity_cli.maps.map_data import load_map
 
     _finite("heading_deg", heading_deg)
+    dry_run, force, strict = boolean(dry_run, "dry_run"), boolean(force, "force"), boolean(strict, "strict")
     out, video_out = optional_path(out, "out"), optional_path(video_out, "video_out")
     seed, max_frames = optional_count(seed, "seed", 0), optional_count(max_frames, "max_frames")
     # a device index may come as the int it is
