@@ -318,6 +318,13 @@ def test_misused_results_name_the_argument(evaluated, call, parameter):
     (lambda: api.reproduce("quick", reuse=None), "reuse"),
     (lambda: api.drive(dry_run="yes"), "dry_run"),
     (lambda: api.drive(dry_run=True, strict="no"), "strict"),
+    (lambda: api.word_store("aerial-mosaic", config=42), "config"),
+    (lambda: api.redraw_timeline("results/drive/x", clock="utc"), "clock"),
+    (lambda: api.drive(dry_run=True, clock="x"), "clock"),
+    (lambda: api.drive(dry_run=True, camera="sim", sim_map="aerial-mosaic", start="5,5"), "start"),
+    (lambda: api.drive(dry_run=True, camera="sim", sim_map="aerial-mosaic", start=(5, "x")), "start"),
+    (lambda: api.drive(dry_run=True, heading_deg="north"), "heading_deg"),
+    (lambda: api.simrobot("aerial-mosaic", noise=5), "noise"),
 ])
 def test_misused_functions_name_the_argument(call, parameter):
     with pytest.raises(ParameterError, match=rf"^{parameter}: got "):

@@ -129,7 +129,7 @@ def extract(
     from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.words.extract import extract_words
 
-    dataset = name_or_path(dataset, "dataset")
+    dataset, config = name_or_path(dataset, "dataset"), config_argument(config)
     density, cache_dir = optional_path(density, "density"), folder_argument(cache_dir, "cache_dir")
     stride, cell_width = optional_count(stride, "stride"), optional_count(cell_width, "cell_width")
     force = boolean(force, "force")

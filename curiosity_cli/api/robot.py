@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import typing
 from collections.abc import Callable
 from pathlib import Path
@@ -10,7 +11,7 @@ from typing import NamedTuple
 
 from curiosity_cli.api.arguments import boolean, folder_argument, name_or_path, optional_count, optional_path
 from curiosity_cli.api.pipeline import Config, load
-from curiosity_cli.errors import UsageError
+from curiosity_cli.errors import ParameterError, UsageError
 
 if typing.TYPE_CHECKING:
     from curiosity_cli.drive.driver import Outcome
@@ -31,20 +32,44 @@ class RobotStart(NamedTuple):
 
 
 def _finite(name: str, value: float | None) -> None:
-    if value is not None and not math.isfinite(value):
+    if value is None:
+        return
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{name}: got {value!r} ({type(value).__name__}), expected a number")
+    if not math.isfinite(value):
         raise UsageError(f"{name}: got {value}, expected a finite number", parameter=name)
+
+
+def _clock(clock) -> str:
+    """``clock``: a name of :data:`~curiosity_cli.drive.timeline.CLOCKS`."""
+    from curiosity_cli.drive.timeline import CLOCKS
+
+    if not isinstance(clock, str) or clock not in CLOCKS:
+        raise ParameterError(f"clock: got {clock!r}, expected one of {', '.join(CLOCKS)}")
+    return clock
 
 
 def _start(start: tuple[float, float] | None, shape: tuple[int, int]) -> tuple[float, float]:
     """``start`` (row, col) in map pixels, the map's centre without it; refused unless inside the map."""
     if start is None:
         return shape[0] / 2, shape[1] / 2
+    _check_start(start)
     row, col = start
     if not (0 <= row <= shape[0] and 0 <= col <= shape[1]):
         raise UsageError(
             f"start: got {row:g},{col:g}, expected a point inside the map ({shape[0]} x {shape[1]} px)", parameter="start"
         )
     return row, col
+
+
+def _check_start(start) -> None:
+    """``start`` is a (row, col) pair of finite numbers, or None."""
+    if start is None:
+        return
+    if not isinstance(start, (tuple, list)) or len(start) != 2:
+        raise ParameterError(f"start: got {start!r} ({type(start).__name__}), expected (row, col) in map pixels")
+    for value in start:
+        _finite("start", value)
 
 
 def drive(
@@ -92,7 +117,9 @@ def drive(
     from curiosity_cli.maps.map_data import load_map
 
     _finite("heading_deg", heading_deg)
+    _check_start(start)
     dry_run, force, strict = boolean(dry_run, "dry_run"), boolean(force, "force"), boolean(strict, "strict")
+    clock = _clock(clock)
     out, video_out = optional_path(out, "out"), optional_path(video_out, "video_out")
     seed, max_frames = optional_count(seed, "seed", 0), optional_count(max_frames, "max_frames")
     # a device index may come as the int it is
@@ -136,7 +163,7 @@ def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
     files written. As :func:`~curiosity_cli.drive.session.redraw_timeline`."""
     from curiosity_cli.drive.session import redraw_timeline as redraw
 
-    return redraw(folder_argument(folder), clock)
+    return redraw(folder_argument(folder), _clock(clock))
 
 
 def simrobot(
@@ -176,6 +203,8 @@ def simrobot(
     _finite("estop_after", estop_after)
     map_name, seed = name_or_path(map_name, "map_name"), optional_count(seed, "seed", 0)
     link, log_file = optional_path(link, "link"), optional_path(log_file, "log_file")
+    if not isinstance(noise, str):
+        raise ParameterError(f"noise: got {noise!r} ({type(noise).__name__}), expected KIND=RATE,... e.g. 'garbage=0.05'")
     resolved = load(config, overrides)
     rates = Noise.parse(noise)
     map_data = load_map(map_name)
