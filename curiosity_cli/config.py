@@ -45,6 +45,15 @@ SPECIFICATIONS_KEY = "specifications"
 
 #: The largest ORB or texton vocabulary a config may name and ``vocab build`` may learn.
 MAX_VOCABULARY = 30000
+#: Bounds on the counts a config names: far above any run that finishes on one machine (the paper:
+#: 20 restarts, 320 steps; this project: 100,000 samples a step, 64-256 label sweeps, 200 batch
+#: sweeps), so that a typo (1e12) is refused by name before anything runs, never a run that does
+#: not end or a count beyond what the kernels' 64-bit integers hold.
+MAX_RESTARTS = 10_000
+MAX_PATH_LENGTH = 100_000
+MAX_SAMPLES = 100_000_000  # word samples of refinement per step or frame: 1,000 times the default
+MAX_SWEEPS = 100_000  # Gibbs sweeps of a labelling chain or of the batch reference
+MAX_CANDIDATE_SWEEPS = 1_000  # passes over a candidate's temporary labels
 
 #: The walkers a config may name in ``explore.weight_functions``, in the order reports list
 #: them: the paper's four weight functions in its order, the lawnmower, then the ceilings.
@@ -264,17 +273,17 @@ class ExploreConfig:
 
     # names in WALKER_NAMES, checked when loading
     weight_functions: tuple[str, ...] = spec()
-    restarts: int = spec(min=1)
-    path_length: int = spec(min=1)
-    checkpoints: tuple[int, ...] = spec(min=1)
-    samples_per_step: int = spec(min=1)
+    restarts: int = spec(min=1, max=MAX_RESTARTS)
+    path_length: int = spec(min=1, max=MAX_PATH_LENGTH)
+    checkpoints: tuple[int, ...] = spec(min=1, max=MAX_PATH_LENGTH)
+    samples_per_step: int = spec(min=1, max=MAX_SAMPLES)
     step_seconds: float | None = spec(min=0, min_exclusive=True)
     coverage: str = spec(choices=tuple(COVERAGE_READINGS))
     # read only by a reading whose reads_min_d2 says so (run_settings)
     min_d2: float | None = spec(min=0, min_exclusive=True)
     candidates: int = spec(choices=EXPLORE_READINGS["candidates"])
     candidate_context: str = spec(choices=EXPLORE_READINGS["candidate_context"])
-    candidate_sweeps: int = spec(min=1)
+    candidate_sweeps: int = spec(min=1, max=MAX_CANDIDATE_SWEEPS)
     candidate_labels: str = spec(choices=EXPLORE_READINGS["candidate_labels"])
     candidate_words: str = spec(choices=EXPLORE_READINGS["candidate_words"])
     path_topics: str = spec(choices=EXPLORE_READINGS["path_topics"])
@@ -303,10 +312,10 @@ class ExploreConfig:
 class LabelConfig:
     """Labelling whole maps: with a path's model (Z_p) and in batch mode (Z_b) (paper section 5.1)."""
 
-    sweeps: int = spec(min=1)
-    warm_sweeps: int | None = spec(min=1)
-    check_restarts: int = spec(min=0)
-    batch_sweeps: int = spec(min=1)
+    sweeps: int = spec(min=1, max=MAX_SWEEPS)
+    warm_sweeps: int | None = spec(min=1, max=MAX_SWEEPS)
+    check_restarts: int = spec(min=0, max=MAX_RESTARTS)
+    batch_sweeps: int = spec(min=1, max=MAX_SWEEPS)
     device: str = spec(choices=LABEL_DEVICES)
 
 
@@ -331,7 +340,7 @@ class DriveConfig:
     orb_levels: int = spec(min=1, max=16)
     orb_per_tile: int = spec(min=1)
     orb_fill_threshold: int | None = spec(min=1, max=19)
-    samples_per_frame: int = spec(min=0)
+    samples_per_frame: int = spec(min=0, max=MAX_SAMPLES)
     memory_frames: int | None = spec(min=2)
     surge_cruise: float = spec()
     surge_gain: float = spec(min=0)

@@ -240,7 +240,7 @@ def test_a_missing_config_file_is_refused(tmp_path, monkeypatch):
 
 
 def test_a_bad_override_names_the_argument(tmp_path):
-    with pytest.raises(ConfigError, match=r"^overrides: explore\.restarts: got -2 \(int\), expected an integer >= 1$") as bad:
+    with pytest.raises(ConfigError, match=r"^overrides: explore\.restarts: got -2 \(int\), expected an integer >= 1 and <= 10000$") as bad:
         load_config(CONFIG_DIR / "quick.yaml", ["explore.restarts=-2"])
     assert bad.value.parameter == "overrides"
     with pytest.raises(ConfigError, match=r"^overrides 'restarts': expected KEY=VALUE") as malformed:
@@ -424,3 +424,25 @@ def test_each_reading_is_one_value_and_the_floor_counts_only_where_the_reading_r
     # a floor on the command line without a reading is the old syntax: refused, naming the option
     with pytest.raises(ConfigError, match=r"^overrides: explore.min_d2: got 0.5 without explore.coverage"):
         load_config(CONFIG_DIR / "quick.yaml", ["explore.min_d2=0.5"])
+
+
+@pytest.mark.parametrize("key, value, bound", [
+    ("explore.candidate_sweeps", 10**12, 1000),
+    ("explore.samples_per_step", 2**63, 100000000),
+    ("explore.restarts", 10**6, 10000),
+    ("explore.path_length", 10**9, 100000),
+    ("label.sweeps", 10**20, 100000),
+    ("label.warm_sweeps", 10**6, 100000),
+    ("label.batch_sweeps", 10**20, 100000),
+    ("drive.samples_per_frame", 10**23, 100000000),
+])
+def test_every_count_has_a_bound_that_the_command_line_names(key, value, bound):
+    """A count beyond its bound is refused before anything runs (issue 44: runs that never ended, numba overflows)."""
+    from typer.testing import CliRunner
+
+    from curiosity_cli.cli import app
+
+    result = CliRunner().invoke(app, ["config", "show", "quick", "--set", f"{key}={value}"])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert f"--set: {key}: got {value} (int), expected an integer >= " in result.stderr
+    assert f"and <= {bound}" in result.stderr

@@ -125,7 +125,7 @@ def test_a_bad_value_anywhere_fails_before_any_folder_is_written(own_map, tmp_pa
     results = tmp_path / "results"
     result = sweep(config, results, "--sweep", "model.topics=4,6", "--sweep", "explore.restarts=2,0")
     assert result.exit_code == 1
-    assert result.stderr.strip() == "Error: --sweep: explore.restarts: got 0 (int), expected an integer >= 1"
+    assert result.stderr.strip() == "Error: --sweep: explore.restarts: got 0 (int), expected an integer >= 1 and <= 10000"
     assert not results.exists()
     result = runner.invoke(app, ["reproduce", "--quick", "--sweep", "model.topics=200", "--results-dir", str(results)])
     assert result.exit_code == 1 and result.stderr.startswith("Error: --sweep: model.topics: got 200")
