@@ -13,7 +13,7 @@ import json
 from pathlib import Path
 
 from curiosity_cli.experiment.layout import ExperimentFolder
-from curiosity_cli.files import atomic_path
+from curiosity_cli.files import atomic_path, display_path, note
 
 #: The stages, in the order they run and the report lists them.
 STAGES = ("extract and explore", "label", "evaluate", "plot")
@@ -29,16 +29,35 @@ def record_stage_seconds(folder: Path, stage: str, seconds: float, *, add: bool)
         raise ValueError(f"stage: got {stage!r}, expected one of {', '.join(STAGES)}")
     path = ExperimentFolder(folder).stage_seconds
     times = read_stage_seconds(folder)
+    if (problem := stage_seconds_problem(folder)) is not None:
+        note(f"{problem}; the stage times it held are lost: {stage}'s is recorded alone")
     times[stage] = (times.get(stage, 0.0) if add else 0.0) + float(seconds)
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps({name: times[name] for name in STAGES if name in times}, indent=1) + "\n")
+
+
+def stage_seconds_problem(folder: Path) -> str | None:
+    """Why ``stage_seconds.json`` of ``folder`` cannot be read, naming it; None when it is missing or fine."""
+    path = ExperimentFolder(folder).stage_seconds
+    try:
+        recorded = json.loads(path.read_text())
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError) as exc:
+        return f"{display_path(path)}: cannot be read ({exc})"
+    if not isinstance(recorded, dict) or any(
+        not isinstance(value, (int, float)) or isinstance(value, bool) for value in recorded.values()
+    ):
+        return f"{display_path(path)}: expected a mapping of stage names to seconds"
+    return None
 
 
 def read_stage_seconds(folder: Path) -> dict[str, float]:
     """The seconds of each stage recorded in ``folder``, in :data:`STAGES` order; none for a file missing or unreadable.
 
     The times are a report's footnote, never a reason to refuse one: a file that cannot
-    be read counts as no times at all.
+    be read counts as no times at all (:func:`stage_seconds_problem` says why, for the
+    report and the next stage to say so).
     """
     path = ExperimentFolder(folder).stage_seconds
     try:

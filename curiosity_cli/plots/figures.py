@@ -160,7 +160,7 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
     """
     import pandas as pd
 
-    from curiosity_cli.experiment.stage_seconds import record_stage_seconds
+    from curiosity_cli.experiment.stage_seconds import record_stage_seconds, stage_seconds_problem
 
     started = time.perf_counter()
     experiment_dir = Path(experiment_dir)
@@ -238,6 +238,8 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
             else:
                 notes.append("batch-convergence: no batch log-likelihood trace under batch/ (label the experiment)")
         written.skipped[:] = list(dict.fromkeys(notes))  # a corrupt file is named once, not once per figure
+        if (lost := stage_seconds_problem(experiment_dir)) is not None:  # before plot's time replaces the file
+            written.skipped.append(f"{lost}: the time table lacks the stage times it held")
         record_stage_seconds(experiment_dir, "plot", time.perf_counter() - started, add=False)
         written.report = _write_report(experiment, written)
         return written

@@ -329,3 +329,22 @@ def test_a_failure_while_writing_the_tables_leaves_the_old_set_whole(own_map, tm
         evaluate_experiment(folder, partial=True)
     assert {path: path.read_bytes() for path in tables} == before
     assert not [p for p in folder.iterdir() if ".tmp" in p.name]
+
+
+def test_an_unreadable_stage_seconds_file_is_named_and_what_was_lost_said(own_map, tmp_path):
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
+    evaluate_experiment(folder)
+    path = folder / "stage_seconds.json"
+    for garbage in ("{not json", '{"label": "12 s"}', ""):
+        path.write_text(garbage)
+        result = runner.invoke(app, ["plot", str(folder)])
+        assert result.exit_code == 0, result.output
+        report = (folder / "REPORT.md").read_text()
+        assert "stage_seconds.json: " in report and "the time table lacks the stage times it held" in report
+        assert "the stage times it held are lost: plot's is recorded alone" in result.stderr
+        path.write_text(garbage)
+        result = runner.invoke(app, ["evaluate", str(folder), "--cache-dir", str(tmp_path / "cache")])
+        assert result.exit_code == 0, result.output
+        assert "stage_seconds.json: " in result.stderr and "the stage times it held are lost: evaluate's is recorded alone" in result.stderr
+        assert set(json.loads(path.read_text())) == {"evaluate"}
