@@ -148,6 +148,8 @@ def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
     from curiosity_cli.drive.timeline import surprise_series
 
     frames = surprise_series(log)["frame"].size
+    if frames == 0:
+        raise CuriosityError(f"{display_path(log)}: holds no frame of the replay (its start record alone); nothing to draw")
     return _draw_timeline(Path(folder), start["camera"], start["topic"], f"{frames} frames", clock)
 
 

@@ -39,15 +39,23 @@ def surprise_series(log: Path, clock: str = "bag") -> dict:
     record times are all equal (a recorder that stamped a batch at once) falls back to
     header stamps, and ``fell_back`` says so.
 
+    A last line cut short (a run stopped while writing it) is left out, with a note.
+
     Raises
     ------
     CuriosityError
-        ``header`` for a log whose frames have no header stamps.
+        ``header`` for a log whose frames have no header stamps; a line before the last
+        that is not a JSON object, or a frame record without a field the timeline reads,
+        naming the line.
     """
     from curiosity_cli.errors import CuriosityError
     from curiosity_cli.files import display_path
 
-    records = [r for r in map(json.loads, Path(log).read_text().splitlines()) if r.get("event") == "frame" and "bag_time" in r]
+    records = [r for r in _log_records(Path(log)) if r.get("event") == "frame" and "bag_time" in r]
+    for r in records:
+        missing = [k for k in ("frame", "perplexity", "scores", "words") if k not in r]
+        if missing:
+            raise CuriosityError(f"{display_path(Path(log))}: line {r['_line']}: a frame record without {missing[0]!r}")
     headers = all(CLOCKS["header"] in r for r in records)
     if clock == "header" and not headers:
         raise CuriosityError(f"{display_path(Path(log))}: its frames have no header stamps; use the bag's clock")
@@ -62,6 +70,36 @@ def surprise_series(log: Path, clock: str = "bag") -> dict:
         "clock": used,
         "fell_back": fell_back,
     }
+
+
+def _log_records(log: Path) -> list[dict]:
+    """The records of a drive's log, each with its line number (``_line``); a last line cut short left out, noted.
+
+    Raises
+    ------
+    CuriosityError
+        A line before the last that is not a JSON object, naming it.
+    """
+    from curiosity_cli.errors import CuriosityError
+    from curiosity_cli.files import display_path, note
+
+    try:
+        lines = log.read_text().splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CuriosityError(f"{display_path(log)}: cannot be read ({exc})") from None
+    records = []
+    for number, line in enumerate(lines, start=1):
+        try:
+            record = json.loads(line)
+        except ValueError:
+            if number == len(lines):
+                note(f"{display_path(log)}: its last line is cut short (a run stopped while writing it?); it is left out")
+                break
+            raise CuriosityError(f"{display_path(log)}: line {number}: not a JSON record") from None
+        if not isinstance(record, dict):
+            raise CuriosityError(f"{display_path(log)}: line {number}: expected a JSON object, got {type(record).__name__}")
+        records.append({**record, "_line": number})
+    return records
 
 
 def most_surprising(perplexity: np.ndarray, count: int = SURPRISING, eligible: np.ndarray | None = None) -> list[int]:

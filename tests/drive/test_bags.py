@@ -444,3 +444,28 @@ def test_header_stamps_are_logged_and_a_bag_of_equal_record_times_falls_back_to_
     assert series["time"].tolist() == pytest.approx([(START + i * PERIOD) / 1e9 for i in range(FRAMES)])
     result = runner.invoke(app, ["drive", "--timeline", str(tmp_path / "run")])
     assert result.exit_code == 0 and "every frame has the same bag time" in result.stderr
+
+
+def test_a_log_cut_short_or_damaged_is_named_not_a_traceback(tmp_path, frames):
+    """Issue 44: a log.jsonl cut mid-line, holding a line that is not an object, or only its start record."""
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
+    assert replay(bag, tmp_path / "run").exit_code == 0
+    log = tmp_path / "run" / "log.jsonl"
+    whole = log.read_text()
+    lines = whole.splitlines()
+
+    log.write_text(whole[: len(whole) - 20])  # killed while writing its last line
+    result = runner.invoke(app, ["drive", "--timeline", str(tmp_path / "run")])
+    assert result.exit_code == 0, result.output
+    assert "log.jsonl: its last line is cut short (a run stopped while writing it?); it is left out" in result.stderr
+
+    for bad, message in (("[1, 2]", "line 2: expected a JSON object, got list"), ("{oops", "line 2: not a JSON record")):
+        log.write_text("\n".join([lines[0], bad, *lines[1:]]) + "\n")
+        result = runner.invoke(app, ["drive", "--timeline", str(tmp_path / "run")])
+        assert result.exit_code == 1 and "Traceback" not in result.output
+        assert f"log.jsonl: {message}" in result.stderr
+
+    log.write_text(lines[0] + "\n")
+    result = runner.invoke(app, ["drive", "--timeline", str(tmp_path / "run")])
+    assert result.exit_code == 1
+    assert "log.jsonl: holds no frame of the replay (its start record alone); nothing to draw" in result.stderr
