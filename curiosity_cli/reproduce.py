@@ -49,6 +49,9 @@ def reproduce(
         if on_done is not None:
             on_done()
 
+    from curiosity_cli.topics.devices import resolve_device
+
+    resolve_device(config.label.device)  # a GPU that is not there stops the pipeline before it explores, not after
     folder = experiment_root(results_dir, config.name)
     stage("words and exploration set-up", 0)
     with Workers(backend, scheduler, jobs) as workers:

@@ -520,6 +520,10 @@ def run_sweep(
     from curiosity_cli.reproduce import reproduce
     from curiosity_cli.sweep_report import write_sweep_report
 
+    from curiosity_cli.topics.devices import resolve_device
+
+    for combination in sweep.combinations:  # a GPU one combination asks for and this machine lacks: before any runs
+        resolve_device(combination.config.label.device)
     folder = sweep.folder(results_dir)
     write_plan(sweep, folder)
     total = len(sweep.combinations)

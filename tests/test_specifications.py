@@ -194,3 +194,25 @@ def test_only_the_study_config_itself_declares_specifications(own_map, tmp_path)
     result = sweep(child, tmp_path / "results")
     assert result.exit_code == 1
     assert "tiny.yaml: specifications: only the experiment config itself may declare specifications" in result.stderr
+
+
+def test_a_gpu_that_is_not_there_is_refused_before_anything_is_explored(own_map, tmp_path):
+    """Issue 44: label.device=cuda in a specification, or given with --set, was checked only after exploring."""
+    from curiosity_cli.topics.devices import cuda_missing
+
+    if cuda_missing() is None:
+        pytest.skip("this machine has a CUDA GPU")
+    config = study_yaml(own_map, tmp_path, {"default": {}, "gpu": {"label.device": "cuda"}})
+    result = sweep(config, tmp_path / "results")
+    assert result.exit_code == 1 and "label.device: cuda, but " in result.stderr
+    assert not (tmp_path / "results").exists() or not list((tmp_path / "results").rglob("run.json")), "nothing explored"
+    from typer.testing import CliRunner
+
+    from curiosity_cli.cli import app
+
+    single = CliRunner().invoke(app, [
+        "reproduce", str(tiny_yaml(own_map, tmp_path)), "--set", "label.device=cuda", "--jobs", "1",
+        "--results-dir", str(tmp_path / "single"), "--cache-dir", str(tmp_path / "cache"),
+    ])
+    assert single.exit_code == 1 and "label.device: cuda, but " in single.stderr
+    assert not list((tmp_path / "single").rglob("run.json")), "nothing explored"

@@ -141,6 +141,14 @@ def extract_words(
         types,
         params,
     )
+    if words.orb_detector == "grid" and store.count_by_type().get("orb", 0) == 0:
+        # a grid that coarse puts no point far enough inside the map for a descriptor: a store without ORB words
+        # would run, and answer another question than the config asks
+        raise CuriosityError(
+            f"words.orb_grid_step: got {words.orb_grid_step}, but its grid places no ORB word on "
+            f"{map_data.config.name} ({image.shape[0]} x {image.shape[1]} px); expected a step that leaves grid points "
+            "inside the map, away from its border",
+        )
     save_store(store, path)
     seconds["total"] = time.perf_counter() - start
     return Extraction(store, path, reused=False, seconds=seconds)

@@ -116,3 +116,18 @@ def test_a_map_smaller_than_half_a_step_has_no_grid_words():
 def test_bad_arguments_are_named(image, step, message):
     with pytest.raises(ParameterError, match=message):
         grid_orb(image, step=step)
+
+
+def test_a_grid_step_that_places_no_orb_word_is_refused_by_name(tmp_path):
+    """Issue 44: orb_grid_step=100000 gave a store without ORB words, and exit 0."""
+    from typer.testing import CliRunner
+
+    from curiosity_cli.cli import app
+
+    result = CliRunner().invoke(app, [
+        "extract", "aerial-mosaic", "--set", "words.orb_detector=grid", "--set", "words.orb_grid_step=100000",
+        "--cache-dir", str(tmp_path),
+    ])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert "words.orb_grid_step: got 100000, but its grid places no ORB word on aerial-mosaic (1024 x 1024 px)" in result.stderr
+    assert not list(tmp_path.glob("*.npz")), "no store is cached"
