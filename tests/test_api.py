@@ -329,3 +329,12 @@ def test_misused_results_name_the_argument(evaluated, call, parameter):
 def test_misused_functions_name_the_argument(call, parameter):
     with pytest.raises(ParameterError, match=rf"^{parameter}: got "):
         call()
+
+
+def test_explore_names_a_registered_map_by_its_name_and_a_dataset_yaml_by_its_path(own_map, monkeypatch):
+    """Issue 44: `explore --map reef-mosaic` saved this checkout's absolute path, which a copied folder cannot follow."""
+    import curiosity_cli.explore.grid as grid
+
+    monkeypatch.setattr(grid, "run_grid", lambda config, **_: config.datasets)
+    assert api.explore("quick", maps=["reef-mosaic"]) == ("reef-mosaic",)
+    assert api.explore("quick", maps=[str(own_map)]) == (str(own_map.resolve()),)

@@ -192,7 +192,7 @@ def explore(
     from curiosity_cli.errors import ConfigError
     from curiosity_cli.explore.grid import run_grid
     from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS
-    from curiosity_cli.maps.datasets import dataset_path
+    from curiosity_cli.maps.datasets import DATASET_CONFIG_DIR, dataset_path
 
     _check_scheduler(backend, scheduler)
     maps = strings(maps, "maps", "aerial-mosaic")
@@ -203,7 +203,10 @@ def explore(
     options = []
     if maps:
         try:
-            paths = [str(dataset_path(name).resolve()) for name in maps]
+            # a registered map by its name, as a config names it (a copied experiment folder still finds it);
+            # a dataset YAML by its absolute path, which no working folder changes
+            paths = [name if dataset_path(name).parent == DATASET_CONFIG_DIR else str(dataset_path(name).resolve())
+                     for name in maps]
         except ConfigError as exc:
             raise UsageError(f"maps: {exc}", parameter="maps") from None
         options.append(f"datasets={paths}")
