@@ -554,8 +554,8 @@ def label_experiment(
             profile.mark("writing")
             labelled += len(taken)
             if shared is not None:  # what this call computed, for the next experiment that needs it
-                for info in stale:
-                    if batch_is_current(batch_files[info.name], batch_recipes[info.name]):
+                for info in stale:  # a map whose batch reference failed has left batch_files
+                    if info.name in batch_files and batch_is_current(batch_files[info.name], batch_recipes[info.name]):
                         shared.keep_file(BATCH, batch_recipes[info.name].digest, batch_files[info.name])
         shared_counts = {"labels": len(taken), "batches": len(shared_batches), "labelled": labelled}
         if todo or stale or shared_batches:  # a call that found every label file current made nothing

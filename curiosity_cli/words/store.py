@@ -13,6 +13,7 @@ Words are sorted by cell, so the words of cell ``c`` are the contiguous slice
 
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,7 +22,7 @@ import numpy as np
 
 from curiosity_cli.maps.cell_grid import SquareGrid, map_grid
 from curiosity_cli.errors import RERUN, CuriosityError
-from curiosity_cli.files import atomic_path, display_path, open_npz
+from curiosity_cli.files import CorruptFileError, atomic_path, display_path, open_npz
 
 STORE_FORMAT = 1
 
@@ -144,14 +145,28 @@ def build_store(
     )
 
 
+_ARRAYS = ("rows", "cols", "words", "cell_start")
+
+
+def _arrays_digest(arrays: dict) -> str:
+    """SHA-256 of a store's arrays (their dtypes, shapes and bytes), recorded in its meta when written."""
+    digest = hashlib.sha256()
+    for name in _ARRAYS:
+        array = np.ascontiguousarray(arrays[name])
+        digest.update(f"{name}:{array.dtype.str}:{array.shape};".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
 def save_store(store: WordStore, path: Path) -> None:
-    """Write a store as one compressed ``.npz``, atomically."""
+    """Write a store as one compressed ``.npz``, atomically, with the digest of its arrays in its meta."""
     meta = {
         "format": STORE_FORMAT,
         "grid_shape": list(store.grid.shape),
         "cell_width": store.grid.cell_width,
         "types": [t.__dict__ for t in store.types],
         "params": store.params,
+        "arrays_sha256": _arrays_digest({name: getattr(store, name) for name in _ARRAYS}),
     }
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as handle:
@@ -173,13 +188,15 @@ def load_store(path: Path) -> WordStore:
     CuriosityError
         The file is missing, or of another format version.
     CorruptFileError
-        The file is not a store: truncated, empty, or another kind of ``.npz``.
+        The file is not a store: truncated, empty, or another kind of ``.npz``; or its
+        arrays are not those it was written with (a store written before their digest was
+        recorded is taken as it is).
     """
     path = Path(path)
     try:
         with open_npz(path) as data:
             meta = json.loads(str(data["meta"]))
-            arrays = {k: data[k] for k in ("rows", "cols", "words", "cell_start")}
+            arrays = {k: data[k] for k in _ARRAYS}
     except FileNotFoundError:
         raise CuriosityError(f"{display_path(path)}: not found; {RERUN} makes it", rerun="extract", force=False) from None
     if meta.get("format") != STORE_FORMAT:
@@ -188,6 +205,8 @@ def load_store(path: Path) -> WordStore:
             f"run {RERUN} to rebuild it",
             rerun="extract",
         )
+    if "arrays_sha256" in meta and _arrays_digest(arrays) != meta["arrays_sha256"]:
+        raise CorruptFileError(f"{display_path(path)}: its words are not those it was written with (altered since)")
     return WordStore(
         **arrays,
         grid=SquareGrid(*meta["grid_shape"], meta["cell_width"]),

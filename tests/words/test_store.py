@@ -71,3 +71,31 @@ def test_a_file_that_is_not_a_store_is_refused(tmp_path):
     np.savez(path, something=np.zeros(3))
     with pytest.raises(CuriosityError, match=r"x\.npz: corrupt or truncated \(meta is not a file in the archive\)"):
         load_store(path)
+
+
+def test_a_store_whose_words_were_edited_is_named_and_extracted_again(own_map, tmp_path):
+    """Issue 44: an edited word store made `label --force` fail naming no file, and kept it."""
+    import json
+
+    from small_maps import grid_yaml
+    from typer.testing import CliRunner
+
+    from curiosity_cli.cli import app
+
+    runner = CliRunner()
+    common = ["--jobs", "1", "--cache-dir", str(tmp_path / "cache")]
+    result = runner.invoke(app, ["explore", str(grid_yaml(own_map, tmp_path)), *common, "--results-dir", str(tmp_path / "results")])
+    assert result.exit_code == 0, result.output
+    (store,) = (tmp_path / "cache").glob("own-*.npz")
+    with np.load(store) as npz:
+        arrays = {name: npz[name] for name in npz.files}
+    assert "arrays_sha256" in json.loads(str(arrays["meta"]))
+    words = arrays["words"].copy()
+    words[0] = (int(words[0]) + 1) % 10
+    np.savez_compressed(store, **{**arrays, "words": words})  # its meta as it was
+    result = runner.invoke(app, ["label", str(tmp_path / "results" / "grid"), "--force", *common,
+                                 "--set", "label.sweeps=2", "--set", "label.batch_sweeps=2"])
+    assert f"{store.name}: its words are not those it was written with (altered since); extracting the words again" in result.stderr
+    assert result.exit_code == 0, result.output
+    with np.load(store) as npz:
+        assert np.array_equal(npz["words"], arrays["words"]), "made again as it was"
