@@ -120,3 +120,21 @@ def test_two_writers_of_one_item_leave_one_whole_file(tmp_path):
         thread.join()
     assert not errors
     assert [p.name.startswith("k" * 32 + ".") for p in (tmp_path / SHARED_FOLDER / LABELS).iterdir()] == [True]
+
+
+def test_a_batch_reference_that_fails_is_named_and_nothing_is_kept_of_it(own_map, tmp_path, monkeypatch):
+    """A batch reference whose task raised stops its map's runs with a named line, not a KeyError."""
+    import curiosity_cli.label.batch_references as batch_references
+    import pytest
+
+    from curiosity_cli.label.stage import LabelError
+
+    def failing(task, config, store=None, *, threads=1):
+        raise RuntimeError("out of memory")
+
+    monkeypatch.setattr(batch_references, "batch_task", failing)
+    config, folder = explored(own_map, tmp_path, "first")
+    # one worker: the batch reference runs before the blocks, in this process's loky worker (which imports the patch)
+    with pytest.raises(LabelError, match=r"the batch reference of own: RuntimeError: out of memory; its runs were not labelled"):
+        label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1, backend="loky")
+    assert not (tmp_path / "cache" / SHARED_FOLDER / BATCH).exists() or not list((tmp_path / "cache" / SHARED_FOLDER / BATCH).iterdir())
