@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import shutil
 from collections.abc import Callable
 from datetime import datetime
 from pathlib import Path
@@ -33,6 +34,7 @@ from curiosity_cli.drive.pipeline import CuriosityPipeline, warm_up
 from curiosity_cli.drive.sim import Body, Pose
 from curiosity_cli.drive.simrobot import Noise, SimRobot, open_pty
 from curiosity_cli.errors import CuriosityError, ParameterError
+from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import display_path
 from curiosity_cli.paths import DEFAULT_RESULTS
 
@@ -72,7 +74,7 @@ def check_run_folder(out: Path | None, *, force: bool = False) -> None:
     out = Path(out)
     if not out.is_dir():
         raise ParameterError(f"out: {display_path(out)} is a file; give a new or empty folder for the run", parameter="out")
-    held = sorted(p.name for p in out.iterdir())
+    held = sorted(p.name for p in out.iterdir() if p != ExperimentFolder(out).lock)
     if not held:
         return
     if (out / RUN_LOG).is_file():
@@ -88,32 +90,53 @@ def check_run_folder(out: Path | None, *, force: bool = False) -> None:
     )
 
 
-def claim_run_folder(out: Path | None, *, force: bool = False) -> Path:
-    """Make the run's folder, empty, and return it: ``out``, or a new ``results/drive/<date-time>``.
+#: What a drive writes in its run folder (besides the folder lock): ``--force`` removes these, and only these.
+RUN_OUTPUTS = (RUN_LOG, "config.yaml", "provenance.yaml", "timeline.png", "timeline.pdf", "frames", "surprising")
 
-    Runs started in the same second without ``out`` each get their own folder
-    (``<date-time>-2``, ``-3``, ...): a folder is made here, atomically, never taken when it
-    exists. ``out`` is checked as :func:`check_run_folder`; with ``force``, the earlier run
-    in it is removed first.
+
+@contextlib.contextmanager
+def claimed_run_folder(out: Path | None, *, force: bool = False):
+    """Make the run's folder and hold its lock while the run writes there; yield the folder.
+
+    ``out``, or a new ``results/drive/<date-time>``. Runs started in the same second without
+    ``out`` each get their own folder (``<date-time>-2``, ``-3``, ...): a folder is made here,
+    atomically, never taken when it exists. ``out`` is checked as :func:`check_run_folder`,
+    again once its lock is held; with ``force``, the earlier run's files (:data:`RUN_OUTPUTS`)
+    are removed then, and nothing else: a file of the user's stays. A second drive into
+    the same folder while one runs is refused, naming the first (its process id).
+
+    Raises
+    ------
+    FolderInUseError
+        Another drive writes in ``out``.
     """
-    import shutil
+    from curiosity_cli.experiment.lock import working_in
 
     if out is not None:
         check_run_folder(out, force=force)
         out = Path(out)
-        if (out / RUN_LOG).is_file():  # force, checked above
-            shutil.rmtree(out)
         out.mkdir(parents=True, exist_ok=True)
-        return out
+        with working_in(out, "drive"):
+            check_run_folder(out, force=force)  # what another drive may have written before this one held the lock
+            for name in RUN_OUTPUTS:
+                path = out / name
+                if path.is_dir():
+                    shutil.rmtree(path)
+                else:
+                    path.unlink(missing_ok=True)
+            yield out
+        return
     base = DEFAULT_RESULTS / "drive" / datetime.now().strftime("%Y%m%d-%H%M%S")
     base.parent.mkdir(parents=True, exist_ok=True)
     for n in range(1, 10_000):
         folder = base if n == 1 else base.with_name(f"{base.name}-{n}")
         try:
             folder.mkdir()
-            return folder
         except FileExistsError:
             continue
+        with working_in(folder, "drive"):
+            yield folder
+        return
     raise CuriosityError(f"{display_path(base)}: 10,000 runs started this second; give --out")
 
 
@@ -223,7 +246,7 @@ def drive_session(
     out : Path, optional
         The run folder (``log.jsonl``, ``config.yaml``, ``provenance.yaml``,
         ``frames/``), new or empty; default a new ``results/drive/<date-time>``
-        (:func:`claim_run_folder`).
+        (:func:`claimed_run_folder`).
     force : bool
         Replace the earlier run in ``out`` (never a folder of anything else).
     strict : bool
@@ -274,14 +297,19 @@ def drive_session(
     if lockstep and start is None:
         raise ParameterError("start: a dry run on a simulated map needs the robot's start (row, col)")
     check_run_folder(out, force=force)  # before the camera and the model: a folder in use is the only message
-    with stopping_on_signals(StopRequest()) as stop:
+    with stopping_on_signals(StopRequest()) as stop, contextlib.ExitStack() as held:
         source = None if camera == "sim" else open_camera(camera, topic)
         if getattr(source, "note", ""):  # a bag read otherwise than named (a recording cut short)
             on_status(source.note)
         on_status("loading the vocabularies and the topic model's kernels")
         pipeline = CuriosityPipeline(config, seed)
         warm_up(config)
-        out = claim_run_folder(out, force=force)
+        try:
+            out = held.enter_context(claimed_run_folder(out, force=force))
+        except BaseException:  # another drive holds the folder: the camera opened for nothing
+            if source is not None:
+                source.close()
+            raise
         prepare_folder(out, config, seed)
         log = JsonLines(out / RUN_LOG)
         map_name = None if sim_map is None else sim_map.config.name

@@ -291,10 +291,34 @@ def test_a_replay_into_a_folder_in_use_is_refused_and_force_replaces_only_an_ear
     assert again.stderr.strip().splitlines()[-1].startswith(f"Error: --out: {run} holds an earlier run (log.jsonl and ")
     assert (run / "log.jsonl").read_bytes() == log  # untouched
 
+    (run / "my-notes.txt").write_text("the operator's notes")  # issue 44: --force deleted files the tool did not write
     replaced = replay(bag, run, "--max-frames", "2", "--force")
     assert replaced.exit_code == 0, replaced.output
     assert len(frame_records(run)) == 2  # the new run only, not mixed with the old one
     assert {int(p.stem.split("-")[1]) for p in (run / "surprising").glob("frame-*.png")} <= {0, 1}
+    assert (run / "my-notes.txt").read_text() == "the operator's notes"
+
+    # issue 44: two drives into one folder at once both exited 0 and one run was lost; the second is refused
+    import subprocess
+    import sys
+    import time
+
+    first = subprocess.Popen([sys.executable, "-c", (
+        "import sys, time; from pathlib import Path; from curiosity_cli.drive.session import claimed_run_folder\n"
+        f"with claimed_run_folder(Path({str(run)!r}), force=True) as out:\n"
+        "    (out / 'log.jsonl').write_text('{}\\n'); print('running', flush=True); time.sleep(30)\n"
+    )], stdout=subprocess.PIPE, text=True)
+    try:
+        assert first.stdout.readline().strip() == "running"
+        busy = replay(bag, run, "--max-frames", "2", "--force")
+    finally:
+        first.kill()
+        first.wait()
+        first.stdout.close()
+    assert busy.exit_code == 1 and "Traceback" not in busy.output
+    assert f"{run}: another process works in this experiment (`curiosity drive`, process {first.pid}, since " in busy.stderr
+    assert (run / "log.jsonl").read_text() == "{}\n", "the first drive's log is untouched"
+    assert (run / "my-notes.txt").is_file()
 
     other = tmp_path / "notes"
     other.mkdir()
@@ -317,9 +341,12 @@ def test_runs_started_in_the_same_second_get_folders_of_their_own(tmp_path, monk
 
     monkeypatch.setattr(session, "DEFAULT_RESULTS", tmp_path)
     monkeypatch.setattr(session, "datetime", Frozen)
-    folders = [session.claim_run_folder(None) for _ in range(3)]
+    folders = []
+    for _ in range(3):
+        with session.claimed_run_folder(None) as folder:
+            folders.append(folder)
     assert [f.name for f in folders] == ["20261126-230000", "20261126-230000-2", "20261126-230000-3"]
-    assert all(f.is_dir() and not any(f.iterdir()) for f in folders)
+    assert all(f.is_dir() and [p.name for p in f.iterdir()] == [".lock"] for f in folders)
 
 
 EMPTY = np.zeros(0, np.uint8)
