@@ -282,7 +282,7 @@ def _mechanism_section(table, names: list[str], folder: Path, datasets: list[str
     a figure and a table (:mod:`~curiosity_cli.evaluate.mechanism`), beside its MI ratio to each walker."""
     from curiosity_cli.evaluate.specification_curve import VERSUS
     from curiosity_cli.plots.mechanism import write_mechanism_figure
-    from curiosity_cli.sweep_report import number
+    from curiosity_cli.evaluate.report import number
 
     lines = [
         "## Does surprise point at what is new?",
@@ -322,7 +322,8 @@ def _mechanism_section(table, names: list[str], folder: Path, datasets: list[str
 def _curve_rows(table, names: list[str]) -> list[str]:
     """The curve's points as a Markdown table: each walker compared alone, then the next-best summary."""
     from curiosity_cli.evaluate.specification_curve import STEERING_WALKER, VERSUS
-    from curiosity_cli.sweep_report import number, p_text
+    from curiosity_cli.evaluate.report import number
+    from curiosity_cli.sweep_report import p_text
 
     def versus(r: dict, walker: str) -> str:
         low, high = r[f"ratio_{walker}_low"], r[f"ratio_{walker}_high"]

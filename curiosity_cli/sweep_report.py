@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from curiosity_cli.config import PAPER_WALKERS
+from curiosity_cli.evaluate.report import number
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.sweep import Combination, Outcome, Sweep, count
@@ -314,15 +315,6 @@ def _sensitivity(sweep: Sweep, treatments: Sequence[Treatment]) -> tuple[list[st
                 ]) + " |"
             )
     return lines + [""], rows
-
-
-def number(value, digits: int = 2) -> str:
-    """A number for a table: ``digits`` decimals, empty for NaN or nothing."""
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        return ""
-    return f"{value:.{digits}f}" if value == value else ""
 
 
 def p_text(value) -> str:

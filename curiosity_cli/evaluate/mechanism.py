@@ -69,8 +69,6 @@ from curiosity_cli.errors import ParameterError
 if TYPE_CHECKING:
     import pandas as pd
 
-    from curiosity_cli.explore.runs import Run
-
 #: The columns naming a run, as ``steering.csv``'s.
 RUN_COLUMNS = ("dataset", "weight_function", "restart", "replicate")
 #: The measures of a row (module docstring), in the order of its columns.
@@ -86,8 +84,6 @@ MECHANISM_SUMMARY_COLUMNS = ("dataset", "weight_function", "path_length", "n", *
 OWN_SCORES = {"topic-perplexity": "topic_perplexity", "word-perplexity": "word_perplexity"}
 #: The score of the walkers without one of their own.
 DEFAULT_SCORE = "topic_perplexity"
-#: ``candidates.csv``'s columns the measures read (the walker's score besides).
-CANDIDATE_COLUMNS = ("step", "cell", "coverage", "weight", "topic_perplexity", "word_perplexity")
 
 
 def walker_score(weight_function: str) -> str:
@@ -126,50 +122,6 @@ def class_presence(cell_pixels: np.ndarray) -> np.ndarray:
     from curiosity_cli.label.classes import classes_present
 
     return classes_present(cell_pixels, CLASS_SHARE_PERCENT)
-
-
-def read_candidates(run: Run):
-    """A run's ``candidates.csv`` with every column the measures read (:data:`CANDIDATE_COLUMNS`).
-
-    :meth:`~curiosity_cli.explore.runs.Run.candidates` gives only ``step``, ``coverage``
-    and ``weight``; this reads the cells and both perplexities too.
-
-    Parameters
-    ----------
-    run : Run
-        From :func:`~curiosity_cli.explore.runs.read_run`.
-
-    Returns
-    -------
-    pandas.DataFrame
-        A row per scored neighbour (none for a planned walker).
-
-    Raises
-    ------
-    RunError
-        ``candidates.csv`` missing, unreadable, without those columns, or with a step
-        outside the path's moves.
-    """
-    import pandas as pd
-
-    from curiosity_cli.experiment.layout import ExperimentFolder
-    from curiosity_cli.explore.runs import RunError
-    from curiosity_cli.files import display_path
-
-    csv = run.folder / ExperimentFolder.RUN_CANDIDATES
-    try:
-        table = pd.read_csv(csv, usecols=list(CANDIDATE_COLUMNS))
-    except FileNotFoundError:
-        raise RunError(f"{display_path(csv)}: not found; the run folder is incomplete") from None
-    except (ValueError, OSError) as exc:
-        raise RunError(f"{display_path(csv)}: corrupt ({exc})") from None
-    if len(table):
-        steps, cells = table["step"], table["cell"]
-        if steps.dtype.kind not in "iu" or steps.min() < 0 or steps.max() >= run.path.size - 1:
-            raise RunError(f"{display_path(csv)}: step: expected whole numbers 0 .. {run.path.size - 2}, the moves of the path")
-        if cells.dtype.kind not in "iu" or cells.min() < 0:
-            raise RunError(f"{display_path(csv)}: cell: expected whole numbers >= 0, the cells of the map")
-    return table
 
 
 @dataclass(frozen=True)
@@ -282,7 +234,7 @@ def mechanism_rows(
     path : (L,) integer ndarray
         Row-major cell of each step.
     candidates : pandas.DataFrame
-        Its ``candidates.csv`` (:func:`read_candidates`): ``step``, ``cell``, ``coverage``,
+        Its ``candidates.csv`` (:meth:`~curiosity_cli.explore.runs.Run.candidates`): ``step``, ``cell``, ``coverage``,
         ``weight``, ``topic_perplexity`` and the walker's score (:func:`walker_score`).
     present : (n_cells, C) bool ndarray
         Which human classes are present in each cell (:func:`class_presence`).

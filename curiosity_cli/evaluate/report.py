@@ -541,16 +541,20 @@ def _mechanism_section(mechanism, lengths: list[int]) -> list[str]:
     ]
     for r in summary.to_dict("records"):
         cells = [
-            _number(r["auc"]), _number(r["opportunity"]), _number(r["gain"], 3), _number(r["new_class_cells"], 1),
-            _number(r["classes_found"], 1), _number(r["infinite_share"]), _number(r["infinite_unseen"]),
+            number(r["auc"]), number(r["opportunity"]), number(r["gain"], 3), number(r["new_class_cells"], 1),
+            number(r["classes_found"], 1), number(r["infinite_share"]), number(r["infinite_unseen"]),
         ]
         lines.append(f"| {r['dataset']} | {_label(r['weight_function'])} | " + " | ".join(cells) + " |")
     return lines + [""]
 
 
-def _number(value, digits: int = 2) -> str:
-    """A table cell: ``digits`` decimals, empty for NaN."""
-    return f"{value:.{digits}f}" if np.isfinite(value) else ""
+def number(value, digits: int = 2) -> str:
+    """A number for a table: ``digits`` decimals, empty for NaN or nothing."""
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return ""
+    return f"{value:.{digits}f}" if value == value else ""
 
 
 def _steering_section(steering, lengths: list[int]) -> list[str]:

@@ -254,7 +254,7 @@ def label_rows(experiment: Experiment, cache_dir: Path | None = None) -> LabelRo
         A map of the config that cannot be loaded, naming it.
     """
     from curiosity_cli.label.label_files import examples_changed, read_label_file
-    from curiosity_cli.evaluate.mechanism import mechanism_rows, read_candidates
+    from curiosity_cli.evaluate.mechanism import mechanism_rows
     from curiosity_cli.evaluate.steering import steering_rows
     from curiosity_cli.explore.runs import RunError, read_run
 
@@ -309,7 +309,7 @@ def label_rows(experiment: Experiment, cache_dir: Path | None = None) -> LabelRo
             continue
         try:
             steps = (run.path, run.boxed_in())
-            candidates = read_candidates(run)
+            candidates = run.candidates()
         except RunError as exc:
             skipped.append(str(exc))
             continue
@@ -337,17 +337,17 @@ def _surroundings(experiment: Experiment, dataset: str, cache_dir: Path | None) 
     """A map's human classes present per cell ((n_cells, C) bool, C = 0 without labels) and
     its words per cell (the word store's ``cell_words``), for :func:`~curiosity_cli.evaluate.mechanism.mechanism_rows`."""
     from curiosity_cli.evaluate.mechanism import class_presence
-    from curiosity_cli.label.classes import cell_class_pixels
+    from curiosity_cli.label.classes import map_class_pixels
     from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.paths import DEFAULT_CACHE
     from curiosity_cli.words.extract import extract_words
 
     map_data = load_map(experiment.maps[dataset].entry)
     store = extract_words(map_data, experiment.config.words, cache_dir=cache_dir or DEFAULT_CACHE).store
-    if map_data.labels is None:
+    cell_classes = map_class_pixels(map_data)
+    if cell_classes is None:
         return np.zeros((store.n_cells, 0), bool), store.cell_words
-    classes = max(c.id for c in map_data.legend) + 1
-    return class_presence(cell_class_pixels(map_data.labels, map_data.config.cell_width, classes)), store.cell_words
+    return class_presence(cell_classes), store.cell_words
 
 
 def _batch_change(path: Path, recipe) -> str | None:

@@ -28,8 +28,8 @@ def record_stage_seconds(folder: Path, stage: str, seconds: float, *, add: bool)
     if stage not in STAGES:
         raise ValueError(f"stage: got {stage!r}, expected one of {', '.join(STAGES)}")
     path = ExperimentFolder(folder).stage_seconds
-    times = read_stage_seconds(folder)
-    if (problem := stage_seconds_problem(folder)) is not None:
+    times, problem = _read(folder)
+    if problem is not None:
         note(f"{problem}; the stage times it held are lost: {stage}'s is recorded alone")
     times[stage] = (times.get(stage, 0.0) if add else 0.0) + float(seconds)
     with atomic_path(path) as tmp:
@@ -38,18 +38,7 @@ def record_stage_seconds(folder: Path, stage: str, seconds: float, *, add: bool)
 
 def stage_seconds_problem(folder: Path) -> str | None:
     """Why ``stage_seconds.json`` of ``folder`` cannot be read, naming it; None when it is missing or fine."""
-    path = ExperimentFolder(folder).stage_seconds
-    try:
-        recorded = json.loads(path.read_text())
-    except FileNotFoundError:
-        return None
-    except (OSError, ValueError) as exc:
-        return f"{display_path(path)}: cannot be read ({exc})"
-    if not isinstance(recorded, dict) or any(
-        not isinstance(value, (int, float)) or isinstance(value, bool) for value in recorded.values()
-    ):
-        return f"{display_path(path)}: expected a mapping of stage names to seconds"
-    return None
+    return _read(folder)[1]
 
 
 def read_stage_seconds(folder: Path) -> dict[str, float]:
@@ -59,14 +48,24 @@ def read_stage_seconds(folder: Path) -> dict[str, float]:
     be read counts as no times at all (:func:`stage_seconds_problem` says why, for the
     report and the next stage to say so).
     """
+    return _read(folder)[0]
+
+
+def _read(folder: Path) -> tuple[dict[str, float], str | None]:
+    """The stages' seconds a file holds (the readable ones, in :data:`STAGES` order), and what is wrong with it."""
     path = ExperimentFolder(folder).stage_seconds
     try:
         recorded = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return {}
+    except FileNotFoundError:
+        return {}, None
+    except (OSError, ValueError) as exc:
+        return {}, f"{display_path(path)}: cannot be read ({exc})"
+    malformed = f"{display_path(path)}: expected a mapping of stage names to seconds"
     if not isinstance(recorded, dict):
-        return {}
-    return {
-        name: float(recorded[name]) for name in STAGES
-        if isinstance(recorded.get(name), (int, float)) and not isinstance(recorded.get(name), bool)
-    }
+        return {}, malformed
+
+    def seconds(value) -> bool:
+        return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+    times = {name: float(recorded[name]) for name in STAGES if seconds(recorded.get(name))}
+    return times, None if all(map(seconds, recorded.values())) else malformed

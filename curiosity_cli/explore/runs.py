@@ -46,6 +46,8 @@ _RUN_KEYS = (
     "n_topics", "checkpoints",
 )
 _TMP_MARK = ".tmp-"
+#: ``candidates.csv``'s columns that its readers take (:meth:`Run.candidates`).
+CANDIDATE_COLUMNS = ("step", "cell", "coverage", "weight", "topic_perplexity", "word_perplexity")
 #: The files of a run besides ``run.json``, which records their sizes and digests.
 _RUN_FILES = [ExperimentFolder.RUN_PATH, ExperimentFolder.RUN_CANDIDATES, ExperimentFolder.RUN_CHECKPOINTS]
 
@@ -188,7 +190,8 @@ class Run:
         return column.to_numpy()
 
     def candidates(self):
-        """``candidates.csv``'s ``step``, ``coverage`` and ``weight``: a row per scored neighbour (none for a plan).
+        """``candidates.csv``'s ``step``, ``cell``, ``coverage``, ``weight``, ``topic_perplexity`` and
+        ``word_perplexity``: a row per scored neighbour (none for a plan), as steering and the mechanism read them.
 
         Returns
         -------
@@ -197,21 +200,26 @@ class Run:
         Raises
         ------
         RunError
-            ``candidates.csv`` missing, unreadable, without those columns, or with a step
-            outside the path.
+            ``candidates.csv`` missing, unreadable, without those columns, with a step
+            outside the path's moves or a cell that is not one.
         """
         import pandas as pd
 
         csv = self.folder / ExperimentFolder.RUN_CANDIDATES
         try:
-            table = pd.read_csv(csv, usecols=["step", "coverage", "weight"])
+            table = pd.read_csv(csv, usecols=list(CANDIDATE_COLUMNS))
         except FileNotFoundError:
             raise RunError(f"{display_path(csv)}: not found; the run folder is incomplete") from None
         except (ValueError, OSError) as exc:
             raise RunError(f"{display_path(csv)}: corrupt ({exc})") from None
-        steps = table["step"]
-        if len(table) and (steps.dtype.kind not in "iu" or steps.min() < 0 or steps.max() >= self.path.size - 1):
-            raise RunError(f"{display_path(csv)}: step: expected whole numbers 0 .. {self.path.size - 2}, the moves of the path")
+        if len(table):
+            steps, cells = table["step"], table["cell"]
+            if steps.dtype.kind not in "iu" or steps.min() < 0 or steps.max() >= self.path.size - 1:
+                raise RunError(
+                    f"{display_path(csv)}: step: expected whole numbers 0 .. {self.path.size - 2}, the moves of the path"
+                )
+            if cells.dtype.kind not in "iu" or cells.min() < 0:
+                raise RunError(f"{display_path(csv)}: cell: expected whole numbers >= 0, the cells of the map")
         return table
 
 

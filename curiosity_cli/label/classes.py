@@ -49,6 +49,14 @@ def cell_class_pixels(labels: np.ndarray, cell_width: int, n_classes: int) -> np
     return out
 
 
+def map_class_pixels(map_data) -> np.ndarray | None:
+    """A map's (:class:`~curiosity_cli.maps.map_data.MapData`) class pixels per cell: :func:`cell_class_pixels`
+    at its cell width, of its ``n_classes``; None without labels."""
+    if map_data.labels is None:
+        return None
+    return cell_class_pixels(map_data.labels, map_data.config.cell_width, map_data.n_classes)
+
+
 def classes_present(cell_pixels: np.ndarray, share_percent: int) -> np.ndarray:
     """Which classes count as present in each cell: at least ``share_percent`` % of its pixels.
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -103,7 +104,7 @@ class SharedItems:
 
     def keep_file(self, kind: str, key: str, source: Path) -> None:
         """Store a copy of ``source`` as the item ``key``."""
-        self._keep(kind, key, lambda tmp: tmp.write_bytes(Path(source).read_bytes()))
+        self._keep(kind, key, lambda tmp: shutil.copyfile(source, tmp))
 
     def labels(self, key: str) -> tuple[dict, dict] | None:
         """A run's stored label arrays and example maps (``(arrays, examples)``, as

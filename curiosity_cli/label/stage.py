@@ -187,14 +187,10 @@ class _DenseCheckpoints(Sequence):
 def _map_references(entry: str) -> tuple:
     """A map's (human labels or None, number of classes, image shape, class pixels per cell or None)."""
     from curiosity_cli.maps.map_data import load_map
-    from curiosity_cli.label.classes import cell_class_pixels
+    from curiosity_cli.label.classes import map_class_pixels
 
     map_data = load_map(entry)
-    n_classes = max(c.id for c in map_data.legend) + 1 if map_data.labels is not None else 0
-    cell_classes = None
-    if map_data.labels is not None:
-        cell_classes = cell_class_pixels(map_data.labels, map_data.config.cell_width, n_classes)
-    return map_data.labels, n_classes, map_data.image.shape[:2], cell_classes
+    return map_data.labels, map_data.n_classes, map_data.image.shape[:2], map_class_pixels(map_data)
 
 
 @lru_cache(maxsize=4)

@@ -66,12 +66,16 @@ class MapData:
         return map_grid(self.image.shape[:2], self.config.cell_width)
 
     @property
+    def n_classes(self) -> int:
+        """The classes the human labels may hold: the legend's largest id + 1; 0 without labels."""
+        return max(c.id for c in self.legend) + 1 if self.labels is not None else 0
+
+    @property
     def labels_digest(self) -> str | None:
         """A digest of the human labels as evaluation reads them (class ids and their count); None without labels."""
         if self.labels is None:
             return None
-        n_classes = max(c.id for c in self.legend) + 1
-        head = f"{self.labels.dtype.str}{self.labels.shape}{n_classes}{self.config.cell_width}".encode()
+        head = f"{self.labels.dtype.str}{self.labels.shape}{self.n_classes}{self.config.cell_width}".encode()
         return hashlib.sha256(head + np.ascontiguousarray(self.labels).tobytes()).hexdigest()[:16]
 
 

@@ -15,7 +15,6 @@ from curiosity_cli.evaluate.mechanism import (
     MECHANISM_SUMMARY_COLUMNS,
     class_presence,
     mechanism_rows,
-    read_candidates,
     step_auc,
     summarise_mechanism,
     walker_score,
@@ -329,18 +328,18 @@ def test_rows_against_their_slow_twin_on_random_walks(walker, seed):
 # ---- reading a run, summarising, drawing --------------------------------------------------
 
 
-def test_read_candidates_reads_cells_and_both_perplexities(tmp_path):
+def test_a_runs_candidates_are_read_with_cells_and_both_perplexities(tmp_path):
     CANDIDATES.assign(row=0, col=0, chosen=False).to_csv(tmp_path / "candidates.csv", index=False)
     run = Run(tmp_path, {}, PATH)
-    table = read_candidates(run)
+    table = run.candidates()
     pd.testing.assert_frame_equal(table[list(CANDIDATES.columns)], CANDIDATES)
     assert rows(table, lengths=(4,)) == rows(lengths=(4,))
     CANDIDATES.assign(step=CANDIDATES["step"] + 1).to_csv(tmp_path / "candidates.csv", index=False)
     with pytest.raises(RunError, match="step: expected whole numbers 0 .. 2"):
-        read_candidates(run)
+        run.candidates()
     (tmp_path / "candidates.csv").unlink()
     with pytest.raises(RunError, match="not found"):
-        read_candidates(run)
+        run.candidates()
 
 
 def test_summary_means_each_measure_over_the_runs_that_define_it():
