@@ -8,6 +8,7 @@ and reading seconds, the kernel's rate per word sample per block, and the share 
 stage's wall time that ``work x rate / jobs`` explains (the rate: the median block's).
 
     python scripts/bench_label_profile.py [--config quick] [--set datasets=[aerial-mosaic]] [--jobs N]
+    python scripts/bench_label_profile.py --folder results/paper-grid   # an experiment already labelled
 """
 
 from __future__ import annotations
@@ -37,22 +38,40 @@ def main() -> None:
     parser.add_argument("--config", default="quick")
     parser.add_argument("--set", dest="overrides", action="append", default=None)
     parser.add_argument("--jobs", type=int, default=os.cpu_count())
+    parser.add_argument("--folder", type=Path, help="read this experiment's label_profile.json instead")
     args = parser.parse_args()
+    print(f"logical CPUs {os.cpu_count()}, physical cores {physical_cores()}")
+    if args.folder:
+        summarise(json.loads((args.folder / "label_profile.json").read_text()))
+        return
     overrides = args.overrides if args.overrides is not None else ["datasets=[aerial-mosaic]"]
-    print(f"logical CPUs {os.cpu_count()}, physical cores {physical_cores()}, --jobs {args.jobs}")
+    print(f"--jobs {args.jobs}")
     with tempfile.TemporaryDirectory() as tmp:
         folder = api.explore(args.config, overrides=overrides, results_dir=Path(tmp), jobs=args.jobs).folder
         api.label(folder, jobs=args.jobs, reuse=False)
-        profile = json.loads((folder / "label_profile.json").read_text())
+        summarise(json.loads((folder / "label_profile.json").read_text()))
+
+
+def summarise(profile: dict) -> None:
+    """Print a label stage's profile (:mod:`curiosity_cli.label.profile`) and how much of it the kernel explains."""
     wall, jobs, blocks = profile["wall"], profile["jobs"], profile["blocks"]
     print(f"\nlabel stage: {wall:.1f} s wall on {jobs} jobs")
     for name, seconds in profile["segments"].items():
         print(f"  {name:<36} {seconds:7.1f} s  {100 * seconds / wall:5.1f} %")
+    for name, batch in profile.get("batches", {}).items():
+        print(f"  batch reference of {name} beside the blocks: {batch['seconds']:.1f} s of sweeps, written at {batch['written']:.1f} s")
+    if not blocks:
+        print("no blocks labelled")
+        return
     kernel, tables, reading = (sum(b[k] for b in blocks) for k in ("kernel", "tables", "reading"))
     work = sum(b["work"] for b in blocks)
     rates = [1e9 * b["kernel"] / b["work"] for b in blocks if b["work"]]
     rate = statistics.median(rates)
     print(f"\n{len(blocks)} blocks, {sum(b['chains'] for b in blocks)} chains, {work:.3g} word samples")
+    for b in blocks:
+        print(f"  {b['dataset']:<16} {b['runs']:>3} runs {b['chains']:>3} chains, began at {b['began']:6.1f} s: "
+              f"reading {b['reading']:6.1f} s, "
+              f"kernel {b['kernel']:6.1f} s, tables {b['tables']:6.1f} s")
     print(f"  worker seconds: kernel {kernel:.1f}, tables {tables:.1f}, reading {reading:.1f} "
           f"(of {jobs} x {wall:.1f} = {jobs * wall:.1f} core-seconds: kernel {100 * kernel / (jobs * wall):.0f} %, "
           f"tables {100 * tables / (jobs * wall):.0f} %, reading {100 * reading / (jobs * wall):.0f} %)")

@@ -11,11 +11,14 @@
 #   a. scripts/bench_label_devices.py: ns per word-sample per chain, CPU vs CUDA, R = 16, 64, 256
 #   b. scripts/device_compare.py: a small experiment labelled on both devices, label files
 #      compared byte for byte, and where the devices part if they do not agree
+#   d. the machine's cores (lscpu) and scripts/bench_batch_threads.py: the batch reference's sweeps on
+#      1, 4 and 16 threads, beside the reference checkout in .device/ref when there is one
 #   c. the paper grid (bench_pipeline.py --full-grid --grid-only --grids paper --jobs 16) with
-#      --device cuda, then CPU only, each stage timed, and the label stage's timeline from its
-#      files (batch references, first and last label file): in the time left (DEVICE_CHECK_SECONDS)
+#      --device cuda, then CPU only, each stage timed, the label stage's timeline from its
+#      files (batch references, first and last label file) and its profile (bench_label_profile.py
+#      --folder): in the time left (DEVICE_CHECK_SECONDS)
 # DEVICE_CHECK_SKIP names parts to leave out: a (the benchmark, when its kernels did not change), b (the comparison),
-# gpu-grid (part c on the CPU only); e.g. DEVICE_CHECK_SKIP=a,b.
+# d (the threads), gpu-grid (part c on the CPU only), cpu-grid (part c on the GPU only); e.g. DEVICE_CHECK_SKIP=a,b.
 set -u
 cd "$(dirname "$0")/.."
 small=0
@@ -42,8 +45,11 @@ part "0. the machine"
 # nothing can be fetched) this copy of the checkout links them into place instead
 if ! "$PY" -c "import curiosity_cli.paths" 2>/dev/null; then
     echo "curiosity is not installed here: linking configs/ and data/ in as curiosity_cli.shipped's packages"
-    ln -sfn ../../configs curiosity_cli/shipped/configs && ln -sfn ../../data curiosity_cli/shipped/data
-    touch configs/__init__.py data/__init__.py
+    for tree in . .device/ref; do
+        [ -d $tree/curiosity_cli ] || continue
+        ln -sfn ../../configs $tree/curiosity_cli/shipped/configs && ln -sfn ../../data $tree/curiosity_cli/shipped/data
+        touch $tree/configs/__init__.py $tree/data/__init__.py
+    done
 fi
 "$PY" -c "import curiosity_cli.paths as p; print('curiosity: configs at', p.SHIPPED_CONFIGS)" 2>&1 | tail -1
 nvidia-smi -L 2>&1 || echo "no nvidia-smi"
@@ -69,10 +75,10 @@ fi
 
 skip=${DEVICE_CHECK_SKIP:-}
 part "a. benchmark: CPU lock-step vs CUDA, ns per word-sample per chain"
-if [[ "$skip" == *a* ]]; then summary+=("a. benchmark: skipped (DEVICE_CHECK_SKIP)")
+if [[ ",$skip," == *,a,* ]]; then summary+=("a. benchmark: skipped (DEVICE_CHECK_SKIP)")
 elif [ $small = 1 ]; then bench=(--map aerial-mosaic --chains 8 16 --runs 2 --steps 10 --repeats 1)
 else bench=(--chains 16 64 256 --repeats 3); fi
-if [[ "$skip" == *a* ]]; then :
+if [[ ",$skip," == *,a,* ]]; then :
 elif timeout "$(limit 170 240)" "$PY" scripts/bench_label_devices.py "${bench[@]}" --json "$OUT/bench.json"; then
     summary+=("a. benchmark: $OUT/bench.json")
 else
@@ -84,7 +90,7 @@ if [ $gpu = 1 ]; then compare=(--devices cpu cuda); else compare=(--devices cpu 
 if [ $small = 1 ]; then compare+=(--restarts 1 --steps 20 --sweeps 2 --warm-sweeps 1 --batch-sweeps 2 --jobs 2 --diagnose --diagnose-chains 2 --diagnose-sweeps 1)
 else compare+=(--restarts 3 --steps 40 --jobs 16); fi
 rm -rf /tmp/device-compare
-if [[ "$skip" == *b* ]]; then status=skipped
+if [[ ",$skip," == *,b,* ]]; then status=skipped
 else timeout "$(limit 200 60)" "$PY" scripts/device_compare.py --out /tmp/device-compare "${compare[@]}"; status=$?; fi
 case $status in
     skipped) summary+=("b. label files: skipped (DEVICE_CHECK_SKIP)");;
@@ -93,9 +99,22 @@ case $status in
     *) summary+=("b. label files: failed or timed out (exit $status)");;
 esac
 
+part "d. the machine's cores, and the batch reference's sweeps on 1 to 16 threads"
+lscpu | grep -E "^(Model name|CPU\(s\)|Thread\(s\) per core|Core\(s\) per socket|Socket\(s\)|L3)" || echo "no lscpu"
+threads=(1 4 16); [ $small = 1 ] && threads=(1 2)
+reference=(); [ -d .device/ref/curiosity_cli ] && reference=(--reference .device/ref)
+if [[ ",$skip," == *,d,* ]]; then summary+=("d. threads: skipped (DEVICE_CHECK_SKIP)")
+elif timeout "$(limit 150 240)" "$PY" scripts/bench_batch_threads.py "${reference[@]}" --maps reef-mosaic --threads "${threads[@]}" \
+        --repeats 1 --sweeps 20 --colours; then
+    summary+=("d. batch sweeps on threads: in the log")
+else
+    summary+=("d. batch sweeps on threads: failed or timed out (exit $?)")
+fi
+
 part "c. the paper grid, --jobs 16, each stage timed (in the time left)"
 jobs=$(nproc); [ "$jobs" -gt 16 ] && jobs=16
-devices=(cpu); [ $gpu = 1 ] && [[ "$skip" != *gpu-grid* ]] && devices=(cuda cpu)
+devices=(); [ $gpu = 1 ] && [[ ",$skip," != *,gpu-grid,* ]] && devices=(cuda)
+[[ ",$skip," != *,cpu-grid,* ]] && devices+=(cpu)
 for device in "${devices[@]}"; do
     t=$(limit 600 5)
     if [ "$t" -lt 60 ]; then summary+=("c. paper grid on $device: not run, $t s left"); continue; fi
@@ -132,6 +151,7 @@ for batch in sorted(folder.glob("batch/*.npz")):
 if labels:
     print(f"  label files: {len(labels)}, first at {labels[0] - t0:.0f}, last at {labels[-1] - t0:.0f}")
 PY
+        "$PY" scripts/bench_label_profile.py --folder "$(dirname "$(ls "$tmp"/*/config.yaml | head -1)")"
         rm -rf "$tmp"
     fi
     if [ $status = 0 ]; then summary+=("c. paper grid on $device: $(grep -m1 'min end to end' "$OUT/grid_$device.log" | sed 's/.*: //')")

@@ -486,7 +486,7 @@ def ml_topics_naive(state: NaiveModel, cells) -> np.ndarray:
 
 
 def log_likelihood_naive(state: NaiveModel) -> float:
-    """Twin of ``mean_log_likelihood_kernel``: mean log Σ_k φ_k(w) θ_c(k), float64."""
+    """Twin of ``log_likelihood_sum_kernel`` over every cell, divided by the words: mean log Σ_k φ_k(w) θ_c(k), float64."""
     nwk, nk, ncz = count_topics(state)
     if state.frozen is not None:
         nwk, nk = state.frozen, state.frozen.sum(axis=0)

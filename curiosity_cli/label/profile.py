@@ -8,8 +8,11 @@ handing label files to the writer threads), ``writing`` (waiting for the writer 
 after the last block) and ``closing``. And per block, what its worker did: the ``runs``,
 ``chains`` (a checked run has two), the map's ``words``, ``chain_sweeps`` (the sweeps of
 all its chains over every checkpoint) and so its ``work`` (word samples: chain sweeps x
-words), and its seconds ``reading`` (its map's arrays, made once per worker),
-``kernel`` (the chains' sweeps) and ``tables`` (contingency tables and example maps).
+words), when it ``began`` (seconds after the stage started, by the wall clock), and its seconds
+``reading`` (its map's arrays, made once per worker),
+``kernel`` (the chains' sweeps) and ``tables`` (contingency tables and example maps,
+and any wait for a batch reference computed beside). And per batch reference computed
+beside the blocks, its ``seconds`` of sweeps and when it was ``written``.
 ``scripts/bench_label_profile.py`` reads it: how much of the stage the kernel's rate
 times the work explains, and where the rest goes.
 """
@@ -37,8 +40,10 @@ class LabelProfile:
 
     def __init__(self, started: float):
         self.started = self.last = started
+        self.wall_clock = time.time() - (time.perf_counter() - started)  # time.time() when the stage started
         self.segments: dict[str, float] = {}
         self.blocks: list[dict] = []
+        self.batches: dict[str, dict] = {}
         self.jobs: int | None = None
 
     def mark(self, segment: str) -> None:
@@ -59,17 +64,23 @@ class LabelProfile:
             yield item
 
     def block(self, chains: int, words: int, chain_sweeps: int, runs: int, dataset: str, seconds: dict) -> None:
-        """A block's work and its worker's seconds (``reading``, ``kernel``, ``tables``)."""
+        """A block's work and its worker's seconds (``began``: its ``time.time()``; ``reading``, ``kernel``, ``tables``)."""
+        seconds = {**seconds, "began": seconds["began"] - self.wall_clock}
         self.blocks.append({
             "dataset": dataset, "runs": runs, "chains": chains, "words": words, "chain_sweeps": chain_sweeps,
             "work": chain_sweeps * words, **{k: round(v, 4) for k, v in seconds.items()},
         })
 
+    def batch(self, dataset: str, seconds: float) -> None:
+        """A batch reference computed beside the blocks, written now after ``seconds`` of sweeps."""
+        self.batches[dataset] = {"seconds": round(seconds, 4), "written": round(time.perf_counter() - self.started, 4)}
+
     def write(self, path: Path) -> None:
-        """Write the profile as JSON, atomically: ``wall`` (the segments' sum), ``jobs``, ``segments``, ``blocks``."""
+        """Write the profile as JSON, atomically: ``wall`` (the segments' sum), ``jobs``, ``segments``, ``blocks``, ``batches``."""
         record = {
             "wall": round(self.last - self.started, 4), "jobs": self.jobs,
             "segments": {k: round(v, 4) for k, v in self.segments.items()}, "blocks": self.blocks,
+            "batches": self.batches,
         }
         with atomic_path(path) as tmp:
             tmp.write_text(json.dumps(record, indent=1) + "\n")

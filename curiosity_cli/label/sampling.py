@@ -187,10 +187,7 @@ def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int
         shows whether the sweeps were enough.
     """
     topic_model = whole_map_model(store, model, seed)
-    trace = np.empty(sweeps)
-    for sweep in range(sweeps):
-        topic_model.refine_batch(1, threads=threads)
-        trace[sweep] = topic_model.log_likelihood()
+    trace = topic_model.refine_batch(sweeps, threads=threads, trace=True)
     return topic_model.ml_topics().astype(np.int16), trace
 
 

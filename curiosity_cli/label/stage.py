@@ -519,6 +519,7 @@ def label_experiment(
                             problems.append(f"the batch reference of {task.info.name}: {outcome}; labelling stopped there")
                             break
                         write_batch(batch_files[task.info.name], batch_recipes[task.info.name], *outcome)
+                        profile.batch(task.info.name, outcome[-1])
                     elif isinstance(outcome, str):
                         problems += ["{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome
                                      for run in task.runs]
@@ -658,7 +659,8 @@ def _stage_task(task: BatchTask | LabelTask, config: ExperimentConfig, shipped=N
 
 class LabelledBlock(NamedTuple):
     """What a block's task returns: ``(arrays, examples, meta)`` per run, and where its seconds went in the worker:
-    ``reading`` (its map's arrays, made once per worker), ``kernel`` and ``tables`` (:func:`label_block`)."""
+    ``began`` (``time.time()`` when it started), ``reading`` (its map's arrays, made once per worker), ``kernel`` and
+    ``tables`` (:func:`label_block`)."""
 
     runs: list[tuple]
     seconds: dict
@@ -667,9 +669,9 @@ class LabelledBlock(NamedTuple):
 def _label_task(task: LabelTask, config: ExperimentConfig, arrays: MapArrays | None = None) -> LabelledBlock:
     """Label a block of runs in a worker on its device; ``arrays`` are its map's when shipped (Dask), else made once
     per worker. One thread: the blocks keep every worker busy."""
-    began = time.perf_counter()
+    began, wall_clock = time.perf_counter(), time.time()
     if arrays is None:
         arrays = _map_arrays(task.inputs, config.model.topics)
-    seconds = {"reading": time.perf_counter() - began}
+    seconds = {"began": wall_clock, "reading": time.perf_counter() - began}
     runs = label_block(task.runs, task.inputs, arrays, config, device=task.device, clock=seconds)
     return LabelledBlock(runs, seconds)

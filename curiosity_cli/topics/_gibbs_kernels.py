@@ -310,14 +310,14 @@ def ml_topics_kernel(cells, cell_first, cell_count, words, nwk, nk, ng, n_topics
 
 
 @njit
-def mean_log_likelihood_kernel(cells, cell_first, cell_count, words, nwk, nk, ng, n_topics, alpha, beta, vbeta):
-    """Mean over the words of ``cells`` of ``log sum_k phi_k(w) theta_c(k)``, float64.
+def log_likelihood_sum_kernel(cells, cell_first, cell_count, words, nwk, nk, ng, n_topics, alpha, beta, vbeta):
+    """``(total, n)``: the sum over the ``n`` words of ``cells`` of ``log sum_k phi_k(w) theta_c(k)``, float64.
 
     ``phi_k(w) = (nwk[w, k] + beta) / (nk[k] + V beta)`` and ``theta_c(k) = (ng[c, k] +
-    alpha) / (sum_k ng[c, k] + K alpha)``, every count including the word itself; 0.0
-    when there are no words. A word id repeated in a cell (aerial cells hold ~260 words
-    of ~25 ids) has the same term each time: it is computed once per cell and added as
-    often, in word order, so the sum is the same to the last bit as term by term.
+    alpha) / (sum_k ng[c, k] + K alpha)``, every count including the word itself. A word
+    id repeated in a cell (aerial cells hold ~260 words of ~25 ids) has the same term each
+    time: it is computed once per cell and added as often, in word order, so the sum is
+    the same to the last bit as term by term.
     """
     kp = nk.shape[0]
     norm = np.zeros(kp)
@@ -344,9 +344,7 @@ def mean_log_likelihood_kernel(cells, cell_first, cell_count, words, nwk, nk, ng
                 seen[w] = cell
             total += term[w]
             n += 1
-    if n == 0:
-        return 0.0
-    return total / n
+    return total, n
 
 
 @njit

@@ -3,17 +3,22 @@
 :meth:`TopicModel.refine_batch <curiosity_cli.topics.model.TopicModel.refine_batch>`
 checks its arguments and owns the arrays; this module cuts the observed cells into
 phases (:func:`batch_phases`) and runs the sweeps on the kernels' shared arguments
-(:func:`sweep_phases`). It also owns the cache-line alignment of the count arrays those
-threads write (:func:`aligned_zeros`).
+(:func:`sweep_phases`), with the model's log-likelihood after each sweep on the same
+threads when asked (:func:`mean_log_likelihood`). It also owns the cache-line alignment
+of the count arrays those threads write (:func:`aligned_zeros`).
 """
 
 from __future__ import annotations
+
+import itertools
 
 import numpy as np
 
 _CACHE_LINE = 64
 # a batch phase holds at most 1/_PHASES of the observed cells
 _PHASES = 16
+# the log-likelihood is summed over runs of this many cells, in order, whatever the threads
+_LIKELIHOOD_CELLS = 256
 
 
 def aligned_zeros(shape, dtype) -> np.ndarray:
@@ -61,10 +66,44 @@ def batch_phases(cells: np.ndarray, colour: np.ndarray) -> list[np.ndarray]:
     return phases
 
 
+def mean_log_likelihood(cells: np.ndarray, likelihood_arrays: tuple, threads: int = 1, pool=None) -> float:
+    """The mean over the words of ``cells`` of the model's per-word log-likelihood (``log_likelihood_sum_kernel``).
+
+    Summed over runs of :data:`_LIKELIHOOD_CELLS` consecutive cells, on ``threads``
+    threads (this one and ``threads - 1`` of ``pool``), then the runs' sums in order:
+    the same float64 for any number of threads.
+
+    Parameters
+    ----------
+    cells : (n,) int64 ndarray
+    likelihood_arrays : tuple
+        The kernel's arguments after ``cells``: from ``cell_first`` to ``vbeta``.
+    threads : int
+    pool : ThreadPoolExecutor, optional
+        With at least ``threads - 1`` workers; needed when ``threads`` > 1.
+    """
+    from curiosity_cli.topics._gibbs_kernels import log_likelihood_sum_kernel
+
+    runs = [cells[start : start + _LIKELIHOOD_CELLS] for start in range(0, cells.size, _LIKELIHOOD_CELLS)]
+    sums = [(0.0, 0)] * len(runs)
+    taken = itertools.count()  # each thread takes the next run (next() of a count is atomic)
+
+    def work() -> None:
+        while (index := next(taken)) < len(runs):
+            sums[index] = log_likelihood_sum_kernel(runs[index], *likelihood_arrays)
+
+    others = [pool.submit(work) for _ in range(min(threads, len(runs)) - 1)]
+    work()
+    for other in others:
+        other.result()
+    words = sum(n for _, n in sums)
+    return sum(total for total, _ in sums) / words if words else 0.0
+
+
 def sweep_phases(
     phases: list[np.ndarray], sampler_arrays: tuple, n_topics: int, counter: int, sweeps: int, threads: int,
-    *, frozen: bool,
-) -> None:
+    *, frozen: bool, trace: tuple | None = None,
+) -> np.ndarray | None:
     """``sweeps`` batch sweeps through ``phases``, changing the model's arrays in place.
 
     Parameters
@@ -82,6 +121,15 @@ def sweep_phases(
         >= 1 each.
     frozen : bool
         The model's word-topic counts are frozen (only read).
+    trace : tuple, optional
+        With a model whose counts are not frozen: the arguments ``(cells,
+        likelihood_arrays)`` of :func:`mean_log_likelihood`, taken after each sweep on the
+        same threads.
+
+    Returns
+    -------
+    (sweeps,) float64 ndarray or None
+        The log-likelihood after each sweep, when ``trace`` is given.
     """
     if frozen:
         _sweep_frozen(phases, sampler_arrays, counter, sweeps, threads)
@@ -115,6 +163,7 @@ def sweep_phases(
     # the phase whose changes are not yet in the counts: every thread merges it into
     # its copy when the next phase starts, and this thread into the model's at the end
     previous = np.zeros(0, np.int64)
+    trace_out = None if trace is None else np.empty(sweeps)
     # this thread refines too, on the model's own counts; the pool starts no thread for threads == 1
     with ThreadPoolExecutor(max(threads - 1, 1)) as pool:
         for sweep in range(sweeps):
@@ -126,7 +175,18 @@ def sweep_phases(
                 for other in others:
                     other.result()  # waits, and re-raises an error of that thread
                 previous = phase
+            if trace_out is not None:
+                # the sweep's last phase into every copy now, not when the next sweep starts: the
+                # model's counts are then whole, and the next sweep's first phase has nothing to merge
+                merges = [pool.submit(merge_phase, previous, cell_first, cell_count, words, before, topics, *mine[:3],
+                                      n_topics, vbeta) for mine in scratch[1:]]
+                merge_phase(previous, cell_first, cell_count, words, before, topics, *own, n_topics, vbeta)
+                for merge in merges:
+                    merge.result()
+                previous = np.zeros(0, np.int64)
+                trace_out[sweep] = mean_log_likelihood(*trace, threads, pool)
     merge_phase(previous, cell_first, cell_count, words, before, topics, *own, n_topics, vbeta)
+    return trace_out
 
 
 def _sweep_frozen(phases: list[np.ndarray], sampler_arrays: tuple, counter: int, sweeps: int, threads: int) -> None:

@@ -31,7 +31,7 @@ import numpy as np
 from curiosity_cli.checks import check_choice, check_float, check_int
 from curiosity_cli.config import EXPLORE_READINGS, RECENT_NEWEST
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.topics.batch_sweeps import aligned_zeros, batch_phases, sweep_phases
+from curiosity_cli.topics.batch_sweeps import aligned_zeros, batch_phases, mean_log_likelihood, sweep_phases
 from curiosity_cli.topics.model_checks import (
     check_frozen_counts,
     check_model_cells,
@@ -271,14 +271,13 @@ class TopicModel(CellMemory):
         perplexity on its own words. 0.0 for a model without words. Not the collapsed
         joint ``log p(w, z)``: the spatial prior has no normalised joint to compare with.
         """
-        from curiosity_cli.topics._gibbs_kernels import mean_log_likelihood_kernel
+        return mean_log_likelihood(self._cells_or_all(None), self._likelihood_arrays())
 
-        cells = self._cells_or_all(None)
-        return float(
-            mean_log_likelihood_kernel(
-                cells, self._cell_first, self._cell_count, self._words, self._nwk, self._nk, self._ng,
-                self._k, self._alpha, self._beta, self._v * self._beta,
-            )
+    def _likelihood_arrays(self) -> tuple:
+        """The arguments of ``log_likelihood_sum_kernel`` after its cells (the counts themselves, not copies)."""
+        return (
+            self._cell_first, self._cell_count, self._words, self._nwk, self._nk, self._ng, self._k, self._alpha,
+            self._beta, self._v * self._beta,
         )
 
     # ------------------------------------------------------------------ changing the state
@@ -460,7 +459,7 @@ class TopicModel(CellMemory):
         self._counter += cells.size
         return int(self._cell_count[cells].sum())
 
-    def refine_batch(self, sweeps: int, *, threads: int = 1) -> int:
+    def refine_batch(self, sweeps: int, *, threads: int = 1, trace: bool = False) -> np.ndarray | None:
         """Algorithm 1: ``sweeps`` Gibbs sweeps over every observed cell, in parallel phases.
 
         A sweep visits the observed cells in phases of at most ``m = ceil(n_observed / 16)``
@@ -483,20 +482,28 @@ class TopicModel(CellMemory):
             >= 1. Each thread past the first refines on its own copy of the word-topic
             counts, (V, Kp) int32 (``Kp`` = K rounded up to a multiple of 8), made for
             the call; none for a frozen model, whose counts are only read.
+        trace : bool
+            Also take :meth:`log_likelihood` after each sweep, on the same threads (the
+            same value as calling it then). Not for a frozen model.
 
         Returns
         -------
-        int
-            Words sampled.
+        (sweeps,) float64 ndarray or None
+            With ``trace``, the log-likelihood after each sweep.
         """
         sweeps = check_int("sweeps", sweeps, 0)
         threads = check_int("threads", threads, 1)
+        if trace and self._frozen:
+            raise ParameterError("trace: a frozen model's log-likelihood is not traced (its counts do not change)")
         if sweeps == 0 or self._n_observed == 0:
-            return 0
+            return np.full(sweeps, self.log_likelihood()) if trace else None
         phases = batch_phases(self._cells_in_order(), self._colouring())
-        sweep_phases(phases, self._sampler_arrays(), self._k, self._counter, sweeps, threads, frozen=self._frozen)
+        out = sweep_phases(
+            phases, self._sampler_arrays(), self._k, self._counter, sweeps, threads, frozen=self._frozen,
+            trace=(self._cells_or_all(None), self._likelihood_arrays()) if trace else None,
+        )
         self._counter += sweeps
-        return sweeps * self.n_words
+        return out
 
     def refine_realtime(self, word_budget: int, *, eta: float, picks: str = "uniform", return_newest: bool = False):
         """Algorithm 2: refine picked observations until ``word_budget`` words are sampled.
