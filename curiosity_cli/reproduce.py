@@ -34,9 +34,14 @@ def reproduce(
     ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
     of it done, for a progress display. ``reuse`` takes label files and batch references
     another experiment computed from the same inputs (:mod:`~curiosity_cli.label.shared_items`).
+    With loky workers, the maps' batch references are computed in this process while the
+    runs are explored (:func:`~curiosity_cli.label.batch_references.beside_exploration`),
+    not in the label stage: the same files, off its critical path.
     """
     from curiosity_cli.evaluate.tables import evaluate_experiment
     from curiosity_cli.explore.grid import run_grid
+    from curiosity_cli.label.batch_references import beside_exploration
+    from curiosity_cli.label.shared_items import SharedItems
     from curiosity_cli.label.stage import label_experiment
     from curiosity_cli.plots.figures import write_figures
     from curiosity_cli.workers import Workers
@@ -54,11 +59,23 @@ def reproduce(
     resolve_device(config.label.device)  # a GPU that is not there stops the pipeline before it explores, not after
     folder = experiment_root(results_dir, config.name)
     stage("words and exploration set-up", 0)
+    batches = []  # threads computing batch references beside the exploration
+
+    def start_batches(experiment, stores) -> None:
+        # a Dask cluster's workers may be elsewhere, this process's cores too few to share;
+        # force makes the label stage compute them again anyway
+        if not workers.ships and not force:
+            shared = SharedItems(cache_dir) if reuse else None
+            batches.extend(beside_exploration(config, experiment, stores, workers.jobs, shared))
+
     with Workers(backend, scheduler, jobs) as workers:
         run_grid(
             config, results_dir=results_dir, cache_dir=cache_dir, force=force, workers=workers,
             on_prepared=lambda to_run, skipped: stage(f"exploring ({skipped} runs already done)", to_run), on_run=done,
+            beside=start_batches,
         )
+        for thread in batches:  # not when the grid failed or was stopped: a stopped command does not wait for them
+            thread.join()
         label_experiment(
             config, folder, cache_dir=cache_dir, force=force, workers=workers, on_stage=stage, on_done=done, reuse=reuse,
         )

@@ -142,6 +142,7 @@ def run_grid(
     backend: str = "loky",
     scheduler: str | None = None,
     workers: Workers | None = None,
+    beside: Callable[[Experiment, dict[str, StoreInfo]], None] | None = None,
 ) -> GridSummary:
     """Run every missing run of an experiment grid and write it under ``results_dir/<name>``.
 
@@ -167,6 +168,10 @@ def run_grid(
     workers : Workers, optional
         Where to compute instead of new workers from ``backend``, ``scheduler`` and
         ``jobs``: open ones another stage shares (``curiosity reproduce``).
+    beside : callable, optional
+        Called as ``beside(experiment, stores)`` (the :class:`Experiment` and the word stores by
+        ``datasets`` entry) once the grid is checked, before the first run starts: work to
+        start beside the exploration (``curiosity reproduce`` starts the batch references).
 
     Raises
     ------
@@ -219,6 +224,8 @@ def run_grid(
 
         if on_prepared is not None:
             on_prepared(len(todo), len(tasks) - len(todo))
+        if beside is not None:
+            beside(experiment, stores)
         failed, fallbacks, written = [], 0, 0
         with computing as workers:
             shipped = {}  # loky workers load the stores from the cache themselves

@@ -7,12 +7,15 @@
 reused while its recipe is the one the experiment's settings give; otherwise computed again,
 with a note saying what changed. The stage (:mod:`~curiosity_cli.label.stage`)
 computes every stale map's at once, before its label blocks or beside them; a block that
-runs beside reads Z_b when it first needs it (:class:`WrittenBatch`).
+runs beside reads Z_b when it first needs it (:class:`WrittenBatch`). ``curiosity
+reproduce`` computes them earlier still, beside the exploration (:func:`beside_exploration`):
+they depend on the words and the model, not on the runs.
 """
 
 from __future__ import annotations
 
 import json
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -25,6 +28,7 @@ from curiosity_cli.experiment.recipes import RECIPE_KEY, Recipe
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz, read_meta
 
 if TYPE_CHECKING:
+    from curiosity_cli.experiment.experiment import Experiment
     from curiosity_cli.experiment.maps import StoreInfo
     from curiosity_cli.workers import Workers
     from curiosity_cli.words.store import WordStore
@@ -125,6 +129,52 @@ def compute_batch_references(
                     for _ in range(sweeps):
                         on_done()
     return problems
+
+
+def beside_exploration(
+    config: ExperimentConfig, experiment: Experiment, stores: dict[str, StoreInfo], jobs: int, shared=None,
+) -> list[threading.Thread]:
+    """Start computing the maps' stale batch references in threads of this process, beside the exploration's workers.
+
+    A map's batch reference depends on its words and the model only, so it need not
+    wait for the runs: computed while they are explored, it is current when the label
+    stage starts, which then labels without it on its critical path. Each stale map gets
+    a thread of ``max(1, jobs // (2 * maps))`` sampler threads (a share that leaves the
+    exploration's ``jobs`` workers their cores), and is written to the experiment's
+    ``batch/`` (and kept in the ``shared`` items, a
+    :class:`~curiosity_cli.label.shared_items.SharedItems` or None) as the label stage
+    would write it. A map whose batch reference is current, or in ``shared`` for the
+    label stage to take, is left alone. A batch reference that fails here is left for
+    the label stage, which computes it again and names the error; the threads are daemons,
+    so a stopped command does not wait for them (a file half-written is a temporary file
+    that the label stage removes).
+
+    Returns
+    -------
+    list of threading.Thread
+        Started; join them before the label stage.
+    """
+    from curiosity_cli.label.shared_items import BATCH
+
+    todo = []
+    for info in stores.values():
+        path, recipe = experiment.folder.batch(info.name), experiment.batch_recipe(info.name)
+        if not batch_is_current(path, recipe) and (shared is None or shared.find(BATCH, recipe.digest) is None):
+            todo.append((info, path, recipe))
+    threads = max(1, jobs // (2 * max(1, len(todo))))
+
+    def compute(info: StoreInfo, path: Path, recipe: Recipe) -> None:
+        try:
+            write_batch(path, recipe, *batch_task(BatchTask(info, threads), config))
+            if shared is not None:
+                shared.keep_file(BATCH, recipe.digest, path)
+        except Exception:  # noqa: BLE001  the label stage computes it again and reports what fails there
+            return
+
+    started = [threading.Thread(target=compute, args=item, daemon=True, name=f"batch-{item[0].name}") for item in todo]
+    for thread in started:
+        thread.start()
+    return started
 
 
 #: How often (s) a label task that needs Z_b checks whether its batch reference is written.

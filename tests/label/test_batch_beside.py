@@ -45,3 +45,25 @@ def test_a_block_waits_for_the_batch_file_made_from_its_recipe(tmp_path):
     got = waiting.tables(labels, 3)
     writer.join()
     np.testing.assert_array_equal(got, PixelTables(pixel_words, batch, 3).tables(labels, 3))
+
+
+def test_reproduce_computes_the_batch_reference_beside_the_exploration_and_it_is_the_label_stages(own_map, tmp_path):
+    import json
+
+    from curiosity_cli.reproduce import reproduce
+
+    config, labelled = small_experiment(own_map, tmp_path / "label", restarts=1, weight_functions=("random-walk",))
+    label_experiment(config, labelled, cache_dir=tmp_path / "label" / "cache", jobs=1, reuse=False)
+    stages = []
+    reproduce(config, results_dir=tmp_path / "reproduce", cache_dir=tmp_path / "cache", jobs=1,
+              on_stage=lambda *stage: stages.append(stage[0]))
+    folder = tmp_path / "reproduce" / config.name
+    # the label stage found it current: computed neither before its blocks nor beside them
+    assert "labelling runs" in stages and not any("batch reference" in stage for stage in stages)
+    assert json.loads((folder / "label_profile.json").read_text())["batches"] == {}
+    with np.load(labelled / "batch" / "own.npz") as want, np.load(folder / "batch" / "own.npz") as got:
+        for name in ("labels", "word_labels", "log_likelihood"):
+            np.testing.assert_array_equal(got[name], want[name])
+        assert json.loads(str(got["meta"]))["recipe"] == json.loads(str(want["meta"]))["recipe"]
+    # and kept for the next experiment, as the label stage keeps what it computes
+    assert len(list((tmp_path / "cache" / "shared" / "batch").glob("*.npz"))) == 1
