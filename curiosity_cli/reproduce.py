@@ -34,9 +34,10 @@ def reproduce(
     ``on_stage(description, units)`` announces each stage and ``on_done()`` marks a unit
     of it done, for a progress display. ``reuse`` takes label files and batch references
     another experiment computed from the same inputs (:mod:`~curiosity_cli.label.shared_items`).
-    With loky workers, the maps' batch references are computed in this process while the
-    runs are explored (:func:`~curiosity_cli.label.batch_references.beside_exploration`),
-    not in the label stage: the same files, off its critical path.
+    With loky workers labelling on the CPU, the maps' batch references are computed in this
+    process while the runs are explored
+    (:func:`~curiosity_cli.label.batch_references.beside_exploration`), not in the label
+    stage: the same files, off its critical path.
     """
     from curiosity_cli.evaluate.tables import evaluate_experiment
     from curiosity_cli.explore.grid import run_grid
@@ -56,15 +57,17 @@ def reproduce(
 
     from curiosity_cli.topics.devices import resolve_device
 
-    resolve_device(config.label.device)  # a GPU that is not there stops the pipeline before it explores, not after
+    device = resolve_device(config.label.device)  # a GPU that is not there stops the pipeline before it explores, not after
     folder = experiment_root(results_dir, config.name)
     stage("words and exploration set-up", 0)
     batches = []  # threads computing batch references beside the exploration
 
     def start_batches(experiment, stores) -> None:
         # a Dask cluster's workers may be elsewhere, this process's cores too few to share;
-        # force makes the label stage compute them again anyway
-        if not workers.ships and not force:
+        # force makes the label stage compute them again anyway. With a GPU the label stage's
+        # blocks leave the cores free for them (on 16 cores they were written at 20 s of a
+        # 36-s stage), and beside the exploration they slowed it (55 to 73 s): not then
+        if not workers.ships and not force and device == "cpu":
             shared = SharedItems(cache_dir) if reuse else None
             batches.extend(beside_exploration(config, experiment, stores, workers.jobs, shared))
 

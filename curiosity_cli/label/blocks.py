@@ -45,6 +45,8 @@ def plan_blocks(
     -------
     list of list of list of int
         Per map, its blocks, each the indices of its runs in order; every run in exactly one.
+        Submit them in :func:`dealing_order`: the plan assumes a worker that frees takes
+        the costliest block left.
     """
     if most is None:
         return [[list(range(len(counts)))] if len(counts) else [] for counts in chain_counts]
@@ -62,6 +64,25 @@ def plan_blocks(
             if best is None or finish < best[0] - 1e-9:
                 best = (finish, plan)
     return best[1]
+
+
+def dealing_order(
+    plan: list[list[list[int]]], chain_counts: Sequence[Sequence[int]], *, lanes: int, words: Sequence[int] | None = None,
+) -> list[tuple[int, int]]:
+    """The ``(map, block)`` indices of a :func:`plan_blocks` plan, costliest block first (ties: in plan order).
+
+    The order the plan's makespan assumes: on a pool whose free worker takes the next
+    task submitted, the costliest blocks start first and the cheap ones fill in at the end.
+    In map order instead, the paper grid's reef-mosaic blocks (its words 1.5 times the
+    others') started when the first blocks finished, and the label stage on 16 cores took
+    184 s where its plan needed about 130.
+    """
+    words = [1] * len(chain_counts) if words is None else words
+    costs = {
+        (m, b): _block_cost(sum(chain_counts[m][i] for i in block), lanes) * words[m]
+        for m, blocks in enumerate(plan) for b, block in enumerate(blocks)
+    }
+    return sorted(costs, key=lambda index: -costs[index])
 
 
 def _full_blocks(counts: Sequence[int], size: int) -> list[list[int]]:

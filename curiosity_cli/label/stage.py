@@ -381,7 +381,7 @@ def label_experiment(
         Another process works in the folder (:mod:`~curiosity_cli.experiment.lock`).
     """
     from curiosity_cli.experiment.maps import prepare_stores
-    from curiosity_cli.label.blocks import plan_blocks
+    from curiosity_cli.label.blocks import dealing_order, plan_blocks
     from curiosity_cli.workers import Workers
     from curiosity_cli.topics.chains import LANES, block_chains
     from curiosity_cli.topics.devices import resolve_device
@@ -467,9 +467,9 @@ def label_experiment(
             plan = plan_blocks(
                 list(counts.values()), workers.jobs if device == "cpu" else 1, lanes=LANES, most=most, words=words
             )
-            for (name, map_runs), map_blocks in zip(to_label.items(), plan):
-                for block in map_blocks:
-                    blocks.append(LabelTask([map_runs[i] for i in block], inputs[name], device))
+            names = list(to_label)
+            for m, b in dealing_order(plan, list(counts.values()), lanes=LANES, words=words):
+                blocks.append(LabelTask([to_label[names[m]][i] for i in plan[m][b]], inputs[names[m]], device))
             # beside the blocks where every task gets a worker at once, so no block waits for a worker a batch
             # reference holds (loky only: a Dask worker cannot see the file it waits for); else before them
             beside = bool(stale) and not workers.ships and len(stale) + len(blocks) <= workers.jobs

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from curiosity_cli.label.blocks import _block_cost, _makespan, plan_blocks
+from curiosity_cli.label.blocks import _block_cost, _makespan, dealing_order, plan_blocks
 
 #: The paper grid (3 maps x 4 walkers x 20 restarts, restart 0 checked: 84 chains a map) and the quick job's map.
 PAPER = [[2] * 4 + [1] * 76] * 3
@@ -74,3 +74,12 @@ def test_a_map_of_more_words_gets_no_larger_blocks_and_the_grid_finishes_sooner(
     largest = [max(sum(c[i] for i in b) for b in blocks) for c, blocks in zip(PAPER, plan)]
     assert largest[2] <= min(largest[:2])
     assert weighted_finish(plan) < weighted_finish(plan_blocks(PAPER, 16, lanes=8, most=16))
+
+
+def test_blocks_are_dealt_costliest_first_as_the_plan_assumes():
+    # map 1 has 1.5 times the words; a block of 4 chains is held as 8, at 1.45 times the cost per chain:
+    # costs 16 x 3 = 48, 8 x 1.45 x 3 = 34.8, 16 x 2 = 32, 8 x 1.45 x 2 = 23.2; in map order they were 32, 23.2, 48, 34.8
+    counts = [[1] * 20, [1] * 20]
+    plan = [[list(range(16)), list(range(16, 20))], [list(range(16)), list(range(16, 20))]]
+    assert dealing_order(plan, counts, lanes=8, words=[2, 3]) == [(1, 0), (1, 1), (0, 0), (0, 1)]
+    assert dealing_order(plan, counts, lanes=8) == [(0, 0), (1, 0), (0, 1), (1, 1)]  # ties in plan order
