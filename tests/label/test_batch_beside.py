@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 import threading
 
@@ -25,6 +26,8 @@ def test_a_batch_reference_beside_the_blocks_gives_the_labels_it_gives_before_th
     stages = []
     label_experiment(config, folder, cache_dir=tmp_path / "beside" / "cache", jobs=2, on_stage=lambda *s: stages.append(s))
     assert stages == [("labelling runs beside the batch reference of own", 3)]
+    profile = json.loads((folder / "label_profile.json").read_text())
+    assert list(profile["batches"]) == ["own"] and 0 < profile["batches"]["own"]["written"] <= profile["wall"]
     label_experiment(config, tmp_path / "before" / "grid", cache_dir=tmp_path / "beside" / "cache", jobs=1,
                      on_stage=lambda *s: stages.append(s), reuse=False)
     assert stages[1:] == [("batch reference own", 8), ("labelling runs", 2)]
@@ -48,8 +51,6 @@ def test_a_block_waits_for_the_batch_file_made_from_its_recipe(tmp_path):
 
 
 def test_reproduce_computes_the_batch_reference_beside_the_exploration_and_it_is_the_label_stages(own_map, tmp_path):
-    import json
-
     from curiosity_cli.reproduce import reproduce
 
     config, labelled = small_experiment(own_map, tmp_path / "label", restarts=1, weight_functions=("random-walk",))

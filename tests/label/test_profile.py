@@ -31,6 +31,10 @@ def test_the_segments_sum_to_the_stage_and_the_blocks_hold_every_run(own_map, tm
     words = sum(load_store(next((tmp_path / "cache").glob("own-*.npz"))).count_by_type().values())
     assert all(b["words"] == words and b["work"] == b["chain_sweeps"] * words for b in blocks)
     assert all(b["kernel"] > 0 and b["tables"] > 0 and b["reading"] >= 0 for b in blocks)
+    # each block began within the stage, after its setup; the batch reference went before them (three tasks on two
+    # workers), so none is listed as beside them
+    assert all(profile["segments"]["setup"] - 0.5 <= b["began"] <= profile["wall"] for b in blocks)
+    assert profile["segments"]["batch references before the blocks"] > 0 and profile["batches"] == {}
 
     before = (folder / "label_profile.json").read_bytes()
     again = label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=2)

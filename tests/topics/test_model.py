@@ -179,6 +179,41 @@ def test_log_likelihood_rises_as_the_sampler_fits_clustered_words():
     assert TopicModel(2, 20, SquareGrid(4, 4).neighbour_table(), alpha=0.1, beta=0.1, seed=3).log_likelihood() == 0.0
 
 
+@pytest.mark.parametrize("threads", [1, 3])
+def test_a_traced_batch_gives_the_log_likelihood_after_each_sweep_and_the_same_topics(threads, monkeypatch):
+    from curiosity_cli.topics import batch_sweeps
+
+    def clustered():
+        rng = np.random.default_rng(3)
+        model = TopicModel(4, 20, SquareGrid(5, 8).neighbour_table(), alpha=0.1, beta=0.1, seed=3)
+        for cell in range(40):
+            model.add_cell(cell, (0 if cell % 8 < 4 else 10) + rng.integers(0, 10, 30))
+        return model
+
+    whole = clustered().log_likelihood()  # one run of cells
+    # 40 cells summed in 5 runs of 8, which the threads share
+    monkeypatch.setattr(batch_sweeps, "_LIKELIHOOD_CELLS", 8)
+    assert clustered().log_likelihood() == pytest.approx(whole, rel=1e-12)
+    one_by_one = clustered()
+    after_each = []
+    for _ in range(5):
+        one_by_one.refine_batch(1, threads=threads)
+        after_each.append(one_by_one.log_likelihood())
+    traced = clustered()
+    assert traced.refine_batch(5, threads=threads, trace=True).tolist() == after_each
+    np.testing.assert_array_equal(traced.ml_topics(), one_by_one.ml_topics())
+    assert clustered().refine_batch(2) is None
+
+
+def test_a_frozen_models_batch_is_not_traced():
+    model = TopicModel(
+        2, 20, SquareGrid(4, 4).neighbour_table(), alpha=0.1, beta=0.1, seed=3, frozen_counts=np.ones((20, 2), np.int32),
+    )
+    model.add_cell(0, [1, 2, 3])
+    with pytest.raises(ParameterError, match="^trace: "):
+        model.refine_batch(1, trace=True)
+
+
 # --- realtime refinement --------------------------------------------------------------
 
 
