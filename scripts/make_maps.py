@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""Regenerate the three embedded maps in ``data/maps/`` from their sources.
+"""Regenerate the embedded maps in ``data/maps/`` from their sources.
 
 The paper's three datasets (two aerial views of Montreal and the SouthBellairs reef
-mosaic) are not public, so the project ships three stand-ins, each a folder
+mosaic) are not public, so the project ships three stand-ins and a positive control, each a folder
 ``data/maps/<name>/`` holding ``image.png`` (8-bit RGB), ``labels.png`` (8-bit class
 ids) and ``legend.yaml``:
 
@@ -17,6 +17,9 @@ ids) and ``legend.yaml``:
 ``reef-mosaic``
     2500 x 2500 synthetic underwater reef built from the same kind of real textures,
     tinted and blurred to read as underwater imagery.
+``rare-patches``
+    512 x 512 meadow with 12 small patches of terrain found nowhere else: the positive
+    control, where MI comes only from finding them.
 
 This file is the command line; the recipes are the package ``scripts/embedded_maps/``,
 one module per map. Everything is derived from the sources and one seed

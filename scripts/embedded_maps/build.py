@@ -9,6 +9,7 @@ import numpy as np
 from curiosity_cli.errors import DatasetError
 
 from .aerial_mosaic import build_aerial_mosaic
+from .rare_patches import build_rare_patches
 from .reef_mosaic import build_reef_mosaic
 from .seeding import MAP_NAMES
 from .sentinel_coast import build_sentinel_coast
@@ -18,6 +19,7 @@ BUILDERS = {
     "aerial-mosaic": build_aerial_mosaic,
     "sentinel-coast": build_sentinel_coast,
     "reef-mosaic": build_reef_mosaic,
+    "rare-patches": build_rare_patches,
 }
 
 

@@ -8,7 +8,7 @@ import numpy as np
 SEED = 20140914
 
 #: The maps, in the order that numbers their random streams.
-MAP_NAMES = ("aerial-mosaic", "sentinel-coast", "reef-mosaic")
+MAP_NAMES = ("aerial-mosaic", "sentinel-coast", "reef-mosaic", "rare-patches")
 
 
 def stage_rng(map_name: str, stage: int) -> np.random.Generator:

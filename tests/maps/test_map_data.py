@@ -15,6 +15,7 @@ EMBEDDED = {
     "aerial-mosaic": ((1024, 1024), 16, 1, 4096),
     "sentinel-coast": ((1024, 1024), 16, 1, 4096),
     "reef-mosaic": ((2500, 2500), 32, 2, 6241),
+    "rare-patches": ((512, 512), 16, 1, 1024),
     # a real 1 m photo: the centred 992 x 992 (a multiple of 16) of a 1000 x 1000 GeoNRW tile
     "geonrw-essen": ((992, 992), 16, 1, 3844),
 }
@@ -124,7 +125,7 @@ def test_declared_size_must_match(own_map):
 
 
 def test_unknown_dataset_name():
-    with pytest.raises(ConfigError, match="no dataset 'nowhere': expected one of aerial-mosaic, geonrw-essen, reef-mosaic, sentinel-coast, zurich-zh17"):
+    with pytest.raises(ConfigError, match="no dataset 'nowhere': expected one of aerial-mosaic, geonrw-essen, rare-patches, reef-mosaic, sentinel-coast, zurich-zh17"):
         load_map("nowhere")
 
 
