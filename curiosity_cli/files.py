@@ -110,6 +110,21 @@ def open_npz(path: Path):
             raise corrupt(_reason(exc)) from None
 
 
+def arrays_digest(arrays: dict) -> str:
+    """SHA-256 of named arrays (each one's name, dtype, shape and bytes, in the dict's order): what a
+    ``.npz`` file's meta records of its arrays when written, so that arrays altered since are found."""
+    import hashlib
+
+    import numpy as np
+
+    digest = hashlib.sha256()
+    for name, array in arrays.items():
+        array = np.ascontiguousarray(array)
+        digest.update(f"{name}:{array.dtype.str}:{array.shape};".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
 def read_meta(npz, required: tuple[str, ...] = ()) -> dict:
     """The JSON ``meta`` of an ``.npz`` file this package wrote (a batch reference, a label file), with the ``required`` keys.
 

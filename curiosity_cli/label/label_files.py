@@ -18,7 +18,9 @@
   at its last checkpoint, for the figures.
 
 Paths are :class:`~curiosity_cli.experiment.layout.ExperimentFolder`'s; each file is
-written atomically, the label file last, recording its example maps' sizes and digests.
+written atomically, the label file last, recording its example maps' sizes and digests
+and the digest of its own arrays (``arrays_sha256``): a label file whose tables were
+altered since it was written is corrupt, and labelled again, never counted.
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ import numpy as np
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import SECOND_START, Recipe
 from curiosity_cli.experiment.wholeness import FILES_KEY, changed, records
-from curiosity_cli.files import CorruptFileError, atomic_path, display_path, note, open_npz, read_meta
+from curiosity_cli.files import CorruptFileError, arrays_digest, atomic_path, display_path, note, open_npz, read_meta
 
 #: Why a run without a label file is labelled (:func:`label_changes`).
 NOT_LABELLED = "not labelled yet"
@@ -40,13 +42,17 @@ EXAMPLE_LENGTHS = (80,)
 #: The prefix of the second chain's tables' names in a checked run's label file.
 SECOND_PREFIX = f"{SECOND_START}_"
 
-#: What every label file's ``meta`` names: a file without one of these is corrupt.
-LABEL_META_KEYS = ("dataset", "weight_function", "restart", "run_seed", "store", "vocabulary_hashes", "sweeps")
+#: Where a label file's meta records the digest of its arrays.
+ARRAYS_KEY = "arrays_sha256"
+#: What every label file's ``meta`` names: a file without one of these is corrupt (one from before
+#: label files recorded their arrays' digest, too: labelled again rather than trusted).
+LABEL_META_KEYS = ("dataset", "weight_function", "restart", "run_seed", "store", "vocabulary_hashes", "sweeps", ARRAYS_KEY)
 
 
 def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None:
     """Write a run's label file and its example maps, each atomically: the examples first,
-    then the label file, whose meta records their sizes and digests (``files``)."""
+    then the label file, whose meta records their sizes and digests (``files``) and the
+    digest of its own arrays (``arrays_sha256``)."""
     written = []
     for length, pixels in examples.items():
         path = ExperimentFolder(folder).example(meta["dataset"], meta["weight_function"], meta["restart"], length)
@@ -55,7 +61,7 @@ def write_labels(folder: Path, arrays: dict, examples: dict, meta: dict) -> None
             with open(tmp, "wb") as handle:
                 np.savez_compressed(handle, labels=pixels)
         written.append(str(path.relative_to(folder)))
-    meta = {**meta, FILES_KEY: records(folder, written)}
+    meta = {**meta, FILES_KEY: records(folder, written), ARRAYS_KEY: arrays_digest(dict(sorted(arrays.items())))}
     path = ExperimentFolder(folder).label_file(meta["dataset"], meta["weight_function"], meta["restart"])
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_path(path) as tmp:
@@ -71,8 +77,9 @@ def read_label_file(path: Path) -> tuple[dict, dict]:
     FileNotFoundError, OSError
         As :func:`~curiosity_cli.files.open_npz`.
     CorruptFileError
-        The file cannot be read, lacks an array a label file has, or has a table array
-        without one table per checkpoint length.
+        The file cannot be read, lacks an array a label file has, has a table array
+        without one table per checkpoint length, or arrays that are not those it was
+        written with (its meta's ``arrays_sha256``).
     """
     tables = ("batch", "human", SECOND_PREFIX + "batch", SECOND_PREFIX + "human")
     with open_npz(path) as npz:
@@ -85,6 +92,8 @@ def read_label_file(path: Path) -> tuple[dict, dict]:
                 raise ValueError(
                     f"{name} has shape {arrays[name].shape}, expected one table for each of {len(arrays['lengths'])} lengths"
                 )
+        if arrays_digest({name: npz[name] for name in sorted(npz.files) if name != "meta"}) != meta[ARRAYS_KEY]:
+            raise ValueError("its tables are not those it was written with (altered since)")
     return meta, arrays
 
 

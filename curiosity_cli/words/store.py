@@ -13,7 +13,6 @@ Words are sorted by cell, so the words of cell ``c`` are the contiguous slice
 
 from __future__ import annotations
 
-import hashlib
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,7 +21,7 @@ import numpy as np
 
 from curiosity_cli.maps.cell_grid import SquareGrid, map_grid
 from curiosity_cli.errors import RERUN, CuriosityError
-from curiosity_cli.files import CorruptFileError, atomic_path, display_path, open_npz
+from curiosity_cli.files import CorruptFileError, arrays_digest, atomic_path, display_path, open_npz
 
 STORE_FORMAT = 1
 
@@ -148,16 +147,6 @@ def build_store(
 _ARRAYS = ("rows", "cols", "words", "cell_start")
 
 
-def _arrays_digest(arrays: dict) -> str:
-    """SHA-256 of a store's arrays (their dtypes, shapes and bytes), recorded in its meta when written."""
-    digest = hashlib.sha256()
-    for name in _ARRAYS:
-        array = np.ascontiguousarray(arrays[name])
-        digest.update(f"{name}:{array.dtype.str}:{array.shape};".encode())
-        digest.update(array.tobytes())
-    return digest.hexdigest()
-
-
 def save_store(store: WordStore, path: Path) -> None:
     """Write a store as one compressed ``.npz``, atomically, with the digest of its arrays in its meta."""
     meta = {
@@ -166,7 +155,7 @@ def save_store(store: WordStore, path: Path) -> None:
         "cell_width": store.grid.cell_width,
         "types": [t.__dict__ for t in store.types],
         "params": store.params,
-        "arrays_sha256": _arrays_digest({name: getattr(store, name) for name in _ARRAYS}),
+        "arrays_sha256": arrays_digest({name: getattr(store, name) for name in _ARRAYS}),
     }
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as handle:
@@ -205,7 +194,7 @@ def load_store(path: Path) -> WordStore:
             f"run {RERUN} to rebuild it",
             rerun="extract",
         )
-    if "arrays_sha256" in meta and _arrays_digest(arrays) != meta["arrays_sha256"]:
+    if "arrays_sha256" in meta and arrays_digest(arrays) != meta["arrays_sha256"]:
         raise CorruptFileError(f"{display_path(path)}: its words are not those it was written with (altered since)")
     return WordStore(
         **arrays,

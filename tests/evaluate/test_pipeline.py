@@ -348,3 +348,26 @@ def test_an_unreadable_stage_seconds_file_is_named_and_what_was_lost_said(own_ma
         assert result.exit_code == 0, result.output
         assert "stage_seconds.json: " in result.stderr and "the stage times it held are lost: evaluate's is recorded alone" in result.stderr
         assert set(json.loads(path.read_text())) == {"evaluate"}
+
+
+def test_a_label_file_whose_tables_were_replaced_is_named_never_counted_and_labelled_again(own_map, tmp_path):
+    # the hostile case of issue 44: the human tables rewritten with np.savez, the meta untouched
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
+    honest = evaluate_experiment(folder).mi
+    path = ExperimentFolder(folder).label_file("own", "word-perplexity", 0)
+    with np.load(path) as npz:
+        arrays = {name: npz[name] for name in npz.files}
+    arrays["human"] = arrays["human"] * 0 + np.eye(*arrays["human"].shape[1:], dtype=arrays["human"].dtype) * 1000
+    with open(path, "wb") as handle:
+        np.savez(handle, **arrays)
+    evaluation = evaluate_experiment(folder, partial=True)
+    assert len(evaluation.skipped) == 1
+    assert "word-perplexity/restart-000.npz: corrupt or truncated (its tables are not those it was written with" in (
+        evaluation.skipped[0]
+    )
+    with pytest.raises(EvaluationError, match="restart-000.npz: corrupt"):
+        evaluate_experiment(folder)
+    done = label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
+    assert (done["labelled"], done["skipped"]) == (1, 7), "labelled again, not 'up to date'"
+    pd.testing.assert_frame_equal(evaluate_experiment(folder).mi, honest)
