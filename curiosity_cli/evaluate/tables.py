@@ -585,12 +585,32 @@ def read_class_names(config: ExperimentConfig) -> dict[str, dict[int, str]]:
 
 def read_maps(folder: Path):
     """``maps.csv`` of an experiment (each map's words and the paper map it stands in
-    for, written by ``explore``), or None for a folder from before it existed."""
+    for, written by ``explore``), or None for a folder from before it existed.
+
+    Raises
+    ------
+    EvaluationError
+        It is not as ``explore`` wrote it (``provenance.yaml`` records its size and digest), or cannot be read.
+    """
     import pandas as pd
 
-    path = ExperimentFolder(folder).maps_csv
+    import yaml
+
+    from curiosity_cli.experiment.wholeness import FILES_KEY, changed
+
+    layout = ExperimentFolder(folder)
+    path = layout.maps_csv
     if not path.is_file():
         return None
+    try:  # what explore recorded of it (nothing in a folder from before it did)
+        written = yaml.safe_load(layout.provenance.read_text()).get(FILES_KEY, {})
+    except (OSError, yaml.YAMLError, AttributeError):
+        written = {}
+    if path.name in written and (change := changed(layout.root, {path.name: written[path.name]})) is not None:
+        raise EvaluationError(
+            f"{display_path(path)}: {change[1]} (explore wrote it); {RERUN} writes it again, keeping the runs",
+            rerun="explore", force=False,
+        )
     try:
         return pd.read_csv(path, keep_default_na=False, na_values=[""])
     except (ValueError, OSError) as exc:

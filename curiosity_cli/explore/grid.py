@@ -23,8 +23,9 @@ Design, in the order a grid runs:
   writes the run folder atomically (:mod:`curiosity_cli.explore.runs`), so where a run
   was computed never matters and a killed grid loses only the runs in flight.
 - **Resumable.** Finished runs are skipped unless ``force``; the experiment folder
-  keeps the resolved config, ``provenance.yaml`` (seed, version, commit) and
-  ``runs.csv`` (every run's start cell and seed). A resumed grid must agree with the
+  keeps the resolved config, ``runs.csv`` (every run's start cell and seed),
+  ``maps.csv`` and ``provenance.yaml`` (seed, version, commit, and the sizes and digests
+  of the two tables, which later stages check). A resumed grid must agree with the
   saved config on everything that changes a run's numbers, and every finished run with
   the recipe this config gives it (:mod:`curiosity_cli.experiment.recipes`): a run made otherwise
   is refused by name before anything is written, or redone with ``force``.
@@ -49,6 +50,7 @@ from curiosity_cli.experiment.lock import working_in
 from curiosity_cli.experiment.stage_seconds import record_stage_seconds
 from curiosity_cli.experiment.maps import StoreInfo, prepare_stores
 from curiosity_cli.experiment.recipes import RECIPE_KEY, Recipe, first_of
+from curiosity_cli.experiment.wholeness import FILES_KEY, records
 from curiosity_cli.experiment.saved_config import check_saved_config
 from curiosity_cli.workers import Workers
 from curiosity_cli.files import atomic_path, check_inside, display_path
@@ -322,8 +324,6 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
     layout = ExperimentFolder(folder)
     with atomic_path(layout.config) as tmp:
         tmp.write_text(saved_yaml(config))
-    with atomic_path(layout.provenance) as tmp:
-        tmp.write_text(yaml.safe_dump(provenance(config.seed), sort_keys=False))
     rows = []
     for t in tasks:
         start_row, start_col = stores[t.dataset].grid.row_col(t.start_cell)
@@ -344,3 +344,7 @@ def _write_experiment_files(folder: Path, config: ExperimentConfig, tasks: list[
         )
     with atomic_path(layout.maps_csv) as tmp:
         pd.DataFrame(maps).to_csv(tmp, index=False)
+    # last, recording the tables it wrote: a later stage reads maps.csv and must not trust an edited one
+    record = {**provenance(config.seed), FILES_KEY: records(folder, [layout.runs_csv.name, layout.maps_csv.name])}
+    with atomic_path(layout.provenance) as tmp:
+        tmp.write_text(yaml.safe_dump(record, sort_keys=False))

@@ -371,3 +371,18 @@ def test_a_label_file_whose_tables_were_replaced_is_named_never_counted_and_labe
     done = label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
     assert (done["labelled"], done["skipped"]) == (1, 7), "labelled again, not 'up to date'"
     pd.testing.assert_frame_equal(evaluate_experiment(folder).mi, honest)
+
+
+def test_an_edited_maps_table_is_named_and_explore_writes_it_again(own_map, tmp_path):
+    # issue 44: maps.csv edited (its cells) went into the report unnoticed
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
+    maps = folder / "maps.csv"
+    written = maps.read_text()
+    maps.write_text(written.replace(",48,", ",999,"))
+    assert maps.read_text() != written
+    with pytest.raises(EvaluationError, match=r"maps.csv: 144 bytes, but 143 were written \(explore wrote it\); explore writes it"):
+        evaluate_experiment(folder)
+    run_grid(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)  # every run kept, the tables written
+    assert maps.read_text() == written
+    assert evaluate_experiment(folder).maps["cells"].tolist() == [48]
