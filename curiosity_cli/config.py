@@ -224,6 +224,11 @@ class WordsConfig:
             and _NAMED_UNLESS.get(key, _NO_DEFAULT) != value
         }
 
+    def read_settings(self) -> dict:
+        """The keys that change a map's words: :meth:`store_settings` and the vocabularies' keys
+        (two configs that differ only outside these make the same words)."""
+        return {**{key: getattr(self, key) for key in _VOCABULARY_KEYS}, **self.store_settings()}
+
 
 #: Words keys that the word store records by their vocabularies' content hashes instead.
 _VOCABULARY_KEYS = ("vocabulary_dir", "orb_vocabulary", "texton_vocabulary")

@@ -464,7 +464,36 @@ def plan_sweep(
             name = combination_name(overrides)
             assert _NAME.match(name), name  # by construction: keys are config fields, values made safe
             loaded.append(Combination(len(loaded) + 1, overrides, name, replace(config, name=name)))
+    _check_each_changes_something(loaded)
     return Sweep(base_name, config_path, sets, tuple(axes), tuple(loaded), tuple(specifications))
+
+
+def _check_each_changes_something(combinations: Sequence[Combination]) -> None:
+    """Refuse two combinations of one seed that make the same experiment: a swept or specified
+    value that no setting reads under the others (``words.orb_grid_step`` with the keypoints
+    detector) would be reported as two treatments that are one.
+
+    Raises
+    ------
+    ConfigError
+        Naming the two combinations and the keys in which they differ.
+    """
+    from curiosity_cli.config_yaml import to_dict
+
+    seen = {}
+    for combination in combinations:
+        settings = to_dict(combination.config)
+        settings["words"] = combination.config.words.read_settings()  # only the keys its ORB detector reads
+        settings.pop("name")
+        key = json.dumps(settings, sort_keys=True, default=str)
+        if (other := seen.get(key)) is not None:
+            differ = [o.split("=", 1)[0] for o in combination.overrides if o not in other.overrides]
+            raise ConfigError(
+                f"sweeps: {', '.join(other.overrides)} and {', '.join(combination.overrides)} make the same experiment: "
+                f"{', '.join(differ)} {'changes' if len(differ) == 1 else 'change'} nothing under the other settings; "
+                "sweep only values that are read"
+            )
+        seen[key] = combination
 
 
 def _combination_error(exc: ConfigError, keys: Sequence[str], overrides: Sequence[str]) -> ConfigError:

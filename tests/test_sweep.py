@@ -274,3 +274,19 @@ def test_a_declared_sweep_reads_as_sweep_options_and_the_command_line_replaces_a
     merged = merge_sweeps(declared[:3], ["seed=2", "model.topics=8"])
     assert merged == [declared[0], declared[1], "seed=2", "model.topics=8"]
     assert merge_sweeps([], ["seed=1"]) == ["seed=1"] and declared_sweeps(CONFIG_DIR / "quick.yaml") == []
+
+
+def test_a_swept_key_that_nothing_reads_under_the_other_settings_is_refused_before_anything_runs(tmp_path):
+    # issue 44: the grid step with the keypoints detector gave two identical treatments reported as two
+    with pytest.raises(ConfigError, match=(
+        r"^sweeps: words.orb_grid_step=1 and words.orb_grid_step=2 make the same experiment: "
+        r"words.orb_grid_step changes nothing under the other settings; sweep only values that are read$"
+    )):
+        plan_sweep(CONFIG_DIR / "quick.yaml", parse_sweeps(["words.orb_grid_step=1,2"]))
+    # under the grid detector it is read: two experiments
+    sweep = plan_sweep(
+        CONFIG_DIR / "quick.yaml", parse_sweeps(["words.orb_grid_step=1,2"]),
+        ["words.orb_detector=grid", "words.orb_per_tile=null", "words.orb_max_features=null"],
+    )
+    assert len(sweep.combinations) == 2
+    assert not list(tmp_path.iterdir()), "nothing written"
