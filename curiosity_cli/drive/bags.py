@@ -93,6 +93,51 @@ def bag_paths(source: str) -> tuple[list[Path], str]:
     return storage, f"{where} has no metadata.yaml (a recording cut short?): reading {', '.join(p.name for p in storage)}"
 
 
+#: Bytes read from each end of a bag's storage file for its fingerprint: a recording is gigabytes,
+#: and another recording differs in its size or its first and last records.
+_FINGERPRINT_BYTES = 1 << 20
+
+
+def bag_fingerprint(source: str) -> dict:
+    """What identifies a bag without reading all of it: per storage file (:func:`bag_paths`), its size
+    and the SHA-256 of its first and last :data:`_FINGERPRINT_BYTES` bytes, by name.
+
+    Raises
+    ------
+    CameraError
+        As :func:`bag_paths`.
+    """
+    import hashlib
+
+    fingerprint = {}
+    for path in bag_paths(source)[0]:
+        if path.is_dir():  # a ROS 2 bag folder: its storage files, as its metadata.yaml names them
+            files = sorted(p for p in path.iterdir() if p.suffix.lower() in (".mcap", ".db3", ".yaml"))
+        else:
+            files = [path]
+        for file in files:
+            size = file.stat().st_size
+            digest = hashlib.sha256()
+            with open(file, "rb") as handle:
+                digest.update(handle.read(_FINGERPRINT_BYTES))
+                handle.seek(max(0, size - _FINGERPRINT_BYTES))
+                digest.update(handle.read(_FINGERPRINT_BYTES))
+            fingerprint[file.name] = {"size": size, "sha256_ends": digest.hexdigest()}
+    return fingerprint
+
+
+def fingerprint_change(recorded: dict, now: dict) -> str | None:
+    """How a bag's :func:`bag_fingerprint` now differs from the one recorded, in words; None when it does not."""
+    if set(recorded) != set(now):
+        return f"its files are {', '.join(sorted(now))}, the replay read {', '.join(sorted(recorded))}"
+    for name, was in sorted(recorded.items()):
+        if now[name]["size"] != was.get("size"):
+            return f"{name} is {now[name]['size']:,} bytes, the replay read {was.get('size'):,}"
+        if now[name]["sha256_ends"] != was.get("sha256_ends"):
+            return f"{name} holds other records than the replay read"
+    return None
+
+
 class BagCamera:
     """The frames of one image topic of a bag, in recorded order, as fast as they are read.
 

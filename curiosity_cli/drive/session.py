@@ -170,9 +170,17 @@ def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
         raise CuriosityError(f"{display_path(log)}: not the log of a replayed bag (no start record with a bag's topic)")
     from curiosity_cli.drive.timeline import surprise_series
 
+    from curiosity_cli.drive.bags import bag_fingerprint, fingerprint_change
+
     frames = surprise_series(log)["frame"].size
     if frames == 0:
         raise CuriosityError(f"{display_path(log)}: holds no frame of the replay (its start record alone); nothing to draw")
+    # the frames drawn are read from the bag again: it must be the recording the log's surprise came from
+    if isinstance(start.get("bag"), dict) and (change := fingerprint_change(start["bag"], bag_fingerprint(start["camera"]))):
+        raise CuriosityError(
+            f"{display_path(Path(start['camera']))}: not the bag {display_path(log)} replayed ({change}); "
+            "put that recording back, or replay this one with `curiosity drive`"
+        )
     return _draw_timeline(Path(folder), start["camera"], start["topic"], f"{frames} frames", clock)
 
 
@@ -311,11 +319,13 @@ def drive_session(
                 source.close()
             raise
         prepare_folder(out, config, seed)
+        from curiosity_cli.drive.bags import BagCamera, bag_fingerprint
+
         log = JsonLines(out / RUN_LOG)
         map_name = None if sim_map is None else sim_map.config.name
         log.write(
             "start", seed=seed, camera=camera, topic=getattr(source, "topic", None), sim_map=map_name, serial=port,
-            dry_run=port is None,
+            dry_run=port is None, **({"bag": bag_fingerprint(camera)} if isinstance(source, BagCamera) else {}),
         )
         robot = None
         try:

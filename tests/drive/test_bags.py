@@ -453,6 +453,25 @@ def test_a_timeline_is_drawn_again_from_a_run_folder(tmp_path, frames):
     assert missing.exit_code == 1 and "log.jsonl: not found; give a run folder of `curiosity drive`" in missing.stderr
 
 
+def test_a_timeline_is_refused_when_the_bag_was_replaced_by_another_recording(tmp_path, frames):
+    """Issue 44: the frames were read from whatever file stood at the bag's path, exit 0."""
+    bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
+    assert replay(bag, tmp_path / "run").exit_code == 0
+    start = json.loads((tmp_path / "run" / "log.jsonl").read_text().splitlines()[0])
+    assert start["bag"]["mission.bag"]["size"] == bag.stat().st_size
+    (tmp_path / "run" / "timeline.png").unlink()
+    bag.unlink()
+    write_bag(bag, "ros1", {"/camera/image_raw": "rgb8"}, frames[::-1])  # another recording, the same size
+    result = runner.invoke(app, ["drive", "--timeline", str(tmp_path / "run")])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    (line,) = [line for line in result.stderr.splitlines() if line.startswith("Error: ")]
+    assert "mission.bag: not the bag" in line and "(mission.bag holds other records than the replay read)" in line
+    assert not (tmp_path / "run" / "timeline.png").exists()
+    bag.unlink()
+    write_bag(bag, "ros1", {"/camera/image_raw": "rgb8"}, frames)  # the recording put back
+    assert runner.invoke(app, ["drive", "--timeline", str(tmp_path / "run")]).exit_code == 0
+
+
 def test_header_stamps_are_logged_and_a_bag_of_equal_record_times_falls_back_to_them(tmp_path, frames):
     from curiosity_cli.drive.timeline import surprise_series
 
