@@ -471,7 +471,10 @@ def plan_sweep(
 def _check_each_changes_something(combinations: Sequence[Combination]) -> None:
     """Refuse two combinations of one seed that make the same experiment: a swept or specified
     value that no setting reads under the others (``words.orb_grid_step`` with the keypoints
-    detector) would be reported as two treatments that are one.
+    detector) would be reported as two treatments that are one. The words and explore
+    sections are compared by the keys their numbers depend on
+    (:meth:`~curiosity_cli.config.WordsConfig.read_settings`,
+    :meth:`~curiosity_cli.config.ExploreConfig.run_settings`).
 
     Raises
     ------
@@ -483,7 +486,9 @@ def _check_each_changes_something(combinations: Sequence[Combination]) -> None:
     seen = {}
     for combination in combinations:
         settings = to_dict(combination.config)
-        settings["words"] = combination.config.words.read_settings()  # only the keys its ORB detector reads
+        # only the keys that change the numbers: the words its ORB detector reads, the explore keys a run reads
+        settings["words"] = combination.config.words.read_settings()
+        settings["explore"] = combination.config.explore.run_settings()
         settings.pop("name")
         key = json.dumps(settings, sort_keys=True, default=str)
         if (other := seen.get(key)) is not None:
