@@ -111,7 +111,7 @@ def bag_fingerprint(source: str) -> dict:
 
     fingerprint = {}
     for path in bag_paths(source)[0]:
-        if path.is_dir():  # a ROS 2 bag folder: its storage files, as its metadata.yaml names them
+        if path.is_dir():  # a ROS 2 bag folder: its storage files and its metadata.yaml
             files = sorted(p for p in path.iterdir() if p.suffix.lower() in (".mcap", ".db3", ".yaml"))
         else:
             files = [path]

@@ -168,9 +168,8 @@ def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
         raise CuriosityError(f"{display_path(log)}: its first line is not a JSON record ({exc})") from None
     if not isinstance(start, dict) or start.get("event") != "start" or not start.get("topic"):
         raise CuriosityError(f"{display_path(log)}: not the log of a replayed bag (no start record with a bag's topic)")
-    from curiosity_cli.drive.timeline import surprise_series
-
     from curiosity_cli.drive.bags import bag_fingerprint, fingerprint_change
+    from curiosity_cli.drive.timeline import surprise_series
 
     frames = surprise_series(log)["frame"].size
     if frames == 0:

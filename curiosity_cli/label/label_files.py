@@ -84,15 +84,16 @@ def read_label_file(path: Path) -> tuple[dict, dict]:
     tables = ("batch", "human", SECOND_PREFIX + "batch", SECOND_PREFIX + "human")
     with open_npz(path) as npz:
         meta = read_meta(npz, LABEL_META_KEYS)
-        arrays = {"lengths": npz["lengths"], "batch": npz["batch"]}  # a file without them is corrupt (KeyError)
-        arrays.update({name: npz[name] for name in (*tables, "class_first_step") if name in npz.files})
+        written = {name: npz[name] for name in sorted(npz.files) if name != "meta"}  # each member decompressed once
+        arrays = {"lengths": written["lengths"], "batch": written["batch"]}  # a file without them is corrupt (KeyError)
+        arrays.update({name: written[name] for name in (*tables, "class_first_step") if name in written})
         for name in tables:
             if name in arrays and (arrays[name].ndim != 3 or len(arrays[name]) != len(arrays["lengths"])):
                 # raised inside open_npz: reported as a corrupt file, not as an IndexError later
                 raise ValueError(
                     f"{name} has shape {arrays[name].shape}, expected one table for each of {len(arrays['lengths'])} lengths"
                 )
-        if arrays_digest({name: npz[name] for name in sorted(npz.files) if name != "meta"}) != meta[ARRAYS_KEY]:
+        if arrays_digest(written) != meta[ARRAYS_KEY]:
             raise ValueError("its tables are not those it was written with (altered since)")
     return meta, arrays
 
