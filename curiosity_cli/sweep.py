@@ -169,11 +169,14 @@ class Sweep:
         """The sweep's folder under ``results_dir``."""
         return Path(results_dir) / f"{self.name}-sweep"
 
-    def command(self, results_dir: Path = DEFAULT_RESULTS) -> str:
-        """The ``curiosity reproduce`` command that runs (or resumes) this sweep in ``results_dir``."""
+    def command(self, results_dir: Path = DEFAULT_RESULTS, record: Path | None = None) -> str:
+        """The ``curiosity reproduce`` command that runs (or resumes) this sweep in ``results_dir``,
+        keeping its ``record`` (:mod:`curiosity_cli.study_record`) if given."""
         words = ["curiosity", "reproduce", display_path(self.config_path)]
         if Path(results_dir) != DEFAULT_RESULTS:
             words += ["--results-dir", display_path(results_dir)]
+        if record is not None:
+            words += ["--record", display_path(record)]
         for text in self.sets:
             words += ["--set", text]
         for axis in self.axes:
@@ -183,12 +186,23 @@ class Sweep:
 
 @dataclass(frozen=True)
 class Outcome:
-    """What running one combination gave: its report, or why it failed, and its time."""
+    """What running one combination gave: its report, or why it failed, and its time.
+
+    Attributes
+    ----------
+    tables : Path or None
+        The folder its tables are in: its experiment folder, or the folder of a study's
+        record it was taken from (:mod:`curiosity_cli.study_record`); None if it failed.
+    taken : bool
+        Taken from a record, not computed.
+    """
 
     combination: Combination
     report: Path | None
     error: str | None
     seconds: float
+    tables: Path | None = None
+    taken: bool = False
 
 
 # --------------------------------------------------------------------------- parsing
@@ -523,6 +537,7 @@ def run_sweep(
     *,
     results_dir: Path = DEFAULT_RESULTS,
     on_stage: Callable[[str, int], None] | None = None,
+    record: Path | None = None,
     **pipeline,
 ) -> Path:
     """Run every combination of ``sweep`` with the whole pipeline and write ``SWEEP.md``.
@@ -536,6 +551,9 @@ def run_sweep(
     on_stage : callable, optional
         As :func:`~curiosity_cli.reproduce.reproduce`'s; each combination is also
         announced as a stage without units, ``"combination 2/3: model.topics=32"``.
+    record : Path, optional
+        A study's record (:mod:`curiosity_cli.study_record`): the combinations it holds are
+        taken from it, not computed; each one computed is recorded there when it finishes.
     **pipeline
         The other keywords of :func:`curiosity_cli.reproduce.reproduce` (``cache_dir``,
         ``jobs``, ``force``, ``backend``, ``scheduler``, ``on_done``), for every combination.
@@ -550,28 +568,40 @@ def run_sweep(
     SweepError
         After every combination, if some failed: each named with its error (``SWEEP.md``
         and ``sweep.csv`` hold the others).
+    RecordError
+        Before anything runs: ``sweep`` is not a study of seeds, or a recorded
+        combination was made otherwise (:meth:`~curiosity_cli.study_record.StudyRecord.recorded`).
     """
     from curiosity_cli.reproduce import reproduce
+    from curiosity_cli.study_record import StudyRecord
     from curiosity_cli.sweep_report import write_sweep_report
-
     from curiosity_cli.topics.devices import resolve_device
 
+    kept = StudyRecord(record, sweep) if record is not None else None
+    taken = kept.recorded() if kept is not None else {}
     for combination in sweep.combinations:  # a GPU one combination asks for and this machine lacks: before any runs
-        resolve_device(combination.config.label.device)
+        if combination.index not in taken:
+            resolve_device(combination.config.label.device)
     folder = sweep.folder(results_dir)
     write_plan(sweep, folder)
     total = len(sweep.combinations)
     outcomes = []
     for combination in sweep.combinations:
         if on_stage is not None:
-            on_stage(f"combination {combination.index}/{total}: {combination.label}", 0)
+            recorded = f" (taken from {display_path(taken[combination.index])})" if combination.index in taken else ""
+            on_stage(f"combination {combination.index}/{total}: {combination.label}{recorded}", 0)
+        if combination.index in taken:
+            outcomes.append(Outcome(combination, None, None, 0.0, taken[combination.index], taken=True))
+            continue
         started = time.perf_counter()
         try:
             report = reproduce(combination.config, results_dir=folder, on_stage=on_stage, **pipeline)
-            outcomes.append(Outcome(combination, report, None, time.perf_counter() - started))
+            if kept is not None:
+                kept.keep(combination, folder / combination.name)
+            outcomes.append(Outcome(combination, report, None, time.perf_counter() - started, folder / combination.name))
         except CuriosityError as exc:
             outcomes.append(Outcome(combination, None, str(exc), time.perf_counter() - started))
-    path = write_sweep_report(sweep, folder, outcomes)
+    path = write_sweep_report(sweep, folder, outcomes, record)
     failed = [o for o in outcomes if o.error is not None]
     if failed:
         raise SweepError(

@@ -62,7 +62,7 @@ def read_headline(folder: Path):
     return pd.read_csv(path, dtype=text, keep_default_na=False, na_values=numbers)
 
 
-def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) -> Path:
+def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], record: Path | None = None) -> Path:
     """Write ``SWEEP.md``, ``sweep.csv`` and ``sensitivity.csv`` from the combinations' tables (module docstring).
 
     A study that declares specifications also gets its specification curve
@@ -78,6 +78,8 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
         The sweep's folder; each combination's experiment folder is in it.
     outcomes : sequence of Outcome
         One per combination run, in product order.
+    record : Path, optional
+        The study's record the sweep kept (:mod:`curiosity_cli.study_record`).
 
     Returns
     -------
@@ -91,7 +93,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
 
     folder = Path(folder)
     keys = sweep.keys
-    treatments = pool_treatments(sweep, folder, outcomes, PAPER_WALKERS if sweep.specifications else None)
+    treatments = pool_treatments(sweep, outcomes, PAPER_WALKERS if sweep.specifications else None)
     sensitivity, pooled_rows = _sensitivity(sweep, treatments)
     # a study's curve has the sensitivity table's rows and numbers, and more: it takes its place
     lead = specification_lead(sweep, folder, treatments) if sweep.specifications else sensitivity
@@ -104,14 +106,18 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
         c = outcome.combination
         values = [text.split("=", 1)[1] for text in c.overrides]
         cells = " | ".join(f"`{v}`" for v in values)
-        link = f"[{c.index}]({c.name}/REPORT.md)"
+        link = f"{c.index} (recorded)" if outcome.taken else f"[{c.index}]({c.name}/REPORT.md)"
         sections += [f"## {c.index}. {c.label}", ""]
         if outcome.error is not None:
             overview.append(f"| {c.index} | {cells} | failed | | | | |")
             sections += [f"Failed: {outcome.error}", ""]
             continue
-        top = read_headline(folder / c.name)
-        sections += [f"Folder `{c.name}/`, report [{c.name}/REPORT.md]({c.name}/REPORT.md), {outcome.seconds:.0f} s.", ""]
+        top = read_headline(outcome.tables)
+        sections += [
+            f"Taken from the record `{display_path(outcome.tables)}/`: its tables, not computed again "
+            "(runs and label files are not kept there)." if outcome.taken else
+            f"Folder `{c.name}/`, report [{c.name}/REPORT.md]({c.name}/REPORT.md), {outcome.seconds:.0f} s.", "",
+        ]
         for row in top.to_dict("records") or [dict.fromkeys(HEADLINE_COLUMNS)]:
             rows.append({"combination": c.index, "folder": c.name, **dict(zip(keys, values)), **row})
         if top.empty:
@@ -134,8 +140,13 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
                 f"| {r.dataset} | {number(r.topic_perplexity, 3)} | {r.next_best} | {number(r.next_best_mi, 3)} | "
                 f"{number(r.ratio)} | {p_text(r.p_value)} | {r.pairs} | {r.paper_map} | {number(r.paper_ratio)} |"
             )
-        sections += ["", *_distinct_table(_read_revisits(folder / c.name))]
+        sections += ["", *_distinct_table(_read_revisits(outcome.tables))]
     sets = ", ".join(f"`--set {s}`" for s in sweep.sets) or "none"
+    taken = sum(outcome.taken for outcome in outcomes)
+    kept = [
+        f"Record `{display_path(record)}`: {taken} of {count(len(outcomes), 'combination')} taken from it (their tables, "
+        "recorded earlier: not computed again), the others computed here and recorded there as each finished.", "",
+    ] if record is not None else []
     lines = [
         f"# Specification curve of `{sweep.name}`: {study_size(sweep)} ({count(len(outcomes), 'combination')})"
         if sweep.specifications else f"# Parameter sweep of `{sweep.name}`: {count(len(outcomes), 'combination')}",
@@ -144,10 +155,11 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome]) 
         f"here, named by its values (`sweep.yaml` lists them). The headline is the mean MI of {HEADLINE_WEIGHT} "
         f"exploration against human labels at {HEADLINE_LENGTH} steps over the next best weight function's.",
         "",
+        *kept,
         "Run again (finished runs and labels are kept):",
         "",
         "```console",
-        f"$ {sweep.command(folder.parent)}",
+        f"$ {sweep.command(folder.parent, record)}",
         "```",
         "",
         *lead,
@@ -232,7 +244,7 @@ class Treatment:
 
 
 def pool_treatments(
-    sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], walkers: Sequence[str] | None = None,
+    sweep: Sweep, outcomes: Sequence[Outcome], walkers: Sequence[str] | None = None,
 ) -> list[Treatment]:
     """Pool each treatment's seeds once (:func:`~curiosity_cli.evaluate.replicates.pool`), in the order of
     their first combination; combinations that failed take no part.
@@ -240,9 +252,8 @@ def pool_treatments(
     Parameters
     ----------
     sweep : Sweep
-    folder : Path
-        The sweep's folder.
     outcomes : sequence of Outcome
+        Each pooled from the folder its tables are in (:attr:`~curiosity_cli.sweep.Outcome.tables`).
     walkers : sequence of str, optional
         As :func:`~curiosity_cli.evaluate.replicates.pool`'s.
     """
@@ -250,18 +261,18 @@ def pool_treatments(
     from curiosity_cli.evaluate.tables import EvaluationError
 
     keys = [key for key in sweep.keys if key != REPLICATE_KEY]
-    groups: dict[tuple, list[Combination]] = {}
+    groups: dict[tuple, list[Outcome]] = {}
     for outcome in outcomes:
         if outcome.error is None:
             values = dict(text.split("=", 1) for text in outcome.combination.overrides)
-            groups.setdefault(tuple(values[k] for k in keys), []).append(outcome.combination)
+            groups.setdefault(tuple(values[k] for k in keys), []).append(outcome)
     treatments = []
     for values, members in groups.items():
         try:
-            pooled, error = pool([folder / c.name for c in members], walkers), None
+            pooled, error = pool([outcome.tables for outcome in members], walkers), None
         except EvaluationError as exc:
             pooled, error = None, str(exc)
-        treatments.append(Treatment(dict(zip(keys, values)), tuple(members), pooled, error))
+        treatments.append(Treatment(dict(zip(keys, values)), tuple(o.combination for o in members), pooled, error))
     return treatments
 
 

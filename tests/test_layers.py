@@ -39,6 +39,8 @@ ORCHESTRATORS = {
     "and a study's specification curve",
     "specifications": "a study's declared specifications planned as sweep combinations, and its specification curve "
     "(evaluate's pooled statistics, plots' figure)",
+    "study_record": "a study's results of record: its experiments' tables kept and taken back, checked against "
+    "the recipes (experiment) its config and maps give now",
     "api": "curiosity from Python: the commands as functions, an experiment's results as frames",
 }
 

@@ -300,7 +300,7 @@ def reproduce(
     jobs: int | None = None, force: bool = False, backend: str = BACKEND, scheduler: str | None = None,
     results_dir: Path = DEFAULT_RESULTS, cache_dir: Path = DEFAULT_CACHE, converged: bool = False,
     on_stage: Callable[[str, int], None] | None = None, on_done: Callable[[], None] | None = None,
-    on_status: Callable[[str], None] | None = None, reuse: bool = True,
+    on_status: Callable[[str], None] | None = None, reuse: bool = True, record: Path | None = None,
 ) -> Path:
     """``curiosity reproduce``: explore, label, evaluate and plot; returns the path of ``REPORT.md``.
 
@@ -324,11 +324,19 @@ def reproduce(
     reuse : bool
         Take label files and batch references another experiment computed from the same
         inputs (:mod:`~curiosity_cli.label.shared_items`); False computes them all.
+    record : Path, optional
+        A study's record, e.g. ``studies/multiverse`` (:mod:`~curiosity_cli.study_record`):
+        the seeds and specifications recorded there are taken, not computed; each one
+        computed is recorded there. Only for a config that declares specifications and
+        sweeps only ``seed``.
 
     Raises
     ------
     UsageError
-        ``sweeps`` not in the ``KEY=V1,V2,...`` form; ``scheduler`` without ``backend="dask"``.
+        ``sweeps`` not in the ``KEY=V1,V2,...`` form; ``scheduler`` without ``backend="dask"``;
+        ``record`` for a config that is not a study.
+    RecordError
+        A recorded combination made from other recipes than the study gives now, or edited.
     """
     from curiosity_cli.config import load_config, with_converged_labels
     from curiosity_cli.reproduce import reproduce as run_pipeline
@@ -340,6 +348,7 @@ def reproduce(
     jobs, reuse = optional_count(jobs, "jobs"), boolean(reuse, "reuse")
     force, converged = boolean(force, "force"), boolean(converged, "converged")
     results_dir, cache_dir = folder_argument(results_dir, "results_dir"), folder_argument(cache_dir, "cache_dir")
+    record = optional_path(record, "record")
     if converged:
         overrides = with_converged_labels(overrides)
     if _is_config(config):
@@ -353,9 +362,14 @@ def reproduce(
             return _reproduce_sweep(
                 config, overrides, sweeps, specifications, on_stage=on_stage, on_done=on_done, on_status=on_status,
                 results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, backend=backend, scheduler=scheduler,
-                reuse=reuse,
+                reuse=reuse, record=record,
             )
         resolved = load_config(config, overrides)  # neither a sweep nor specifications, just read: one experiment
+    if record is not None:
+        raise UsageError(
+            "record: keeps a study's seeds (a config that declares specifications and sweeps seed); this is one experiment",
+            parameter="record",
+        )
     return run_pipeline(
         resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
         backend=backend, scheduler=scheduler, on_stage=on_stage, on_done=on_done, reuse=reuse,
