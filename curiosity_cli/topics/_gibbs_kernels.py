@@ -215,40 +215,48 @@ def merge_phase(cells, cell_first, cell_count, words, before, topics, nwk, nk, i
 
 @njit
 def refine_realtime_kernel(
-    budget, eta, order, group_start,
+    limit, eta, order, group_start,
     cell_first, cell_count, words, topics, nwk, nk, inv, ncz, ng, table, alpha, beta, vbeta, key, counter,
-    update_phi, recent, window, tau, pick_stream,
+    update_phi, recent, window, tau, carry,
 ):
-    """Algorithm 2 of the paper: refine picked observation times until ``budget`` is spent.
+    """Algorithm 2 of the paper: refine picked observation times until ``limit`` of the budget is spent.
+
+    A budget is spent over one or more calls, each resuming where the last stopped, so
+    that a large budget returns to Python often enough for a signal to stop it; the picks
+    are the same however it is cut.
 
     Parameters
     ----------
+    limit : int
+        Pick until ``done + idle`` reaches it (at most the budget).
     order : (n_observed,) int32 ndarray
         Observed cells in the order they were added.
     group_start : (T + 1,) int64 ndarray, T >= 1
         Observation time ``t`` holds ``order[group_start[t]:group_start[t + 1]]``.
+    carry : (5,) uint64 ndarray
+        The picks' stream state (``stream_start(key, counter, pick_stream)`` before the
+        first call), words sampled (``done``), picks without words (``idle``), picks, and
+        words sampled at the newest time; read, and updated in place.
 
-    Returns
-    -------
-    (int, int, int)
-        Words sampled, number of picks, and words sampled at the newest time. Picks draw from stream
-        ``(counter, pick_stream)``: with probability ``eta`` (or always, with one time) the
-        newest time, else a uniform earlier one (eq. 6); or, when ``recent``, with
-        probability ``eta`` a uniform one of the newest ``window`` times, else time
-        ``floor(T u^(1 / tau))`` for a uniform ``u`` (a Beta(tau, 1) draw by age: recent
-        times more often). Pick ``j`` refines each cell of its time with stream
-        ``(counter + 1 + j, cell)``. Each word sampled spends one
-        unit of the budget, and so does a pick that finds no words, so the loop ends
-        after at most ``budget`` picks even if every reachable cell is empty.
+    Notes
+    -----
+    Picks draw from stream ``(counter, pick_stream)``: with probability ``eta`` (or
+    always, with one time) the newest time, else a uniform earlier one (eq. 6); or, when
+    ``recent``, with probability ``eta`` a uniform one of the newest ``window`` times,
+    else time ``floor(T u^(1 / tau))`` for a uniform ``u`` (a Beta(tau, 1) draw by age:
+    recent times more often). Pick ``j`` refines each cell of its time with stream
+    ``(counter + 1 + j, cell)``. Each word sampled spends one unit of the budget, and so
+    does a pick that finds no words, so the loop ends after at most ``limit`` picks even
+    if every reachable cell is empty.
     """
     n_times = group_start.shape[0] - 1
     p = weights_scratch(inv)
-    picker = stream_start(key, counter, pick_stream)
-    done = 0
-    idle = 0
-    picks = 0
-    newest_done = 0
-    while done + idle < budget:
+    picker = carry[0]
+    done = np.int64(carry[1])
+    idle = np.int64(carry[2])
+    picks = np.int64(carry[3])
+    newest_done = np.int64(carry[4])
+    while done + idle < limit:
         picker, bits = next_state(picker)
         if recent:
             newest = unit64(bits) < eta
@@ -279,7 +287,11 @@ def refine_realtime_kernel(
         if sampled == 0:
             idle += 1
         picks += 1
-    return done, picks, newest_done
+    carry[0] = picker
+    carry[1] = done
+    carry[2] = idle
+    carry[3] = picks
+    carry[4] = newest_done
 
 
 @njit

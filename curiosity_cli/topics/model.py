@@ -47,6 +47,10 @@ _MIN_CAPACITY = 1024
 #: ``p_refine_last_observation`` (0.5, the paper's η), else a cell drawn by age from Beta(``tau``
 #: = 2, 1). :meth:`TopicModel.refine_realtime` with ``picks="recent"`` (or ``"recent-64-ours"``).
 RECENT_TAU = 2.0
+#: Word samples of realtime refinement per kernel call: a tenth of a second or so (20-50 ns a
+#: sample), so that a signal stops a step or frame of up to 10^8 samples promptly; the picks
+#: are the same however a budget is cut (``refine_realtime_kernel`` resumes them).
+RESPONSIVE_SAMPLES = 1 << 22
 
 
 class TopicModel(CellMemory):
@@ -544,19 +548,26 @@ class TopicModel(CellMemory):
             than the words of one observation) unless some picks found no words.
         """
         from curiosity_cli.topics._gibbs_kernels import refine_realtime_kernel
+        from curiosity_cli.topics._rng import stream_start
 
         word_budget = check_int("word_budget", word_budget, 0)
         eta = check_float("eta", eta, 0, 1)
         picks = check_choice("picks", picks, EXPLORE_READINGS["refine_picks"])
         if word_budget == 0 or self._n_observed == 0:
             return (0, 0) if return_newest else 0
-        done, n_picks, newest = refine_realtime_kernel(
-            word_budget, eta, self._order[: self._n_observed], self._time_groups(), *self._sampler_arrays(),
-            np.uint64(self._counter), not self._frozen, picks in RECENT_NEWEST, RECENT_NEWEST.get(picks, 0), RECENT_TAU,
-            self._free_stream,
-        )
-        self._counter += 1 + int(n_picks)
-        return (int(done), int(newest)) if return_newest else int(done)
+        counter = np.uint64(self._counter)
+        # picks' stream state, words sampled, idle picks, picks, newest time's words
+        carry = np.zeros(5, np.uint64)
+        carry[0] = stream_start(self._key(), counter, self._free_stream)
+        arrays = (self._order[: self._n_observed], self._time_groups(), *self._sampler_arrays())
+        while (spent := int(carry[1]) + int(carry[2])) < word_budget:
+            refine_realtime_kernel(
+                min(word_budget, spent + RESPONSIVE_SAMPLES), eta, *arrays, counter, not self._frozen,
+                picks in RECENT_NEWEST, RECENT_NEWEST.get(picks, 0), RECENT_TAU, carry,
+            )
+        done, n_picks, newest = int(carry[1]), int(carry[3]), int(carry[4])
+        self._counter += 1 + n_picks
+        return (done, newest) if return_newest else done
 
     # ------------------------------------------------------------------ the whole state (persistence.py, compact_state.py)
 

@@ -150,6 +150,44 @@ def test_an_error_without_a_signal_is_not_taken_for_an_interrupt():
     assert done.returncode == 1 and "ValueError: can't close the zip file" in done.stderr, done.stderr
 
 
+# A step's refinement at the bound of explore.samples_per_step (10^8 word samples: seconds
+# in one kernel call), after a small one has compiled the kernel.
+_LONG_REFINEMENT = """
+import numpy as np
+from curiosity_cli.config import MAX_SAMPLES
+from curiosity_cli.maps.cell_grid import SquareGrid
+from curiosity_cli.topics.model import TopicModel
+
+rng = np.random.default_rng(0)
+model = TopicModel(16, 1000, SquareGrid(8, 8).neighbour_table(4), alpha=0.3, beta=0.2, seed=0)
+for cell in range(64):
+    model.add_cell(cell, rng.integers(0, 1000, 200), time=cell)
+model.refine_realtime(1000, eta=0.5)
+print("refining", flush=True)
+model.refine_realtime(MAX_SAMPLES, eta=0.5)
+print("finished", flush=True)
+"""
+
+
+def test_a_step_refined_at_the_sample_bound_stops_within_a_second_of_ctrl_c():
+    process = subprocess.Popen(
+        [sys.executable, "-c", _LONG_REFINEMENT], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )
+    try:
+        assert process.stdout.readline() == "refining\n", process.stderr.read()
+        time.sleep(0.5)
+        sent = time.monotonic()
+        process.send_signal(signal.SIGINT)
+        process.wait(timeout=60)
+        took = time.monotonic() - sent
+    finally:
+        process.kill()
+    out, err = process.communicate()
+    assert "KeyboardInterrupt" in err and "finished" not in out, "stopped inside the refinement, not after it"
+    # one kernel call of 10^8 samples took 5 s here; pieces of RESPONSIVE_SAMPLES take a tenth of that
+    assert took < 1.5, f"{took:.1f} s from Ctrl-C to exit"
+
+
 def test_the_workers_of_a_killed_command_exit_on_their_own(exploring):
     run = exploring()
     run.process.kill()

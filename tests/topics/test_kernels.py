@@ -30,6 +30,7 @@ from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics import _rng
 from curiosity_cli.topics._gibbs_kernels import distance2_colouring
 from curiosity_cli.topics._sampler import lane_draw as lane_draw_kernel
+from curiosity_cli.topics import model as model_module
 from curiosity_cli.topics.model import TopicModel
 from curiosity_cli.topics.neighbours import stream_neighbours
 
@@ -216,6 +217,23 @@ def test_refine_realtime_with_observation_times_matches_twin():
     twin = NaiveModel.of(model)
     done, newest = model.refine_realtime(60, eta=0.4, return_newest=True)
     twin_done, _, twin_newest = refine_realtime_naive(twin, 60, 0.4)
+    assert (done, newest) == (twin_done, twin_newest) and 0 < newest < done
+    assert_matches(model, twin)
+
+
+@pytest.mark.parametrize("picks", ["uniform", "recent"])
+def test_refine_realtime_cut_into_pieces_matches_twin(monkeypatch, picks):
+    # a large budget goes to the kernel in pieces, so that a signal can stop it; each piece
+    # resumes the last one's picks: the same as one call, which the twin is
+    monkeypatch.setattr(model_module, "RESPONSIVE_SAMPLES", 3)
+    rng = np.random.default_rng(12)
+    model = TopicModel(5, 10, stream_neighbours(SquareGrid(2, 2), 4), alpha=0.3, beta=0.2, seed=12)
+    for frame in range(4):
+        for cell in range(frame * 4, frame * 4 + 4):
+            model.add_cell(cell, rng.integers(0, 10, rng.integers(0, 5)), time=frame)
+    twin = NaiveModel.of(model)
+    done, newest = model.refine_realtime(200, eta=0.3, picks=picks, return_newest=True)
+    twin_done, _, twin_newest = refine_realtime_naive(twin, 200, 0.3, picks)
     assert (done, newest) == (twin_done, twin_newest) and 0 < newest < done
     assert_matches(model, twin)
 
