@@ -144,9 +144,19 @@ class StudyRecord:
             raise RecordError(f"{where}: an incomplete record (no {', '.join(missing)}); {remedy}")
         try:
             record = yaml.safe_load((folder / RECORD_FILE).read_text())
-            tables, recorded = record["tables"], record["recipes"]
-        except (OSError, ValueError, KeyError, TypeError, yaml.YAMLError) as exc:
+        except (OSError, ValueError, yaml.YAMLError) as exc:
             raise RecordError(f"{where}/{RECORD_FILE}: unreadable ({exc}); {remedy}") from None
+        tables = record.get("tables") if isinstance(record, dict) else None
+        recorded = record.get("recipes") if isinstance(record, dict) else None
+        # every table, each with its size and digest: a record that leaves one out would let it pass unchecked
+        whole = isinstance(tables, dict) and set(tables) == set(TABLES) and all(
+            isinstance(entry, dict) and {"size", "sha256"} <= set(entry) for entry in tables.values()
+        )
+        if not whole or not isinstance(recorded, dict) or not {"maps", "grid"} <= set(recorded):
+            raise RecordError(
+                f"{where}/{RECORD_FILE}: expected a mapping of tables (the size and sha256 of each of "
+                f"{', '.join(TABLES)}) and recipes (maps, grid), as a record is written; {remedy}"
+            )
         if (change := changed(folder, tables)) is not None:
             path, why = change
             raise RecordError(f"{display_path(path)}: not the table that was recorded ({why}); {remedy}")

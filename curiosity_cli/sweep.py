@@ -428,7 +428,7 @@ def _digest(text: str, digits: int) -> str:
 
 def plan_sweep(
     config_path: str | Path, axes: Sequence[SweepAxis], sets: Sequence[str] = (),
-    specifications: Sequence[Specification] = (),
+    specifications: Sequence[Specification] = (), declared: Iterable[str] = (),
 ) -> Sweep:
     """Load and validate every combination of a sweep; nothing is written.
 
@@ -443,6 +443,9 @@ def plan_sweep(
     specifications : sequence of Specification
         A study's (:func:`curiosity_cli.specifications.declared_specifications`): every
         combination of ``axes`` runs under each, its overrides after ``sets``.
+    declared : iterable of str
+        The keys of ``axes`` whose values the config file's ``sweep:`` gave
+        (:func:`declared_sweeps`), not a ``--sweep`` option: an error in one names the file.
 
     Returns
     -------
@@ -473,7 +476,7 @@ def plan_sweep(
                 config = load_config(config_path, [*sets, *own, *values])
             except ConfigError as exc:
                 error = specification_error(exc, config_path, specification) if specification is not None else None
-                raise error or _combination_error(exc, keys, overrides) from None
+                raise error or _combination_error(exc, keys, overrides, config_path, set(declared)) from None
             base_name = config.name  # the same for every combination: name cannot be swept
             name = combination_name(overrides)
             assert _NAME.match(name), name  # by construction: keys are config fields, values made safe
@@ -515,9 +518,14 @@ def _check_each_changes_something(combinations: Sequence[Combination]) -> None:
         seen[key] = combination
 
 
-def _combination_error(exc: ConfigError, keys: Sequence[str], overrides: Sequence[str]) -> ConfigError:
+def _combination_error(
+    exc: ConfigError, keys: Sequence[str], overrides: Sequence[str], config_path: Path, declared: set[str],
+) -> ConfigError:
     """The error of a combination that does not validate: the overrides' error, naming the
-    sweeps when a swept key is at fault, else followed by the combination."""
+    sweeps (or the config file's ``sweep:``, for a key it declares) when a swept key is at
+    fault, else followed by the combination."""
+    from curiosity_cli.config import SWEEP_KEY
+
     if exc.parameter == OVERRIDES:
         rest = str(exc)[len(OVERRIDES):]
         if rest.startswith(" "):  # a malformed override: not the sweep's doing
@@ -525,6 +533,8 @@ def _combination_error(exc: ConfigError, keys: Sequence[str], overrides: Sequenc
         for key in keys:
             at = rest[2:]
             if at.startswith(key) and at[len(key):len(key) + 1] in (":", ".", "["):
+                if key in declared:
+                    return ConfigError(f"{display_path(config_path)}: {SWEEP_KEY}.{at}")
                 return ConfigError(f"sweeps{rest}", parameter="sweeps")
     return ConfigError(f"{exc} (with the sweep's {', '.join(overrides)})", parameter=exc.parameter)
 

@@ -216,3 +216,27 @@ def test_a_gpu_that_is_not_there_is_refused_before_anything_is_explored(own_map,
     ])
     assert single.exit_code == 1 and "label.device: cuda, but " in single.stderr
     assert not list((tmp_path / "single").rglob("run.json")), "nothing explored"
+
+
+def test_config_show_checks_every_experiment_of_a_study_and_says_what_reproduce_runs(own_map, tmp_path):
+    from typer.testing import CliRunner
+
+    from curiosity_cli.cli import app
+
+    config = study_yaml(own_map, tmp_path)
+    shown = CliRunner().invoke(app, ["config", "show", str(config)])
+    assert shown.exit_code == 0, shown.output
+    assert shown.stdout.splitlines()[-4:] == [
+        "# `curiosity reproduce` runs 4 experiments (2 specifications x 2 seeds): the config above with the overrides "
+        "of each, as checked here",
+        "#   sweep: seed = 1, 2",
+        "#   specifications: default: (none: the config as it is)",
+        "#   specifications: clamp: explore.coverage=clamp, explore.min_d2=0.5",
+    ]
+    # a bad specification or sweep value fails config show as it fails reproduce
+    edit_yaml(config, specifications={"x": {"model.topics": 1}})
+    bad = CliRunner().invoke(app, ["config", "show", str(config)])
+    assert bad.exit_code == 1 and bad.stderr.startswith(f"Error: {config}: specifications.x.model.topics: got 1")
+    edit_yaml(config, specifications=..., sweep={"seed": [0, -5]})
+    bad = CliRunner().invoke(app, ["config", "show", str(config)])
+    assert bad.exit_code == 1 and bad.stderr.startswith(f"Error: {config}: sweep.seed: got -5 (int)")

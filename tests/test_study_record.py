@@ -80,6 +80,16 @@ def test_a_record_made_otherwise_or_edited_is_refused_naming_the_difference_befo
     edited = sweep(config, tmp_path / "edited", "--record", str(record), "--sweep", "seed=1")
     assert edited.exit_code == 1 and f"Error: {mi}: not the table that was recorded (" in edited.output
 
+    kept = (seed / RECORD_FILE).read_text()
+    written = yaml.safe_load(kept)
+    # a record that lists no tables would let an edited one pass: refused, as any record not in its form
+    for broken in ({**written, "tables": {}}, {**written, "tables": "oops"}, {**written, "recipes": "garbage"}, [1, 2]):
+        (seed / RECORD_FILE).write_text(yaml.safe_dump(broken))
+        refused = sweep(config, tmp_path / "broken", "--record", str(record), "--sweep", "seed=1")
+        assert refused.exit_code == 1, refused.output
+        assert refused.output.strip().splitlines()[-1].startswith(f"Error: {seed}/{RECORD_FILE}: expected a mapping of tables")
+    (seed / RECORD_FILE).write_text(kept)
+
     (seed / "headline.csv").unlink()
     missing = sweep(config, tmp_path / "missing", "--record", str(record), "--sweep", "seed=1")
     assert missing.exit_code == 1 and f"Error: {seed}: an incomplete record (no headline.csv)" in missing.output

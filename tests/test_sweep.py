@@ -7,7 +7,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 import yaml
-from small_maps import tiny_yaml
+from small_maps import edit_yaml, tiny_yaml
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
@@ -129,6 +129,14 @@ def test_a_bad_value_anywhere_fails_before_any_folder_is_written(own_map, tmp_pa
     assert not results.exists()
     result = runner.invoke(app, ["reproduce", "--quick", "--sweep", "model.topics=200", "--results-dir", str(results)])
     assert result.exit_code == 1 and result.stderr.startswith("Error: --sweep: model.topics: got 200")
+    assert not results.exists()
+    # a value of the config's own sweep: the file is named, not --sweep, which was not given
+    edit_yaml(config, sweep={"seed": [0, -5]})
+    result = sweep(config, results)
+    assert result.exit_code == 1 and result.stderr.startswith(f"Error: {config}: sweep.seed: got -5 (int), expected")
+    # given with --sweep, the same key is --sweep's
+    result = sweep(config, results, "--sweep", "seed=-6")
+    assert result.exit_code == 1 and result.stderr.startswith("Error: --sweep: seed: got -6 (int)")
     assert not results.exists()
 
 

@@ -20,7 +20,30 @@ def show_config(config: str | Path, overrides: typing.Iterable[str] = ()) -> str
     text = shown(config, overrides)
     # the vocabularies it names must be there, as explore needs them (the config layer cannot know their files)
     WordRecipe(load_words_config(config, [o for o in overrides if o.split("=", 1)[0].startswith("words.")]))
-    return text
+    return text + _study(config, overrides)
+
+
+def _study(config: str | Path, overrides: typing.Iterable[str]) -> str:
+    """For a config that declares a sweep or specifications: every experiment it makes checked
+    (as ``reproduce`` would, before it runs), and what they are, as YAML comments after the config."""
+    from curiosity_cli.config import SPECIFICATIONS_KEY, SWEEP_KEY
+    from curiosity_cli.specifications import declared_specifications, study_size
+    from curiosity_cli.sweep import count, declared_sweeps, parse_sweeps, plan_sweep
+
+    sweeps, specifications = declared_sweeps(config), declared_specifications(config)
+    if not sweeps and not specifications:
+        return ""
+    sweep = plan_sweep(config, parse_sweeps(sweeps, list(overrides)), list(overrides), specifications, declared=[
+        text.partition("=")[0] for text in sweeps
+    ])
+    size = f" ({study_size(sweep)})" if specifications else ""
+    lines = [
+        f"`curiosity reproduce` runs {count(len(sweep.combinations), 'experiment')}{size}: the config above with "
+        "the overrides of each, as checked here",
+        *(f"  {SWEEP_KEY}: {axis.key} = {', '.join(axis.values)}" for axis in sweep.axes),
+        *(f"  {SPECIFICATIONS_KEY}: {s.name}: {', '.join(s.overrides) or '(none: the config as it is)'}" for s in specifications),
+    ]
+    return "".join(f"# {line}\n" for line in lines)
 
 
 def init_config(name: str, source: str = "quick", folder: Path = Path(".")) -> Path:

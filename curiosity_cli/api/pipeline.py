@@ -356,11 +356,14 @@ def reproduce(
             raise UsageError("sweeps: a resolved config is one experiment; give the config's name or path to sweep it", parameter="sweeps")
         resolved = load(config, overrides)  # refuses overrides of a resolved config
     else:
-        sweeps = merge_sweeps(declared_sweeps(config), sweeps)
+        declared = declared_sweeps(config)
+        # the keys whose values only the file gives: an error in one names the file, not --sweep
+        from_file = {text.partition("=")[0] for text in declared} - {text.partition("=")[0].strip() for text in sweeps}
+        sweeps = merge_sweeps(declared, sweeps)
         specifications = declared_specifications(config)
         if sweeps or specifications:
             return _reproduce_sweep(
-                config, overrides, sweeps, specifications, on_stage=on_stage, on_done=on_done, on_status=on_status,
+                config, overrides, sweeps, specifications, from_file, on_stage=on_stage, on_done=on_done, on_status=on_status,
                 results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, backend=backend, scheduler=scheduler,
                 reuse=reuse, record=record,
             )
@@ -376,7 +379,7 @@ def reproduce(
     )
 
 
-def _reproduce_sweep(config, overrides, sweeps, specifications, *, on_status, **options) -> Path:
+def _reproduce_sweep(config, overrides, sweeps, specifications, from_file, *, on_status, **options) -> Path:
     """A sweep, or a study's specifications: every option and combination checked, then all run."""
     from curiosity_cli.files import display_path
     from curiosity_cli.specifications import study_size
@@ -386,7 +389,7 @@ def _reproduce_sweep(config, overrides, sweeps, specifications, *, on_status, **
         axes = parse_sweeps(sweeps, overrides)
     except SweepSyntaxError as exc:
         raise UsageError(f"sweeps: {exc}", parameter="sweeps") from None
-    sweep = plan_sweep(config, axes, overrides, specifications)
+    sweep = plan_sweep(config, axes, overrides, specifications, from_file)
     if on_status is not None:
         of = f" ({study_size(sweep)})" if specifications else ""
         on_status(f"{count(len(sweep.combinations), 'combination')}{of}, in {display_path(sweep.folder(options['results_dir']))}")

@@ -112,7 +112,14 @@ def verdict(row: Mapping, effects=None) -> str:
     others = [o for o in _text(row["not_beaten"]).split(";") if o and o != next_best]
     if others and not row["beats_all"]:
         text += f"; not clearly ahead of {', '.join(others)} either"
-    text += f"; ratio {row['ratio']:.2f}"
+    if not np.isfinite(row["ratio"]):
+        # a ratio over 0 bits: every path labels the map into one class against its labels
+        text += (
+            f"; ratio undefined: {next_best}'s MI is 0 bits (a map whose {'human labels hold' if against == 'human' else 'Z_b holds'} "
+            "one class, or whose words give one topic, has no MI for any walker to gather)"
+        )
+    else:
+        text += f"; ratio {row['ratio']:.2f}"
     if np.isfinite(row.get("ratio_ci_low", np.nan)):
         text += f" ({100 * CONFIDENCE:.0f} % CI {row['ratio_ci_low']:.2f} to {row['ratio_ci_high']:.2f}"
         if np.isfinite(row.get("null_median", np.nan)):
@@ -150,7 +157,8 @@ def _each_walker(row: Mapping, effects) -> str:
             f" ({100 * CONFIDENCE:.0f} % CI {r['ratio_ci_low']:.2f} to {r['ratio_ci_high']:.2f})"
             if np.isfinite(r.get("ratio_ci_low", np.nan)) else ""
         )
-        parts.append(f"{r['other']} {r['ratio']:.2f}{interval}, {_p(r['p_value'])}")
+        ratio = f"{r['ratio']:.2f}" if np.isfinite(r["ratio"]) else "undefined (its MI is 0)"
+        parts.append(f"{r['other']} {ratio}{interval}, {_p(r['p_value'])}")
     return ", ".join(parts)
 
 

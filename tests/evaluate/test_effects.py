@@ -160,6 +160,19 @@ def test_the_verdict_of_a_clear_loss():
     assert "bits below stochastic-coverage (95 % CI \u2212" in verdict(loss) and "p = 0.002" in verdict(loss)
 
 
+def test_the_verdict_of_a_map_that_no_walker_can_gather_mi_on_says_why_the_ratio_is_undefined():
+    # human labels of one class (a hostile user's map): every walker's MI is 0, the ratio 0 / 0
+    row = {
+        "dataset": "one-class", "path_length": 80, "against": "human", "topic_perplexity": 0.0, "next_best": "random-walk",
+        "next_best_mi": 0.0, "ratio": np.nan, "mean_difference": 0.0, "ci_low": 0.0, "ci_high": 0.0,
+        "p_value": np.nan, "pairs": 2, "beats_all": False, "not_beaten": "random-walk",
+        "best_ceiling": "", "ceiling_mi": np.nan, "ceiling_share": np.nan, "paper_map": "", "paper_ratio": np.nan,
+    }
+    text = verdict(row)
+    assert "ratio nan" not in text
+    assert "; ratio undefined: random-walk's MI is 0 bits (a map whose human labels hold one class, or whose words " in text
+
+
 def test_the_verdict_of_a_map_without_human_labels():
     *_, top = tables()
     row = top.set_index("dataset").loc["unlabelled"].to_dict() | {"dataset": "unlabelled"}
