@@ -40,7 +40,7 @@ if "NUMBA_CACHE_DIR" not in os.environ:
     os.environ["NUMBA_CACHE_DIR"] = str(cache_dir())
 # LLVM's SLP vectoriser, which numba turns off by default: the lock-step labelling kernels
 # (_chain_kernels.py) step over many chains at once and only become vector code with it.
-# It left the single-chain sampler's speed unchanged (../shared/PERFORMANCE.md).
+# It left the single-chain sampler's speed unchanged (docs/PERFORMANCE.md).
 os.environ.setdefault("NUMBA_SLP_VECTORIZE", "1")
 # numba-cuda warns of a launch too small to fill the GPU: a colour of a small map is one,
 # by design, and labelling shows library warnings to the user
@@ -68,7 +68,7 @@ def import_cuda():
     """``numba.cuda`` (numba-cuda, the optional extra ``curiosity[cuda]``), importable with numpy 2.5.
 
     numba-cuda up to at least 0.30 registers an implementation of ``np.row_stack``, which
-    numpy 2.5 removed, and so fails to import there (``../shared/PERFORMANCE.md``);
+    numpy 2.5 removed, and so fails to import there (``docs/PERFORMANCE.md``);
     ``np.row_stack`` is ``np.vstack`` under its old name, given back for the import.
 
     Raises

@@ -1,4 +1,5 @@
-"""File helpers shared by every stage: reading YAML, writing atomically, showing paths."""
+"""File helpers shared by every stage: writing atomically, reading ``.npz`` files and their meta,
+digests of files and arrays, showing paths and naming OS errors (YAML: :mod:`curiosity_cli.yamlfile`)."""
 
 from __future__ import annotations
 
@@ -108,6 +109,17 @@ def open_npz(path: Path):
                 yield npz
         except (ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
             raise corrupt(_reason(exc)) from None
+
+
+def file_sha256(path: Path) -> str:
+    """Hex SHA-256 of a file's bytes, read in blocks of 1 MiB."""
+    import hashlib
+
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def arrays_digest(arrays: dict) -> str:

@@ -9,8 +9,9 @@ run. So whoever writes a set of files records each one's size and SHA-256
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
+
+from curiosity_cli.files import file_sha256
 
 #: Where a file's meta (``run.json``, a label file's ``meta``) records the files that go with it.
 FILES_KEY = "files"
@@ -18,11 +19,7 @@ FILES_KEY = "files"
 
 def record(path: Path) -> dict:
     """``{"size": bytes, "sha256": hex}`` of a file as it is now."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as handle:
-        for block in iter(lambda: handle.read(1 << 20), b""):
-            digest.update(block)
-    return {"size": Path(path).stat().st_size, "sha256": digest.hexdigest()}
+    return {"size": Path(path).stat().st_size, "sha256": file_sha256(path)}
 
 
 def records(folder: Path, names: list[str]) -> dict[str, dict]:

@@ -86,22 +86,22 @@ class Candidates:
 WeightFunction = Callable[[Candidates], np.ndarray]
 
 
-def random_walk(candidates: Candidates) -> np.ndarray:
+def random_walk_weights(candidates: Candidates) -> np.ndarray:
     """Every neighbour equally likely (eq. 7)."""
     return np.ones(candidates.cells.shape[0])
 
 
-def stochastic_coverage(candidates: Candidates) -> np.ndarray:
+def stochastic_coverage_weights(candidates: Candidates) -> np.ndarray:
     """Repelled by visited cells (eq. 8)."""
     return 1.0 / candidates.coverage
 
 
-def word_perplexity(candidates: Candidates) -> np.ndarray:
+def word_perplexity_weights(candidates: Candidates) -> np.ndarray:
     """Drawn to cells whose words the model finds surprising, repelled by visited ones (eq. 9)."""
     return _repelled(candidates.word_perplexity, candidates.coverage)
 
 
-def topic_perplexity(candidates: Candidates) -> np.ndarray:
+def topic_perplexity_weights(candidates: Candidates) -> np.ndarray:
     """Drawn to cells whose topics are rare on the path so far, repelled by visited ones (eq. 10)."""
     return _repelled(candidates.topic_perplexity, candidates.coverage)
 
@@ -135,9 +135,18 @@ scattered_cells = Plan(plans.scattered_cells, ceiling=True)
 compact_block = Plan(plans.compact_block, ceiling=True)
 
 #: Every walker by the name configs use, in the order of :data:`curiosity_cli.config.WALKER_NAMES`
-#: (the paper's four weight functions, the lawnmower baseline, the ceilings): the function or plan
-#: of this module that has the name, spelt as Python spells it (``random-walk``: :func:`random_walk`).
-WEIGHT_FUNCTIONS: dict[str, WeightFunction | Plan] = {name: globals()[name.replace("-", "_")] for name in WALKER_NAMES}
+#: (the paper's four weight functions, the lawnmower baseline, the ceilings).
+WEIGHT_FUNCTIONS: dict[str, WeightFunction | Plan] = {
+    "random-walk": random_walk_weights,
+    "stochastic-coverage": stochastic_coverage_weights,
+    "word-perplexity": word_perplexity_weights,
+    "topic-perplexity": topic_perplexity_weights,
+    "lawnmower": lawnmower,
+    "scattered-cells": scattered_cells,
+    "compact-block": compact_block,
+}
+if tuple(WEIGHT_FUNCTIONS) != WALKER_NAMES:  # the config's vocabulary and the walkers are one list
+    raise ImportError(f"explore.weights: walkers {tuple(WEIGHT_FUNCTIONS)} are not config.WALKER_NAMES {WALKER_NAMES}")
 
 #: Names of the runs that are ceilings, not walkers: reported apart, never the "next best".
 CEILINGS: tuple[str, ...] = tuple(n for n, w in WEIGHT_FUNCTIONS.items() if isinstance(w, Plan) and w.ceiling)

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 #: A block's time per chain held against a block of two vectors' worth or more: one
 #: vector's worth of chains hides less latency (21.3 against 14.8 ns a word-sample at 8
-#: and 16 chains, ``../shared/PERFORMANCE.md``).
+#: and 16 chains, ``docs/PERFORMANCE.md``).
 _ONE_VECTOR_COST = 1.45
 
 

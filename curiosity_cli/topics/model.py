@@ -424,27 +424,6 @@ class TopicModel(CellMemory):
         self._ng[:] = 0
         return cells
 
-    def set_frozen_counts(self, counts) -> None:
-        """Replace the frozen word-topic counts (Φ) of a frozen model, keeping every topic.
-
-        Labelling the checkpoints of one path in turn, each can start from the topics the
-        previous one left (a warm start) rather than from random ones.
-
-        Parameters
-        ----------
-        counts : (V, K) int ndarray
-
-        Raises
-        ------
-        ParameterError
-            The model is not frozen, or ``counts`` has another shape or negative entries.
-        """
-        if not self._frozen:
-            raise ParameterError("counts: the model's word-topic counts are not frozen; they follow its topics")
-        self._nwk[:, : self._k] = check_frozen_counts(counts, self._v, self._k)
-        self._nk[:] = self._nwk.sum(axis=0, dtype=np.int64)
-        self._refresh_inverse()
-
     def refine_cells(self, cells) -> int:
         """One Gibbs pass over the words of each listed cell, in the order given.
 

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from curiosity_cli.checks import check_float, check_int
+from curiosity_cli.checks import check_float
 from curiosity_cli.errors import ParameterError
 
 #: ``(sigma_long, sigma_short)`` of the three anisotropic scales, in pixels.
@@ -318,27 +318,6 @@ def normalise_responses(responses: np.ndarray, *, scale: float = CONTRAST_SCALE)
     safe = np.where(length > 0, length, 1.0)
     factor = np.where(length > 0, np.log1p(length / scale) / safe, 0.0)
     return (work * factor).astype(np.float32)
-
-
-def subsample(array: np.ndarray, stride: int) -> np.ndarray:
-    """Every ``stride``-th row and column of an image-shaped array, starting at (0, 0).
-
-    Parameters
-    ----------
-    array : (H, W, ...) ndarray
-    stride : int
-        Sampling step in pixels, >= 1 (the paper uses 1, and 2 for SouthBellairs).
-
-    Returns
-    -------
-    (ceil(H / stride), ceil(W / stride), ...) ndarray
-        A view of ``array``.
-    """
-    stride = check_int("stride", stride, 1)
-    array = np.asarray(array)
-    if array.ndim < 2:
-        raise ParameterError(f"array: got shape {array.shape}, expected at least 2 dimensions (rows, cols, ...)")
-    return array[::stride, ::stride]
 
 
 def check_image(image: object) -> np.ndarray:

@@ -25,8 +25,8 @@ from curiosity_cli.words.hamming import DESCRIPTOR_BYTES
 
 # OpenCV ORB's oriented-BRIEF sampling pattern is defined on a 31 x 31 patch; its edge
 # threshold (border where nothing is detected) must cover the patch, so both stay at 31.
-_PATCH_SIZE = 31
-_EDGE_THRESHOLD = 31
+PATCH_SIZE = 31
+EDGE_THRESHOLD = 31
 
 # Map side (pixels) detected in one OpenCV call: bounds memory on big maps (at FAST
 # threshold 1 a textured megapixel yields ~2e5 raw keypoints over 8 pyramid levels).
@@ -60,7 +60,7 @@ def pad_for_levels(n_levels: int, scale_factor: float) -> int:
     ORB drops keypoints within ``edgeThreshold`` pixels of the border of each pyramid
     level, i.e. ``31 * scale_factor ** level`` pixels of the original image.
     """
-    return math.ceil(_EDGE_THRESHOLD * scale_factor ** (n_levels - 1)) + 2
+    return math.ceil(EDGE_THRESHOLD * scale_factor ** (n_levels - 1)) + 2
 
 
 def _orb_keypoints(window: np.ndarray, fast_threshold: int, n_levels: int, scale_factor: float):
@@ -74,18 +74,27 @@ def _orb_keypoints(window: np.ndarray, fast_threshold: int, n_levels: int, scale
     area = window.shape[0] * window.shape[1]
     share = (1 - 1 / scale_factor) / (1 - scale_factor**-n_levels) if n_levels > 1 else 1.0
     nfeatures = min(2**30, math.ceil(area / share) + 16)
-    orb = cv2.ORB_create(
+    orb = orb_extractor(nfeatures=nfeatures, scale_factor=scale_factor, n_levels=n_levels, fast_threshold=fast_threshold)
+    return orb.detectAndCompute(window, None)
+
+
+def orb_extractor(*, nfeatures: int = 1, scale_factor: float = 1.2, n_levels: int = 1, fast_threshold: int = 20):
+    """OpenCV's ORB with the settings every ORB word here shares: the 31 px patch and border, the
+    two-point BRIEF tests, Harris ranking, from level 0. The other arguments only matter for
+    detection (OpenCV's defaults); describing given points needs none of them."""
+    import cv2
+
+    return cv2.ORB_create(
         nfeatures=nfeatures,
         scaleFactor=scale_factor,
         nlevels=n_levels,
-        edgeThreshold=_EDGE_THRESHOLD,
+        edgeThreshold=EDGE_THRESHOLD,
         firstLevel=0,
         WTA_K=2,
         scoreType=cv2.ORB_HARRIS_SCORE,
-        patchSize=_PATCH_SIZE,
+        patchSize=PATCH_SIZE,
         fastThreshold=fast_threshold,
     )
-    return orb.detectAndCompute(window, None)
 
 
 def _detect_window(

@@ -38,11 +38,11 @@ import numpy as np
 from curiosity_cli.checks import as_uint8, check_int
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.words.hamming import DESCRIPTOR_BYTES
-from curiosity_cli.words.orb import _EDGE_THRESHOLD, _PATCH_SIZE, OrbFeatures
+from curiosity_cli.words.orb import EDGE_THRESHOLD, PATCH_SIZE, OrbFeatures, orb_extractor
 
 # Pixels of reflection around the map: OpenCV's ORB describes no point within its edge
 # threshold (31 px) of the image it is given; one more keeps the last row and column in.
-_PAD = _EDGE_THRESHOLD + 1
+_PAD = EDGE_THRESHOLD + 1
 
 # Most grid points described in one OpenCV call: bounds memory (OpenCV keypoint objects).
 _BAND_POINTS = 1 << 18
@@ -120,7 +120,7 @@ def _patch_angles(image_gray: np.ndarray, rows: np.ndarray, cols: np.ndarray) ->
     """
     import cv2
 
-    radius = _PATCH_SIZE // 2
+    radius = PATCH_SIZE // 2
     half_widths = _circle_half_widths(radius)
     grey = image_gray.astype(np.int64)
     # prefix sums along each row of I and of col * I, so a row segment's sum and its
@@ -145,18 +145,9 @@ def _describe(window: np.ndarray, rows: np.ndarray, cols: np.ndarray, angles: np
     """ORB descriptors (N, 32) uint8 of oriented points of a window, one call of OpenCV's ORB."""
     import cv2
 
-    orb = cv2.ORB_create(
-        nfeatures=1,  # unused: the points are given
-        scaleFactor=1.2,
-        nlevels=1,
-        edgeThreshold=_EDGE_THRESHOLD,
-        firstLevel=0,
-        WTA_K=2,
-        scoreType=cv2.ORB_HARRIS_SCORE,
-        patchSize=_PATCH_SIZE,
-    )
+    orb = orb_extractor()
     keypoints = [
-        cv2.KeyPoint(float(c), float(r), float(_PATCH_SIZE), float(a))
+        cv2.KeyPoint(float(c), float(r), float(PATCH_SIZE), float(a))
         for r, c, a in zip(rows.tolist(), cols.tolist(), angles.tolist())
     ]
     kept, descriptors = orb.compute(window, keypoints)

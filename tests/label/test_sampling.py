@@ -9,8 +9,14 @@ import pytest
 from small_maps import small_config, synthetic_store
 
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.label.sampling import batch_labels, label_with_phi, pixel_labels
+from curiosity_cli.label.sampling import batch_labels, label_paths, pixel_labels
 from curiosity_cli.words.store import WordType, build_store
+
+
+def label_with_phi(store, phi, model, *, sweeps, seed):
+    """Z_p of every word of the map from one path model's word-topic counts: one chain, one checkpoint."""
+    _, _, labels = next(label_paths(store, model, [[phi]], [seed], sweeps=sweeps, warm_sweeps=None))
+    return labels[:, 0]
 
 
 @pytest.mark.parametrize("stride", [1, 2, 3])

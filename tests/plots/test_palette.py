@@ -8,21 +8,20 @@ import numpy as np
 import pytest
 
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.plots.palette import PALETTE_SIZE, _srgb_to_lab, match_topics, paint_topics, rank_topics, topic_palette
+from curiosity_cli.plots.palette import PALETTE_SIZE, _palette, _srgb_to_lab, match_topics, paint_topics, rank_topics
 
 
 def test_palette_is_fixed_distinct_and_readable():
-    colours = topic_palette()
-    assert colours.shape == (PALETTE_SIZE, 3) and colours.dtype == np.uint8
-    assert np.array_equal(colours, topic_palette())
-    first = topic_palette(127)
+    colours = _palette()
+    assert colours.shape == (PALETTE_SIZE, 3) and colours.dtype == np.uint8 and not colours.flags.writeable
+    _palette.cache_clear()
+    assert np.array_equal(colours, _palette())
+    first = colours[:127]
     assert len({tuple(c) for c in first}) == 127
     lab = _srgb_to_lab(first / 255)
     distances = np.sqrt(((lab[:, None] - lab[None]) ** 2).sum(-1))[np.triu_indices(127, 1)]
     assert distances.min() > 12  # CIELAB ΔE: clearly different side by side
     assert np.sqrt(((lab[0] - lab[1]) ** 2).sum()) > 60  # the first colours are the most distinct
-    with pytest.raises(ParameterError):
-        topic_palette(0)
 
 
 def test_lab_conversion_of_reference_colours():

@@ -296,26 +296,6 @@ def test_restart_matches_twin_and_a_fresh_model(frozen):
     assert_matches(model, twin)  # the cached counts agree with the redrawn topics
 
 
-@pytest.mark.parametrize("threads", [1, 2])
-def test_swapping_the_frozen_counts_keeps_the_topics_and_matches_twin(threads):
-    model, _ = frozen_model(15, **BATCH_GRID)
-    model.refine_batch(2, threads=threads)
-    topics = model.topics()
-    other = np.random.default_rng(7).integers(0, 9, (12, 5))
-    model.set_frozen_counts(other)
-    np.testing.assert_array_equal(model.topics(), topics)
-    np.testing.assert_array_equal(model.topic_word_counts(), other)
-    twin = NaiveModel.of(model)
-    model.refine_batch(2, threads=threads)
-    refine_batch_naive(twin, 2)
-    assert_matches(model, twin)
-
-
-def test_counts_of_a_model_that_learns_cannot_be_swapped():
-    with pytest.raises(ParameterError, match="not frozen"):
-        small_model(16).set_frozen_counts(np.zeros((12, 5), int))
-
-
 # --- ML topics and log-likelihood -----------------------------------------------------
 
 

@@ -12,7 +12,6 @@ from curiosity_cli.words.filterbank import (
     mr8_filters,
     mr8_responses,
     normalise_responses,
-    subsample,
 )
 
 
@@ -286,19 +285,6 @@ def test_normalisation_matches_the_naive_twin():
 def test_bad_normalisation_scale_is_named(scale):
     with pytest.raises(ValueError, match="scale: got"):
         normalise_responses(np.ones((2, 8)), scale=scale)
-
-
-def test_subsample_takes_every_stride_th_row_and_col():
-    array = np.arange(7 * 5 * 2).reshape(7, 5, 2)
-    np.testing.assert_array_equal(subsample(array, 2), array[::2, ::2])
-    assert subsample(array, 2).shape == (4, 3, 2)
-    assert subsample(array, 1) is not None and subsample(array, 1).shape == array.shape
-
-
-@pytest.mark.parametrize("stride", [0, -2, 1.5, True, "2"])
-def test_bad_stride_is_named(stride):
-    with pytest.raises(ValueError, match=r"stride: got .*, expected an integer >= 1"):
-        subsample(np.zeros((4, 4)), stride)
 
 
 # --- validation --------------------------------------------------------------------
