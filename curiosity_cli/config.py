@@ -58,9 +58,8 @@ MAX_CANDIDATE_SWEEPS = 1_000  # passes over a candidate's temporary labels
 #: The walkers a config may name in ``explore.weight_functions``, in the order reports list
 #: them: the paper's four weight functions in its order, the lawnmower, then the ceilings.
 #: The one list of walkers: names are the config's vocabulary, checked here under every
-#: entry point without importing the explore stage, and
-#: :data:`curiosity_cli.explore.weights.WEIGHT_FUNCTIONS` finds each name's walker in that
-#: module by the name (``random-walk``: ``random_walk``).
+#: entry point without importing the explore stage;
+#: :data:`curiosity_cli.explore.weights.WEIGHT_FUNCTIONS` gives each its walker, in this order.
 WALKER_NAMES = (
     "random-walk",
     "stochastic-coverage",
@@ -72,7 +71,7 @@ WALKER_NAMES = (
 )
 
 #: The paper's own walkers (its four weight functions): what a specification curve compares.
-PAPER_WALKERS = WALKER_NAMES[:4]
+PAPER_WALKERS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity")
 
 
 @dataclass(frozen=True)
@@ -121,7 +120,10 @@ COVERAGE_READINGS: dict[str, CoverageReading] = {
 }
 
 #: Where labelling runs (``label.device``): the CPU, a CUDA GPU (the extra ``curiosity[cuda]``),
-#: or a GPU when one is there; the same bytes on each (``topics/chains.py``).
+#: or a GPU when one is there; the same bytes on each (``topics/chains.py``). The one list of
+#: names: configs are checked here under every entry point without importing the topics stage,
+#: and :data:`curiosity_cli.topics.devices.DEVICES`, the table of devices, holds exactly these
+#: and ``auto`` (checked when it loads).
 LABEL_DEVICES = ("cpu", "cuda", "auto")
 
 #: The other open choices of the paper's exploration, each a key of ``explore`` with the

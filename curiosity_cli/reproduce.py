@@ -55,7 +55,7 @@ def reproduce(
         if on_done is not None:
             on_done()
 
-    from curiosity_cli.topics.devices import resolve_device
+    from curiosity_cli.topics.devices import DEVICES, resolve_device
 
     device = resolve_device(config.label.device)  # a GPU that is not there stops the pipeline before it explores, not after
     folder = experiment_root(results_dir, config.name)
@@ -64,10 +64,11 @@ def reproduce(
 
     def start_batches(experiment, stores) -> None:
         # a Dask cluster's workers may be elsewhere, this process's cores too few to share;
-        # force makes the label stage compute them again anyway. With a GPU the label stage's
-        # blocks leave the cores free for them (on 16 cores they were written at 20 s of a
-        # 36-s stage), and beside the exploration they slowed it (55 to 73 s): not then
-        if not workers.ships and not force and device == "cpu":
+        # force makes the label stage compute them again anyway. On a device that frees the
+        # cores (a GPU) the label stage's blocks leave them to the references (on 16 cores they
+        # were written at 20 s of a 36-s stage), and beside the exploration they slowed it
+        # (55 to 73 s): not then
+        if not workers.ships and not force and not DEVICES[device].frees_cores:
             shared = SharedItems(cache_dir) if reuse else None
             batches.extend(beside_exploration(config, experiment, stores, workers.jobs, shared))
 

@@ -12,10 +12,12 @@ Every file is written atomically; a killed ``label`` resumes with the runs not y
 Batch references and blocks of runs are tasks of :class:`~curiosity_cli.workers.Workers`.
 A map's runs to label are cut into blocks
 (:func:`~curiosity_cli.label.blocks.plan_blocks`: sizes that keep every worker busy
-to the end, around :data:`CHAINS_PER_BLOCK` chains on the CPU, every chain of the map
-on a GPU), a run's chains (and a checked run's second chain) in one block, whose chains
-advance in lock-step in one task; a run's labels depend only on the run, never on its
-block, so a killed ``label`` relabels what it lost to the same bytes. Batch references are
+to the end, around the device's block size,
+:attr:`~curiosity_cli.topics.devices.Device.block_chains`: a few vectors' worth of
+chains on the CPU, every chain of the map on a GPU), a run's chains (and a checked run's
+second chain) in one block, whose chains advance in lock-step in one task; a run's labels
+depend only on the run, never on its block, so a killed ``label`` relabels what it lost to
+the same bytes. Batch references are
 computed every map's at once, each a task on its share of the cores: beside the blocks
 where each task gets a worker of its own at once (a GPU's one block per map; a block
 needs Z_b only to compare its first Z_p with it, and waits for the file then,
@@ -59,14 +61,13 @@ from curiosity_cli.label.sampling import path_seed
 from curiosity_cli.paths import DEFAULT_CACHE
 
 if TYPE_CHECKING:
+    from curiosity_cli.label.profile import LabelProfile
+    from curiosity_cli.topics.devices import Device
     from curiosity_cli.label.pixel_tables import PixelTables
     from curiosity_cli.workers import Workers
     from curiosity_cli.explore.runs import Run
     from curiosity_cli.words.store import WordStore
 
-#: Chains labelled in lock-step in one task: past 16 they gained no more on the 2-core
-#: AVX2 machine (``scripts/bench_label.py``), and smaller blocks share out better.
-CHAINS_PER_BLOCK = 16
 #: Threads writing label files and example maps in this process.
 WRITERS = 4
 
@@ -210,9 +211,10 @@ def label_block(
 ) -> list[tuple]:
     """Z_p of every checkpoint of some runs of one map, as contingency tables; ``(tables, examples, meta)`` per run.
 
-    The chains run on ``device`` (``"cpu"`` or ``"cuda"``: the same bytes). ``clock``, when
-    given, gets the seconds spent in the chains' sweeps (``kernel``) and in the tables and
-    example maps made from their labels (``tables``, with any wait for a Z_b computed beside).
+    The chains run on ``device``, a name in :data:`~curiosity_cli.topics.devices.DEVICES`
+    (the same bytes on each). ``clock``, when given, gets the seconds spent in the chains'
+    sweeps (``kernel``) and in the tables and example maps made from their labels
+    (``tables``, with any wait for a Z_b computed beside).
 
     ``inputs`` names the map's files, ``arrays`` holds their contents; the runs were made
     from the map's current word store (:func:`label_experiment` checks). Their chains,
@@ -316,7 +318,7 @@ def label_experiment(
     backend: str = "loky",
     scheduler: str | None = None,
     workers: Workers | None = None,
-    chains_per_block: int = CHAINS_PER_BLOCK,
+    chains_per_block: int | None = None,
     reuse: bool = True,
 ) -> dict:
     """Label every finished run of an experiment (and each map's batch reference).
@@ -347,10 +349,12 @@ def label_experiment(
     workers : Workers, optional
         Where to compute instead of new workers from ``backend``, ``scheduler`` and
         ``jobs``: open ones another stage shares (``curiosity reproduce``).
-    chains_per_block : int
-        On the CPU, the block size past which lock-step chains gain no more speed
-        (:func:`~curiosity_cli.label.blocks.plan_blocks` cuts blocks around it);
-        the labels do not depend on it.
+    chains_per_block : int, optional
+        On a device whose blocks run side by side (the CPU), the block size past which
+        lock-step chains gain no more speed (:func:`~curiosity_cli.label.blocks.plan_blocks`
+        cuts blocks around it); default the device's
+        (:attr:`~curiosity_cli.topics.devices.Device.block_chains`). The labels do not
+        depend on it.
     reuse : bool
         Take label files and batch references that another experiment already computed
         from the same inputs from ``cache_dir``'s shared items, and keep what this one
@@ -381,19 +385,15 @@ def label_experiment(
         Another process works in the folder (:mod:`~curiosity_cli.experiment.lock`).
     """
     from curiosity_cli.experiment.maps import prepare_stores
-    from curiosity_cli.label.blocks import dealing_order, plan_blocks
     from curiosity_cli.workers import Workers
-    from curiosity_cli.topics.chains import LANES, block_chains
-    from curiosity_cli.topics.devices import resolve_device
-    from curiosity_cli.explore.runs import RunError
+    from curiosity_cli.topics.devices import DEVICES, resolve_device
     from curiosity_cli.experiment.lock import working_in
-    from curiosity_cli.words.store import load_store
     from curiosity_cli.label.profile import LabelProfile
 
     with working_in(folder, "label"):
         started = time.perf_counter()
         profile = LabelProfile(started)
-        device = resolve_device(config.label.device)  # before any work: a missing GPU is the only message
+        device = DEVICES[resolve_device(config.label.device)]  # before any work: a missing GPU is the only message
         computing = Workers.shared(workers, backend, scheduler, jobs)
         folder = Path(folder)
         layout = ExperimentFolder(folder)
@@ -402,6 +402,7 @@ def label_experiment(
             remove_leftovers(written)
         stores = prepare_stores(config, cache_dir)
         by_name = {info.name: info for info in stores.values()}
+        words = {name: sum(info.word_counts.values()) for name, info in by_name.items()}
         experiment = Experiment(folder, config, {name: info.facts for name, info in by_name.items()})
         # the runs of the grid the config holds, as they sit: a run folder outside it (a config narrowed since) is not labelled
         folders = [layout.run(r.dataset, r.weight_function, r.restart) for r in experiment.planned()]
@@ -415,61 +416,27 @@ def label_experiment(
         finished, problems = _runs_as_configured(experiment, runs)
 
         with computing as workers:
-            batch_recipes = {info.name: experiment.batch_recipe(info.name) for info in stores.values()}
-            batch_files = {info.name: layout.batch(info.name) for info in stores.values()}
-            stale = [
-                info for info in stores.values()
-                if force or not batch_is_current(batch_files[info.name], batch_recipes[info.name])
-            ]
             shared = SharedItems(cache_dir) if reuse else None
-            shared_batches = [info for info in stale if _take_batch(shared, batch_files[info.name], batch_recipes[info.name])]
-            stale = [info for info in stale if info not in shared_batches]
-            skipped, to_label, recipes, relabelled, keys, taken = 0, {}, {}, [], {}, []
-            for run in finished:
-                info = by_name[run.meta["dataset"]]
-                recipe = experiment.label_recipe(run.meta)
-                path = layout.label_file(info.name, run.meta["weight_function"], run.meta["restart"])
-                change = None if force else label_changes(path, recipe)
-                if not force and change is None:
-                    skipped += 1
-                    continue
-                if change not in (None, NOT_LABELLED):
-                    relabelled.append(f"{display_path(path)}: {change}")
-                try:
-                    run_inputs = RunInputs.of(run, (info.vocabulary_size, config.model.topics))
-                except RunError as exc:
-                    problems.append(str(exc))
-                    continue
-                recipes[run.folder] = recipe
-                if shared is not None:
-                    keys[run.folder] = label_key(recipe.inputs, run.meta, run_inputs.checkpoints, run_inputs.path)
-                    if (stored := shared.labels(keys[run.folder])) is not None:
-                        taken.append((run_inputs, *stored))
-                        continue
-                to_label.setdefault(info.name, []).append(run_inputs)
-            if relabelled:
-                note(f"labelling {len(relabelled)} runs again whose label files were made otherwise, e.g. {relabelled[0]}")
-            todo = len(runs) - skipped
+            batches = _plan_batches(experiment, list(stores.values()), shared, force)
+            plan = _plan_runs(experiment, by_name, finished, shared, force)
+            problems += plan.problems
+            if plan.relabelled:
+                note(
+                    f"labelling {len(plan.relabelled)} runs again whose label files were made otherwise, "
+                    f"e.g. {plan.relabelled[0]}"
+                )
+            todo = len(runs) - plan.skipped
             inputs = {
                 info.name: MapInputs(
-                    info.name, entry, str(info.path), str(batch_files[info.name]), batch_recipes[info.name].digest
+                    info.name, entry, str(info.path), str(batches.files[info.name]), batches.recipes[info.name].digest
                 )
                 for entry, info in stores.items()
             }
-            for run, arrays, examples in taken:  # the same file computing it would write
-                name = run.meta["dataset"]
-                meta = label_meta(run.meta, inputs[name], config, "class_first_step" in arrays)
-                write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
-            blocks = []  # LabelTask: runs labelled in lock-step
-            counts = {name: [1 + is_checked(config, run.meta["restart"]) for run in map_runs] for name, map_runs in to_label.items()}
-            most = chains_per_block if device == "cpu" else block_chains(device)
-            words = [sum(by_name[name].word_counts.values()) for name in counts]
-            plan = plan_blocks(
-                list(counts.values()), workers.jobs if device == "cpu" else 1, lanes=LANES, most=most, words=words
-            )
-            names = list(to_label)
-            for m, b in dealing_order(plan, list(counts.values()), lanes=LANES, words=words):
-                blocks.append(LabelTask([to_label[names[m]][i] for i in plan[m][b]], inputs[names[m]], device))
+            for run, arrays, examples in plan.taken:  # the same file computing it would write
+                meta = label_meta(run.meta, inputs[run.meta["dataset"]], config, "class_first_step" in arrays)
+                write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: plan.recipes[run.folder].record()})
+            blocks = _plan_blocks(config, plan.to_label, inputs, words, device, workers.jobs, chains_per_block)
+            stale = batches.stale
             # beside the blocks where every task gets a worker at once, so no block waits for a worker a batch
             # reference holds (loky only: a Dask worker cannot see the file it waits for); else before them
             beside = bool(stale) and not workers.ships and len(stale) + len(blocks) <= workers.jobs
@@ -479,89 +446,38 @@ def label_experiment(
                 tasks = [BatchTask(info, threads) for info in stale]
             else:
                 profile.mark("setup")
-                batch_problems = compute_batch_references(config, stale, batch_files, batch_recipes, workers, on_stage, on_done)
+                problems += compute_batch_references(config, stale, batches.files, batches.recipes, workers, on_stage, on_done)
                 profile.mark("batch references before the blocks")
-                problems += batch_problems
-                failed_maps = {info.name for info in stale if info.name not in batch_files}
+                failed_maps = {info.name for info in stale if info.name not in batches.files}
                 for task in [task for task in blocks if task.inputs.name in failed_maps]:
                     blocks.remove(task)  # its runs are not labelled: counted as failed, named in problems
             tasks += blocks
-            shipped = {}  # loky workers read the maps' files themselves
-            if workers.ships:  # before the stage starts: an unusable cluster is the only message
-                for name, map_inputs in {task.inputs.name: task.inputs for task in blocks}.items():
-                    store = workers.ship_file(map_inputs.store_path, load_store)
-                    with open_npz(Path(map_inputs.batch_path)) as npz:
-                        batch = npz["labels"]
-                    shipped[name] = workers.ship(
-                        partial(map_arrays, topics=config.model.topics), store, *_map_references(map_inputs.entry), batch,
-                        key=f"map-{name}",
-                    )
+            shipped = _ship_maps(workers, blocks, config)  # before the stage starts: an unusable cluster is the only message
             if on_stage is not None:
-                what = "labelling runs" + (" on the GPU" if device == "cuda" else "")
+                what = "labelling runs" + (f" on {device.shown}" if device.announced else "")
                 if beside:
                     what += " beside the batch reference" + ("s of " if len(stale) > 1 else " of ") + ", ".join(i.name for i in stale)
                 on_stage(what, sum(len(task.runs) for task in blocks) + len(stale) * beside)
-            labelled, reused = 0, len(stores) - len(stale)
-            computed = workers.compute(
-                _stage_task, tasks, args=lambda task: (config, shipped.get(task.inputs.name) if isinstance(task, LabelTask) else None),
-                threads=1, key=lambda task: task.key,
+            labelled, task_problems = _compute_and_write(
+                workers, tasks, shipped, config=config, folder=folder, plan=plan, batches=batches, words=words,
+                shared=shared, profile=profile, on_done=on_done,
             )
-            # the files are written by threads (zlib and SHA-256 let go of the GIL) while results arrive:
-            # a GPU's block returns a whole map's runs at once
-            profile.jobs = workers.jobs
-            profile.mark("setup")
-            with computed as results, ThreadPoolExecutor(WRITERS) as writers:
-                writes, keeps = [], []
-                results = profile.waiting(results)
-                for task, outcome in results:
-                    if isinstance(task, BatchTask):
-                        if isinstance(outcome, str):  # its map's blocks would wait for it: stop them all
-                            problems.append(f"the batch reference of {task.info.name}: {outcome}; labelling stopped there")
-                            break
-                        write_batch(batch_files[task.info.name], batch_recipes[task.info.name], *outcome)
-                        profile.batch(task.info.name, outcome[-1])
-                    elif isinstance(outcome, str):
-                        problems += ["{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome
-                                     for run in task.runs]
-                    else:
-                        chains = [1 + is_checked(config, run.meta["restart"]) for run in task.runs]
-                        profile.block(
-                            sum(chains), sum(by_name[task.inputs.name].word_counts.values()),
-                            sum(c * _sweeps(config, len(run.meta["checkpoints"])) for c, run in zip(chains, task.runs)),
-                            len(task.runs), task.inputs.name, outcome.seconds,
-                        )
-                        writes += [
-                            writers.submit(write_labels, folder, arrays, examples, {**meta, RECIPE_KEY: recipes[run.folder].record()})
-                            for run, (arrays, examples, meta) in zip(task.runs, outcome.runs)
-                        ]
-                        if shared is not None:
-                            keeps += [
-                                writers.submit(shared.keep_labels, keys[run.folder], arrays, examples)
-                                for run, (arrays, examples, _) in zip(task.runs, outcome.runs)
-                            ]
-                    if on_done is not None:
-                        for _ in range(1 if isinstance(task, BatchTask) else len(task.runs)):
-                            on_done()
-                profile.mark("handling results")
-                for write in writes:
-                    write.result()  # a file that could not be written stops the stage, as it did
-                    labelled += 1
-                for keep in keeps:
-                    keep.result()
+            problems += task_problems
             profile.mark("writing")
-            labelled += len(taken)
+            labelled += len(plan.taken)
             if shared is not None:  # what this call computed, for the next experiment that needs it
-                for info in stale:  # a map whose batch reference failed has left batch_files
-                    if info.name in batch_files and batch_is_current(batch_files[info.name], batch_recipes[info.name]):
-                        shared.keep_file(BATCH, batch_recipes[info.name].digest, batch_files[info.name])
-        shared_counts = {"labels": len(taken), "batches": len(shared_batches), "labelled": labelled}
-        if todo or stale or shared_batches:  # a call that found every label file current made nothing
+                for info in stale:  # a map whose batch reference failed has left batches.files
+                    if info.name in batches.files and batch_is_current(batches.files[info.name], batches.recipes[info.name]):
+                        shared.keep_file(BATCH, batches.recipes[info.name].digest, batches.files[info.name])
+        shared_counts = {"labels": len(plan.taken), "batches": len(batches.taken), "labelled": labelled}
+        made = todo or stale or batches.taken  # a call that found every label file current made nothing
+        if made:
             with atomic_path(layout.shared) as tmp:
                 tmp.write_text(json.dumps(shared_counts, indent=1) + "\n")
             profile.mark("closing")
             profile.write(layout.label_profile)
         seconds = time.perf_counter() - started
-        if todo or stale or shared_batches:
+        if made:
             record_stage_seconds(folder, "label", seconds, add=not force)
         if problems or left_out:
             failed = todo - labelled + len(left_out)
@@ -570,9 +486,169 @@ def label_experiment(
                 + "; ".join([*problems, *left_out])
             )
         return {
-            "labelled": labelled, "skipped": skipped, "batch_reused": reused, "seconds": seconds,
-            "relabelled": relabelled, "shared": {k: shared_counts[k] for k in ("labels", "batches")},
+            "labelled": labelled, "skipped": plan.skipped, "batch_reused": len(stores) - len(stale), "seconds": seconds,
+            "relabelled": plan.relabelled, "shared": {k: shared_counts[k] for k in ("labels", "batches")},
         }
+
+
+class _Batches(NamedTuple):
+    """The maps' batch references as a label stage finds them (:func:`_plan_batches`)."""
+
+    recipes: dict  # map name -> Recipe: what its batch file must have been made from
+    files: dict  # map name -> Path; a map whose batch reference failed leaves it
+    stale: list  # StoreInfo: the maps whose batch reference this call computes
+    taken: list  # StoreInfo: the maps whose batch reference it took from the shared items
+
+
+def _plan_batches(experiment: Experiment, stores: list, shared: SharedItems | None, force: bool) -> _Batches:
+    """Which of the ``stores``' maps need their batch reference computed; those the shared items hold are copied now."""
+    recipes = {info.name: experiment.batch_recipe(info.name) for info in stores}
+    files = {info.name: experiment.folder.batch(info.name) for info in stores}
+    stale = [info for info in stores if force or not batch_is_current(files[info.name], recipes[info.name])]
+    taken = [info for info in stale if _take_batch(shared, files[info.name], recipes[info.name])]
+    return _Batches(recipes, files, [info for info in stale if info not in taken], taken)
+
+
+class _Runs(NamedTuple):
+    """The finished runs as a label stage finds them (:func:`_plan_runs`)."""
+
+    skipped: int  # whose label files are current
+    to_label: dict  # map name -> [RunInputs]: the runs to compute, in the grid's order
+    taken: list  # (RunInputs, arrays, examples): label files the shared items hold
+    recipes: dict  # run folder -> Recipe: what its label file is made from, for every run not skipped
+    keys: dict  # run folder -> its key in the shared items (with shared items)
+    relabelled: list  # a line per label file made again because it was made otherwise, saying what changed
+    problems: list  # a line per run whose checkpoints cannot be read
+
+
+def _plan_runs(experiment: Experiment, by_name: dict, finished: list, shared: SharedItems | None, force: bool) -> _Runs:
+    """Which ``finished`` runs to label: those whose label files are current are skipped, and those the shared items
+    hold taken; ``by_name`` holds the maps' stores."""
+    from curiosity_cli.explore.runs import RunError
+
+    config, layout = experiment.config, experiment.folder
+    skipped, to_label, taken, recipes, keys, relabelled, problems = 0, {}, [], {}, {}, [], []
+    for run in finished:
+        info = by_name[run.meta["dataset"]]
+        recipe = experiment.label_recipe(run.meta)
+        path = layout.label_file(info.name, run.meta["weight_function"], run.meta["restart"])
+        change = None if force else label_changes(path, recipe)
+        if not force and change is None:
+            skipped += 1
+            continue
+        if change not in (None, NOT_LABELLED):
+            relabelled.append(f"{display_path(path)}: {change}")
+        try:
+            run_inputs = RunInputs.of(run, (info.vocabulary_size, config.model.topics))
+        except RunError as exc:
+            problems.append(str(exc))
+            continue
+        recipes[run.folder] = recipe
+        if shared is not None:
+            keys[run.folder] = label_key(recipe.inputs, run.meta, run_inputs.checkpoints, run_inputs.path)
+            if (stored := shared.labels(keys[run.folder])) is not None:
+                taken.append((run_inputs, *stored))
+                continue
+        to_label.setdefault(info.name, []).append(run_inputs)
+    return _Runs(skipped, to_label, taken, recipes, keys, relabelled, problems)
+
+
+def _plan_blocks(
+    config: ExperimentConfig, to_label: dict, inputs: dict, words: dict, device: Device, jobs: int,
+    chains_per_block: int | None,
+) -> list[LabelTask]:
+    """Each map's runs ``to_label`` cut into blocks for ``device`` (:func:`~curiosity_cli.label.blocks.plan_blocks`),
+    in the order they are dealt to the ``jobs`` workers; ``words``: each map's, ``inputs``: each map's files."""
+    from curiosity_cli.label.blocks import dealing_order, plan_blocks
+    from curiosity_cli.topics.chains import LANES
+
+    counts = [[1 + is_checked(config, run.meta["restart"]) for run in map_runs] for map_runs in to_label.values()]
+    most = chains_per_block if chains_per_block is not None and device.parallel_blocks else device.block_chains
+    map_words = [words[name] for name in to_label]
+    plan = plan_blocks(counts, jobs if device.parallel_blocks else 1, lanes=LANES, most=most, words=map_words)
+    names = list(to_label)
+    return [
+        LabelTask([to_label[names[m]][i] for i in plan[m][b]], inputs[names[m]], device.name)
+        for m, b in dealing_order(plan, counts, lanes=LANES, words=map_words)
+    ]
+
+
+def _ship_maps(workers: Workers, blocks: list[LabelTask], config: ExperimentConfig) -> dict:
+    """The arrays of the maps of ``blocks`` by name, shipped to a Dask cluster once each; empty with loky, whose
+    workers read the maps' files themselves."""
+    from curiosity_cli.words.store import load_store
+
+    shipped = {}
+    if workers.ships:
+        for name, map_inputs in {task.inputs.name: task.inputs for task in blocks}.items():
+            store = workers.ship_file(map_inputs.store_path, load_store)
+            with open_npz(Path(map_inputs.batch_path)) as npz:
+                batch = npz["labels"]
+            shipped[name] = workers.ship(
+                partial(map_arrays, topics=config.model.topics), store, *_map_references(map_inputs.entry), batch,
+                key=f"map-{name}",
+            )
+    return shipped
+
+
+def _compute_and_write(
+    workers: Workers, tasks: list, shipped: dict, *, config: ExperimentConfig, folder: Path, plan: _Runs,
+    batches: _Batches, words: dict, shared: SharedItems | None, profile: LabelProfile,
+    on_done: Callable[[], None] | None,
+) -> tuple[int, list[str]]:
+    """Compute ``tasks`` (batch references and blocks) and write each file as its task returns:
+    ``(label files written, a line per run or batch reference that failed)``.
+
+    The files are written by threads (zlib and SHA-256 let go of the GIL) while results
+    arrive: a GPU's block returns a whole map's runs at once.
+    """
+    problems = []
+    computed = workers.compute(
+        _stage_task, tasks, args=lambda task: (config, shipped.get(task.inputs.name) if isinstance(task, LabelTask) else None),
+        threads=1, key=lambda task: task.key,
+    )
+    profile.jobs = workers.jobs
+    profile.mark("setup")
+    labelled = 0
+    with computed as results, ThreadPoolExecutor(WRITERS) as writers:
+        writes, keeps = [], []
+        results = profile.waiting(results)
+        for task, outcome in results:
+            if isinstance(task, BatchTask):
+                if isinstance(outcome, str):  # its map's blocks would wait for it: stop them all
+                    problems.append(f"the batch reference of {task.info.name}: {outcome}; labelling stopped there")
+                    break
+                write_batch(batches.files[task.info.name], batches.recipes[task.info.name], *outcome)
+                profile.batch(task.info.name, outcome[-1])
+            elif isinstance(outcome, str):
+                problems += ["{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome
+                             for run in task.runs]
+            else:
+                chains = [1 + is_checked(config, run.meta["restart"]) for run in task.runs]
+                profile.block(
+                    sum(chains), words[task.inputs.name],
+                    sum(c * _sweeps(config, len(run.meta["checkpoints"])) for c, run in zip(chains, task.runs)),
+                    len(task.runs), task.inputs.name, outcome.seconds,
+                )
+                writes += [
+                    writers.submit(write_labels, folder, arrays, examples, {**meta, RECIPE_KEY: plan.recipes[run.folder].record()})
+                    for run, (arrays, examples, meta) in zip(task.runs, outcome.runs)
+                ]
+                if shared is not None:
+                    keeps += [
+                        writers.submit(shared.keep_labels, plan.keys[run.folder], arrays, examples)
+                        for run, (arrays, examples, _) in zip(task.runs, outcome.runs)
+                    ]
+            if on_done is not None:
+                for _ in range(1 if isinstance(task, BatchTask) else len(task.runs)):
+                    on_done()
+        profile.mark("handling results")
+        for write in writes:
+            write.result()  # a file that could not be written stops the stage, as it did
+            labelled += 1
+        for keep in keeps:
+            keep.result()
+    return labelled, problems
 
 
 def _sweeps(config: ExperimentConfig, checkpoints: int) -> int:

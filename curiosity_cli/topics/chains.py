@@ -19,10 +19,11 @@ colour by colour (:func:`sweep_order`): every cell of colour 0 in index order, t
 colour 1, ... (label format 3; before it, cells in index order). Every order is the
 exact sampler; this one lets a GPU resample a colour's cells at once.
 
-**Devices.** The chains run on the CPU (``device="cpu"``, the numba kernels of
-``_chain_kernels.py``) or on a CUDA GPU (``device="cuda"``, ``_chain_kernels_cuda.py``,
-the optional extra ``curiosity[cuda]``), behind one interface, with the same bytes on
-both: the same streams, the same float32 operations in the same order, never fused.
+**Devices.** The chains run on the CPU (``device="cpu"``, :class:`CpuEngine`, the numba
+kernels of ``_chain_kernels.py``) or on a CUDA GPU (``device="cuda"``, :class:`CudaEngine`,
+``_chain_kernels_cuda.py``, the optional extra ``curiosity[cuda]``), behind one interface,
+with the same bytes on both: the same streams, the same float32 operations in the same
+order, never fused. :data:`curiosity_cli.topics.devices.DEVICES` names each device's engine.
 What a device does for each step of the interface:
 
 ==============  ==============================================================================
@@ -42,10 +43,10 @@ step            CPU / CUDA
                 the float64 factors computed in the kernel from the counts already there
 ==============  ==============================================================================
 
-Chains per block (:func:`block_chains`): the CPU holds chains in multiples of
-:data:`LANES` and gains nothing past 16 in one block, so a map's chains are cut into
-blocks that keep every core busy; a GPU wants every chain of a map in one block (its
-time per chain falls until a few hundred chains, ``../shared/PERFORMANCE.md``).
+Chains per block, each device's (:attr:`~curiosity_cli.topics.devices.Device.block_chains`):
+the CPU holds chains in multiples of :data:`LANES` and gains nothing past a few of them in
+one block, so a map's chains are cut into blocks that keep every core busy; a GPU wants
+every chain of a map in one block.
 """
 
 from __future__ import annotations
@@ -58,21 +59,11 @@ from curiosity_cli.checks import check_float, check_int
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.topics.neighbours import check_neighbours
 
-#: Where chains can run (:class:`FrozenChains`' ``device``).
-DEVICES = ("cpu", "cuda")
-#: The chains a device wants in one block (a task): None for all of a map's chains.
-_BLOCK_CHAINS = {"cpu": 16, "cuda": None}
-
 #: Chains are held in multiples of this many (float32 lanes of a 256-bit vector): the
 #: kernels compile for the number of chains held, and a remainder past a multiple of 8
 #: runs as scalar code, at twice the time per chain. The padding chains repeat the last
 #: real one and are never reported.
 LANES = 8
-
-
-def block_chains(device: str) -> int | None:
-    """The most chains ``device`` wants advanced in one block (a task); None: every chain of a map."""
-    return _BLOCK_CHAINS[device]
 
 
 def sweep_order(table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -116,10 +107,11 @@ class FrozenChains:
         V >= 1.
     alpha, beta : float
         Dirichlet hyper-parameters, > 0.
-    device : {"cpu", "cuda"}
-        Where the chains run (module docstring); the same bytes on either. ``"cuda"``
-        needs numba-cuda and a GPU (:func:`curiosity_cli.topics.devices.resolve_device`
-        says which is missing).
+    device : str
+        Where the chains run: a name in :data:`curiosity_cli.topics.devices.DEVICES`, whose
+        engine runs them (module docstring); the same bytes on each. ``"cuda"`` needs
+        numba-cuda and a GPU (:func:`curiosity_cli.topics.devices.resolve_device` says
+        which is missing).
 
     Raises
     ------
@@ -131,6 +123,9 @@ class FrozenChains:
         self, words, cells, neighbours, *, n_topics: int, vocabulary_size: int, alpha: float, beta: float,
         device: str = "cpu",
     ):
+        # here, not at the top: the table names this module's engines, so it imports this module
+        from curiosity_cli.topics.devices import DEVICES
+
         self._k = check_int("n_topics", n_topics, 1, 127)
         self._v = check_int("vocabulary_size", vocabulary_size, 1)
         self._alpha = check_float("alpha", alpha, 0, low_open=True)
@@ -149,9 +144,10 @@ class FrozenChains:
         self._cell_first = np.concatenate([[0], np.cumsum(self._cell_count)[:-1]]).astype(np.int64)
         self._order, self._colour_starts = sweep_order(self._table)
         self.device = device
-        engine = _CudaEngine if device == "cuda" else _CpuEngine
-        self._engine = engine(self._order, self._colour_starts, self._cell_first, self._cell_count, self._words,
-                              self._table, self._alpha, self._beta)
+        self._engine = DEVICES[device].engine(
+            self._order, self._colour_starts, self._cell_first, self._cell_count, self._words, self._table, self._alpha,
+            self._beta,
+        )
         self._totals = None  # (K, R held) int64: each chain's frozen words per topic (its counts are the engine's)
         self._keys = None  # (R padded,) uint64
         self._n = 0  # real chains
@@ -274,7 +270,7 @@ def _phiw(counts: np.ndarray, inv: np.ndarray, beta: float) -> np.ndarray:
     return (counts.astype(np.float32) + np.float32(beta)) * inv
 
 
-class _CpuEngine:
+class CpuEngine:
     """The chains' state in numpy arrays, advanced by ``_chain_kernels.py`` (the interface: module docstring)."""
 
     def __init__(self, order, colour_starts, cell_first, cell_count, words, table, alpha, beta):
@@ -341,7 +337,7 @@ def _start_on_cpu(phiw, keys, placed, cell_first, cell_count, words, table, alph
     return [topics, ncz, ng]
 
 
-class _CudaEngine:
+class CudaEngine:
     """The chains' state on a CUDA GPU, advanced by ``_chain_kernels_cuda.py`` (the interface: module docstring).
 
     The frozen counts go to the GPU once per :meth:`set_counts`; eq. 5's factors and the
