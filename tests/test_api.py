@@ -281,6 +281,17 @@ def test_misused_results_name_the_argument(evaluated, call, parameter):
     assert evaluated.run("aerial-mosaic", "topic-perplexity", 1).phi(20).sum() > 0
 
 
+@pytest.mark.parametrize("run, message", [
+    (("aerial-mosaic", "topic-perplexity", 7), r"^restart: got 7, expected a restart of .*config\.yaml: 0 to 1$"),
+    (("nomap", "topic-perplexity", 0), r"^dataset: got 'nomap', expected a map of .*config\.yaml: aerial-mosaic$"),
+    (("aerial-mosaic", "lawnmower", 0), r"^weight_function: got 'lawnmower', expected a walker of .*: random-walk, topic-perplexity$"),
+])
+def test_a_run_outside_the_grid_is_named_not_called_unfinished(evaluated, run, message):
+    # explore would never make it: "not finished; explore redoes the run" would send the user in circles
+    with pytest.raises(ParameterError, match=message):
+        evaluated.run(*run)
+
+
 @pytest.mark.parametrize("call, parameter", [
     (lambda: api.load(123), "config"),
     (lambda: api.load(None), "config"),
@@ -301,6 +312,11 @@ def test_misused_results_name_the_argument(evaluated, call, parameter):
     (lambda: api.extract(3), "dataset"),
     (lambda: api.extract("aerial-mosaic", stride=0), "stride"),
     (lambda: api.show_datasets("aerial-mosaic"), "datasets"),
+    (lambda: api.show_datasets([]), "datasets"),  # not matplotlib's ValueError of a figure with no rows
+    # an empty path (an unset variable) is refused, not taken as the current folder
+    (lambda: api.explore("quick", results_dir=""), "results_dir"),
+    (lambda: api.extract("aerial-mosaic", cache_dir=""), "cache_dir"),
+    (lambda: api.show_datasets(["aerial-mosaic"], out=""), "out"),
     (lambda: api.build_vocabularies(texton_words=2.5), "texton_words"),
     (lambda: api.show_config(1), "config"),
     (lambda: api.init_config(None), "name"),

@@ -201,16 +201,78 @@ def test_extract_writes_a_density_png(own_map, tmp_path):
 @pytest.mark.parametrize(
     "args, fragment",
     [
-        (["--stride", "0"], "stride: got 0, expected an integer >= 1"),
-        (["--cell-width", "0"], "cell_width: got 0, expected an integer >= 1"),
         (["--set", "model.topics=3"], "expected a words.* key"),
         (["--set", "words.texton_vocabulary=77"], "texton-77.npz: vocabulary not found"),
+        # as the dataset YAML's word_stride is refused, named by the option that gave it
+        (["--stride", "40"], "Error: --stride: got a stride of 40 px with cells of 16 px, expected a stride of at most the cell width"),
+        (["--stride", "12", "--cell-width", "8"], "Error: --stride: got a stride of 12 px with cells of 8 px"),
+        (["--cell-width", "1000"], "Error: --cell-width: got 1000, expected at most the image's smaller side (96 px)"),
     ],
 )
 def test_extract_bad_options_are_one_line_errors(own_map, tmp_path, args, fragment):
     cache = tmp_path / "cache"
     _assert_one_line_error(run("extract", str(own_map), "--cache-dir", str(cache), *args), fragment)
     assert not cache.exists()
+
+
+def test_extract_names_a_cell_width_narrower_than_the_datasets_stride(own_map, tmp_path):
+    edit_yaml(own_map, word_stride=16)
+    result = run("extract", str(own_map), "--cache-dir", str(tmp_path / "cache"), "--cell-width", "8")
+    _assert_one_line_error(result, "Error: --cell-width: got a stride of 16 px with cells of 8 px")
+
+
+@pytest.mark.parametrize("option", ["--stride", "--cell-width"])
+def test_extract_stride_or_cell_width_below_one_is_a_usage_error(own_map, tmp_path, option):
+    result = run("extract", str(own_map), "--cache-dir", str(tmp_path / "cache"), option, "0")
+    box = " ".join(re.sub("[│╭╮╰╯─]", " ", result.stderr).split())  # click wraps its box to the terminal
+    assert result.exit_code == 2 and f"Invalid value for '{option}'" in box, result.output
+    assert not (tmp_path / "cache").exists()
+
+
+@pytest.mark.parametrize(
+    "args, option",
+    [
+        (["explore", "quick", "--results-dir", ""], "--results-dir"),
+        (["explore", "quick", "--cache-dir", ""], "--cache-dir"),
+        (["extract", "aerial-mosaic", "--cache-dir", ""], "--cache-dir"),
+        (["label", ""], "folder"),
+        (["reproduce", "quick", "--results-dir", ""], "--results-dir"),
+    ],
+)
+def test_an_empty_path_is_a_usage_error_not_the_current_folder(tmp_path, monkeypatch, args, option):
+    # an unset shell variable: `--results-dir "$OUT"` would otherwise fill the working folder
+    monkeypatch.chdir(tmp_path)
+    result = run(*args)
+    box = " ".join(re.sub("[│╭╮╰╯─]", " ", result.stderr).split())
+    assert result.exit_code == 2, result.output
+    assert f"Invalid value for {option}: got '' (an empty path), expected a path" in box
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "args, option, given",
+    [
+        (["--weights", "random-walk,topic-perplexity,random-walk"], "--weights", "'random-walk' twice, expected each weight function once"),
+        (["--map", "MAP", "--map", "MAP"], "--map", "twice, expected each map once"),
+    ],
+)
+def test_explore_names_a_walker_or_map_given_twice_by_its_option(own_map, tmp_path, args, option, given):
+    args = [str(own_map) if arg == "MAP" else arg for arg in args]
+    result = run("explore", "quick", *args, "--results-dir", str(tmp_path / "results"))
+    box = " ".join(re.sub("[│╭╮╰╯─]", " ", result.stderr).split())
+    assert result.exit_code == 2, result.output
+    assert f"Invalid value for {option}: got" in box and given in box and "--set" not in box
+    assert not (tmp_path / "results").exists()
+
+
+def test_datasets_show_notes_a_character_the_font_lacks_once_with_no_raw_warning(own_map, tmp_path, recwarn):
+    legend = own_map.parent / "legend.yaml"
+    legend.write_text(legend.read_text().replace("name: sand", "name: \"\\U0001F30A sand\""))
+    result = run("datasets", "show", str(own_map), "--out", str(tmp_path / "p.png"))
+    assert result.exit_code == 0, result.output
+    assert "\U0001F30A sand" in result.stdout
+    assert result.stderr.splitlines() == ["the figure's font has no \U0001F30A (U+1F30A): drawn as an empty box"]
+    assert not [w for w in recwarn if "Glyph" in str(w.message)]
 
 
 def test_extract_corrupt_image_is_one_line_error(own_map, tmp_path):

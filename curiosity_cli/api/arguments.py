@@ -1,7 +1,8 @@
 """The checks of the API's arguments: a wrong type is a :class:`~curiosity_cli.errors.ParameterError`
 naming the argument, as a wrong value is, never a ``TypeError`` from deep inside.
 
-The command line cannot give these wrong (its options are parsed into the right types);
+The command line cannot give these wrong (its options are parsed into the right types),
+but for an empty path, which it checks here too (:func:`~curiosity_cli.cli.usage_errors`);
 a notebook can.
 """
 
@@ -11,7 +12,7 @@ import os
 import typing
 from pathlib import Path
 
-from curiosity_cli.errors import ParameterError
+from curiosity_cli.errors import ParameterError, UsageError
 from curiosity_cli.yamlfile import shown
 
 
@@ -31,10 +32,8 @@ def config_argument(config):
 
 
 def folder_argument(folder, name: str = "folder") -> Path:
-    """A folder's path, given as a string or a path."""
-    if isinstance(folder, (str, os.PathLike)):
-        return Path(folder)
-    raise ParameterError(f"{name}: got {_given(folder)}, expected the path of a folder")
+    """A folder's path, given as a string or a path, not an empty one (:func:`path_argument`)."""
+    return path_argument(folder, name, "the path of a folder")
 
 
 def name_or_path(value, name: str) -> str:
@@ -45,8 +44,22 @@ def name_or_path(value, name: str) -> str:
 
 
 def optional_path(value, name: str) -> Path | None:
-    """A file's path, or None."""
-    return None if value is None else folder_argument(value, name)
+    """A path, given as a string or a path, not an empty one (:func:`path_argument`), or None."""
+    return None if value is None else path_argument(value, name)
+
+
+def path_argument(value, name: str, expected: str = "a path") -> Path:
+    """``value``, a string or a path, as a path; ``expected`` says what it should be in an error.
+
+    An empty string is refused as a :class:`~curiosity_cli.errors.UsageError` naming
+    ``name``: ``Path("")`` is the current folder, and an empty string is far more often an
+    unset shell variable than a wish to write there.
+    """
+    if not isinstance(value, (str, os.PathLike)):
+        raise ParameterError(f"{name}: got {_given(value)}, expected {expected}")
+    if os.fspath(value) == "":
+        raise UsageError(f"{name}: got '' (an empty path), expected {expected}", parameter=name)
+    return Path(value)
 
 
 def strings(value, name: str, example: str) -> list[str]:

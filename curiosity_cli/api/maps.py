@@ -75,7 +75,13 @@ def show_datasets(datasets: Sequence[str], *, out: Path | None = None) -> Previe
     out : Path, optional
         The preview PNG or PDF; default ``results/datasets/NAME.png``
         (``overview.png`` for several maps).
+
+    Raises
+    ------
+    ParameterError
+        No map, or ``out`` not a path.
     """
+    from curiosity_cli.errors import ParameterError
     from curiosity_cli.maps.fetched import made_notes
     from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.plots.preview import write_preview
@@ -83,6 +89,11 @@ def show_datasets(datasets: Sequence[str], *, out: Path | None = None) -> Previe
     from curiosity_cli.api.arguments import optional_path, strings
 
     datasets, out = strings(datasets, "datasets", "aerial-mosaic"), optional_path(out, "out")
+    if not datasets:
+        raise ParameterError(
+            "datasets: got [], expected at least one map: a registered name or a path to a dataset YAML",
+            parameter="datasets",
+        )
     maps = [load_map(d) for d in datasets]
     notes = [made_notes(m.config.fetch) if m.config.fetch is not None else {} for m in maps]
     if out is None:
@@ -96,7 +107,11 @@ def build_vocabularies(
     log: Callable[[str], None] = lambda line: None,
 ) -> list[tuple[Path, Vocabulary]]:
     """``curiosity vocab build``: texton words (k-means of MR8 responses), then ORB words (k-majority of
-    descriptors), of scikit-image's photographs; each file written and its vocabulary, in that order.
+    descriptors), of scikit-image's photographs; each file written or kept and its vocabulary, in that order.
+
+    A vocabulary already in ``out`` that was built by the same recipe (size, seed,
+    photographs, versions: :func:`~curiosity_cli.words.vocab.built_vocabulary`) is kept, so
+    a build stopped after the texton words goes on with the ORB words when run again.
 
     Parameters
     ----------
@@ -106,25 +121,35 @@ def build_vocabularies(
         The vocabularies' sizes (the paper's 5000 and 1000), 2 to
         :data:`~curiosity_cli.config.MAX_VOCABULARY`.
     log : callable
-        Progress lines, and a line for each file written.
+        Progress lines, and a line for each file written or kept.
     """
     from curiosity_cli.config import MAX_VOCABULARY
     from curiosity_cli.errors import ParameterError
     from curiosity_cli.files import display_path
-    from curiosity_cli.words.vocab import build_orb_vocabulary, build_texton_vocabulary, save_vocabulary
+    from curiosity_cli.words.vocab import (
+        build_orb_vocabulary, build_texton_vocabulary, built_vocabulary, save_vocabulary, vocabulary_path,
+    )
 
     from curiosity_cli.api.arguments import folder_argument
     from curiosity_cli.checks import check_int
 
     out, seed = folder_argument(out, "out"), check_int("seed", seed, 0)
-    plan = (("texton_words", build_texton_vocabulary, texton_words), ("orb_words", build_orb_vocabulary, orb_words))
-    for name, _, size in plan:
+    plan = (
+        ("texton_words", "texton", build_texton_vocabulary, texton_words),
+        ("orb_words", "orb", build_orb_vocabulary, orb_words),
+    )
+    for name, _, _, size in plan:
         if isinstance(size, bool) or not isinstance(size, int) or not 2 <= size <= MAX_VOCABULARY:
             raise ParameterError(f"{name}: got {size!r}, expected 2 to {MAX_VOCABULARY}", parameter=name)
     written = []
-    for _, builder, size in plan:
-        vocabulary = builder(size, seed=seed, log=log)
-        path = save_vocabulary(vocabulary, out)
-        log(f"wrote {display_path(path)} (sha256 {vocabulary.sha256[:16]}…)")
+    for _, kind, builder, size in plan:
+        path, vocabulary = vocabulary_path(out, kind, size), built_vocabulary(out, kind, size, seed)
+        if vocabulary is not None:
+            log(f"kept {display_path(path)}, built by the same recipe (sha256 {vocabulary.sha256[:16]}…); "
+                "delete it to build it again")
+        else:
+            vocabulary = builder(size, seed=seed, log=log)
+            save_vocabulary(vocabulary, out)
+            log(f"wrote {display_path(path)} (sha256 {vocabulary.sha256[:16]}…)")
         written.append((path, vocabulary))
     return written

@@ -201,19 +201,27 @@ def explore(
     results_dir, cache_dir = folder_argument(results_dir, "results_dir"), folder_argument(cache_dir, "cache_dir")
     force = boolean(force, "force")
     options = []
+    # a map or walker given twice is refused here, where the user's words are known: the config would
+    # refuse it too, but as an override the user never wrote
     if maps:
         try:
-            # a registered map by its name, as a config names it (a copied experiment folder still finds it);
-            # a dataset YAML by its absolute path, which no working folder changes
-            paths = [name if dataset_path(name).parent == DATASET_CONFIG_DIR else str(dataset_path(name).resolve())
-                     for name in maps]
+            found = [dataset_path(name) for name in maps]
         except ConfigError as exc:
             raise UsageError(f"maps: {exc}", parameter="maps") from None
+        files = [path.resolve() for path in found]
+        twice = next((name for i, name in enumerate(maps) if files[i] in files[:i]), None)
+        if twice is not None:
+            raise UsageError(f"maps: got {twice!r} twice, expected each map once", parameter="maps")
+        # a registered map by its name, as a config names it (a copied experiment folder still finds it);
+        # a dataset YAML by its absolute path, which no working folder changes
+        paths = [name if path.parent == DATASET_CONFIG_DIR else str(file) for name, path, file in zip(maps, found, files)]
         options.append(f"datasets={paths}")
     if weights is not None:
-        for name in weights:
+        for i, name in enumerate(weights):
             if name not in WEIGHT_FUNCTIONS:
                 raise UsageError(f"weights: got {name!r}, expected one of {', '.join(WEIGHT_FUNCTIONS)}", parameter="weights")
+            if name in weights[:i]:
+                raise UsageError(f"weights: got {name!r} twice, expected each weight function once", parameter="weights")
         options.append(f"explore.weight_functions={weights}")
     if restarts is not None:
         options.append(f"explore.restarts={restarts}")

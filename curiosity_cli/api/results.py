@@ -67,15 +67,45 @@ class Results:
         Raises
         ------
         RunError
-            A missing, incomplete or altered run, naming the file.
+            A missing, incomplete or altered run of the grid, naming the file.
         ParameterError
-            ``restart`` is not an int >= 0, or a name is not a string.
+            ``restart`` is not an int >= 0, or a name is not a string; a map, walker or
+            restart the experiment's grid does not hold.
         """
         from curiosity_cli.checks import check_int
         from curiosity_cli.explore.runs import read_run
 
         dataset, weight_function = name_or_path(dataset, "dataset"), name_or_path(weight_function, "weight_function")
-        return read_run(self.experiment.folder.run(dataset, weight_function, check_int("restart", restart, 0)))
+        restart = check_int("restart", restart, 0)
+        self._check_in_grid(dataset, weight_function, restart)
+        return read_run(self.experiment.folder.run(dataset, weight_function, restart))
+
+    def _check_in_grid(self, dataset: str, weight_function: str, restart: int) -> None:
+        """Refuse a run outside the grid: explore never makes it, so its folder's absence is no unfinished run."""
+        from curiosity_cli.errors import ConfigError, ParameterError
+        from curiosity_cli.files import display_path
+        from curiosity_cli.maps.datasets import dataset_path, load_dataset_config
+
+        config = self.experiment.config
+        where = display_path(self.experiment.folder.config)
+        walkers = config.explore.weight_functions
+        if weight_function not in walkers:
+            raise ParameterError(
+                f"weight_function: got {weight_function!r}, expected a walker of {where}: {', '.join(walkers)}",
+                parameter="weight_function",
+            )
+        if restart >= config.explore.restarts:
+            raise ParameterError(
+                f"restart: got {restart}, expected a restart of {where}: 0 to {config.explore.restarts - 1}",
+                parameter="restart",
+            )
+        try:
+            # the maps' names from their YAMLs: loading every map's image to name it would take long
+            maps = [load_dataset_config(dataset_path(entry)).name for entry in config.datasets]
+        except ConfigError:  # a map's YAML that does not load now: which maps there are is unknown; the run is read
+            return
+        if dataset not in maps:
+            raise ParameterError(f"dataset: got {dataset!r}, expected a map of {where}: {', '.join(maps)}", parameter="dataset")
 
 
 def open_experiment(folder: Path | str | None = None, *, name: str = "quick", results_dir: Path = DEFAULT_RESULTS) -> Results:

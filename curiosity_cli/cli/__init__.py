@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import functools
 import inspect
+from pathlib import Path
 
 import typer
 from typer.core import TyperGroup
@@ -74,16 +75,31 @@ def _options(command):
 
 def usage_errors(command):
     """``command`` with the API's :class:`UsageError` reported as click's usage error (exit code 2) on the
-    option that gave its parameter, other arguments it names written as their options."""
+    option that gave its parameter, other arguments it names written as their options.
 
+    Its ``Path`` options and arguments reach it as the API checks a path
+    (:func:`~curiosity_cli.api.arguments.optional_path`): an empty one is such a usage error.
+    """
+    parameters = inspect.signature(command).parameters
     flags = {
-        name: param.default.param_decls[0] for name, param in inspect.signature(command).parameters.items()
+        name: param.default.param_decls[0] for name, param in parameters.items()
         if isinstance(param.default, typer.models.OptionInfo) and param.default.param_decls
     }
+    paths = [
+        name for name, param in parameters.items()
+        if param.annotation in (Path, "Path") and isinstance(param.default, typer.models.ParameterInfo)
+    ]
+    for name in paths:
+        # typer would make an empty string Path(""), the current folder: let the string through to be checked
+        parameters[name].default.path_type = str
 
     @functools.wraps(command)
     def reporting(*args, **kwargs):
+        from curiosity_cli.api.arguments import optional_path
+
         try:
+            for name in paths:
+                kwargs[name] = optional_path(kwargs[name], name)
             return command(*args, **kwargs)
         except UsageError as exc:
             raise typer.BadParameter(exc.detail(flags), param_hint=flags.get(exc.parameter, exc.parameter)) from None

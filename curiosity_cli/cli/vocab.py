@@ -25,7 +25,10 @@ def build(
     ),
     seed: int = typer.Option(0, "--seed", min=0, help="Seed of the clustering."),
 ) -> None:
-    """Cluster ORB descriptors (k-majority) and MR8 responses (k-means) of scikit-image's photographs."""
+    """Cluster ORB descriptors (k-majority) and MR8 responses (k-means) of scikit-image's photographs.
+
+    A vocabulary already in --out that was built by the same recipe (size, seed, versions) is kept: run the same command again to finish a stopped build, and delete a file to build it again.
+    """
     from curiosity_cli import api
 
     api.build_vocabularies(out, orb_words=orb_words, texton_words=texton_words, seed=seed, log=typer.echo)

@@ -78,11 +78,9 @@ def load_dataset_config(path: str | Path) -> DatasetConfig:
         config = dataclasses.replace(config, **fetched_files(config.fetch))
     elif config.image is None:
         raise ConfigError(f"{where}: image: missing key; expected the path of the map's image")
-    if config.word_stride > config.cell_width:
-        raise ConfigError(
-            f"{where}: word_stride: got {config.word_stride}, expected at most cell_width ({config.cell_width}): "
-            "a wider stride leaves cells without texton words"
-        )
+    problem = stride_problem(config.word_stride, config.cell_width)
+    if problem is not None:
+        raise ConfigError(f"{where}: word_stride: {problem}")
     if config.labels is not None and config.legend is None:
         raise ConfigError(f"{where}: legend: missing; a dataset with labels needs a legend YAML")
     if config.size is not None and len(config.size) != 2:
@@ -100,6 +98,20 @@ def load_dataset_config(path: str | Path) -> DatasetConfig:
             f"{where}: stands_in_for: got {shown(config.stands_in_for)}, expected one of {', '.join(PAPER_MAPS)} or null"
         )
     return config
+
+
+def stride_problem(stride: int, cell_width: int) -> str | None:
+    """What is wrong with texton words every ``stride`` px in cells ``cell_width`` px wide, or None.
+
+    Said of a dataset's ``word_stride`` and of the stride and cell width ``extract`` is
+    given instead (:func:`~curiosity_cli.words.extract.extract_words`).
+    """
+    if stride > cell_width:
+        return (
+            f"got a stride of {stride} px with cells of {cell_width} px, expected a stride of at most the cell width: "
+            "a wider stride leaves cells without texton words"
+        )
+    return None
 
 
 def dataset_names() -> list[str]:

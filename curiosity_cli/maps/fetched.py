@@ -88,7 +88,7 @@ def made_notes(name: str) -> dict:
         return {}
 
 
-def ensure_fetched(name: str, *, announce=None) -> None:
+def ensure_fetched(name: str, *, announce=None, force: bool = False) -> None:
     """Make the map's files from its source archive unless they are already cached.
 
     Parameters
@@ -97,6 +97,8 @@ def ensure_fetched(name: str, *, announce=None) -> None:
         A key of :data:`FETCHED_MAPS`.
     announce : callable, optional
         Called with a line of text before a download or a build.
+    force : bool
+        Make them even so: a cached file that does not read.
 
     Raises
     ------
@@ -107,7 +109,7 @@ def ensure_fetched(name: str, *, announce=None) -> None:
     import cv2
     import yaml
 
-    if is_fetched(name):
+    if is_fetched(name) and not force:
         return
     spec = FETCHED_MAPS[name]
     archive = ensure_sdist(spec.archive, announce=announce)

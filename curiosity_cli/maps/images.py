@@ -11,6 +11,7 @@ tifffile (every band, every layout), other formats with OpenCV, and an image of 
 from __future__ import annotations
 
 import logging
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -112,9 +113,10 @@ def read_raster(path: Path, where: str) -> Raster:
         raise DatasetError(f"{where}: {shown} is empty; expected a PNG, JPEG or TIFF image")
     if bytes(data[:4]) in _TIFF_MAGIC:
         return _read_tiff(path, shown, where)
-    if bytes(data[:8]) == _PNG_MAGIC and bytes(data[-12:]) != _PNG_END:
-        # checked here because libpng reports a truncated file on stderr itself, beside our error
-        raise DatasetError(f"{where}: {shown} is truncated (no IEND chunk at its end); expected a whole PNG image")
+    if bytes(data[:8]) == _PNG_MAGIC:
+        damage = _png_damage(memoryview(data))
+        if damage is not None:
+            raise DatasetError(f"{where}: {shown} {damage}")
     import cv2
 
     # imdecode over bytes rather than imread: a path with any characters works
@@ -134,6 +136,31 @@ def read_raster(path: Path, where: str) -> Raster:
         order = [2, 1, 0] + ([3] if pixels.shape[2] == 4 else [])
         return Raster(np.ascontiguousarray(pixels[:, :, order]), "rgb")
     return Raster(pixels, None)
+
+
+def _png_damage(data: memoryview) -> str | None:
+    """Why libpng would refuse a PNG file's bytes, in words, or None.
+
+    Checked here because libpng prints its own line on stderr beside our error: a file
+    cut short, or a critical chunk (``IHDR``, ``PLTE``, ``IDAT``, ``IEND``, those with an
+    upper-case first letter) whose CRC does not match its bytes. libpng only warns of an
+    ancillary chunk's, and skips it; so does this.
+    """
+    if bytes(data[-12:]) != _PNG_END:
+        return "is truncated (no IEND chunk at its end); expected a whole PNG image"
+    at = len(_PNG_MAGIC)
+    while at + 12 <= len(data):  # length, type, data, CRC
+        length, kind = int.from_bytes(data[at : at + 4], "big"), bytes(data[at + 4 : at + 8])
+        end = at + 8 + length
+        if end + 4 > len(data):
+            break
+        if kind[:1].isupper() and zlib.crc32(data[at + 4 : end]) != int.from_bytes(data[end : end + 4], "big"):
+            name = kind.decode("ascii", "replace")
+            return f"is corrupt (its {name} chunk at byte {at} fails its CRC check); expected an intact PNG image"
+        if kind == b"IEND":
+            return None
+        at = end + 4
+    return f"is corrupt (its chunks do not add up to the file, from byte {at}); expected an intact PNG image"
 
 
 def decode_tiff(data: bytes, shown: str, where: str) -> Raster:

@@ -18,7 +18,7 @@ import numpy as np
 from curiosity_cli.maps.cell_grid import SquareGrid, map_grid
 from curiosity_cli.maps.datasets import DatasetConfig, dataset_names, dataset_path, load_dataset_config
 from curiosity_cli.errors import ConfigError, DatasetError
-from curiosity_cli.files import display_path
+from curiosity_cli.files import display_path, note
 from curiosity_cli.maps.images import Rendering
 from curiosity_cli.yamlfile import read_yaml
 
@@ -130,7 +130,8 @@ def _to_stderr(line: str) -> None:
 def load_map(name_or_path: str | Path, *, announce=_to_stderr) -> MapData:
     """Load a dataset by registered name or YAML path, and check it is usable.
 
-    A fetched map (``fetch:`` in its YAML) is downloaded and made on first use.
+    A fetched map (``fetch:`` in its YAML) is downloaded and made on first use, and made
+    again when a file of it in the cache does not read.
 
     Parameters
     ----------
@@ -153,18 +154,36 @@ def load_map(name_or_path: str | Path, *, announce=_to_stderr) -> MapData:
         size or not single-channel, label ids missing from the legend, a cell wider than
         the image, a size other than declared, a fetch that fails.
     """
-    from curiosity_cli.maps.fetched import ensure_fetched
-    from curiosity_cli.maps.images import read_raster, render_rgb
-
     yaml_path = dataset_path(name_or_path)
     config = load_dataset_config(yaml_path)
     where = display_path(yaml_path)
-    if config.fetch is not None:
-        try:
-            ensure_fetched(config.fetch, announce=announce)
-        except DatasetError as exc:
-            embedded = [n for n in dataset_names() if load_dataset_config(dataset_path(n)).fetch is None]
-            raise DatasetError(f"{where}: {exc}; the embedded maps {', '.join(embedded)} need no network") from None
+    if config.fetch is None:
+        return _read_map(config, where)
+    _fetch(config.fetch, where, announce)
+    try:
+        return _read_map(config, where)
+    except DatasetError as exc:
+        # the files are the cache's, made from the archive: a damaged one is made again, as a word store is
+        note(f"{exc}; the cache made it for the fetched map {config.fetch}, which is made again")
+        _fetch(config.fetch, where, announce, force=True)
+        return _read_map(config, where)
+
+
+def _fetch(name: str, where: str, announce, *, force: bool = False) -> None:
+    """:func:`~curiosity_cli.maps.fetched.ensure_fetched`; its error names the dataset YAML ``where``, and the
+    maps that need no network."""
+    from curiosity_cli.maps.fetched import ensure_fetched
+
+    try:
+        ensure_fetched(name, announce=announce, force=force)
+    except DatasetError as exc:
+        embedded = [n for n in dataset_names() if load_dataset_config(dataset_path(n)).fetch is None]
+        raise DatasetError(f"{where}: {exc}; the embedded maps {', '.join(embedded)} need no network") from None
+
+
+def _read_map(config: DatasetConfig, where: str) -> MapData:
+    """The map ``config`` describes, read from its files and checked (:func:`load_map`); ``where`` names the YAML."""
+    from curiosity_cli.maps.images import read_raster, render_rgb
 
     image, rendering = render_rgb(read_raster(config.image, f"{where}: image"), config.bands, config.stretch, where)
     rows, cols = image.shape[:2]

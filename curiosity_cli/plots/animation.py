@@ -70,15 +70,20 @@ def animate_run(
     experiment = Experiment.open(experiment_dir)
     layout = experiment.folder
     if dataset not in experiment.maps:
-        raise AnimationError(f"animate: map {dataset!r} is not in {display_path(layout.config)}: {', '.join(experiment.maps)}")
+        raise AnimationError(
+            f"animate: map {dataset!r} is not in {display_path(layout.config)}: {', '.join(experiment.maps)}",
+            parameter="animate",
+        )
     grid = experiment.config.explore
     if weight_function not in grid.weight_functions:
         raise AnimationError(
-            f"animate: walker {weight_function!r} is not in {display_path(layout.config)}: {', '.join(grid.weight_functions)}"
+            f"animate: walker {weight_function!r} is not in {display_path(layout.config)}: {', '.join(grid.weight_functions)}",
+            parameter="animate",
         )
     if not 0 <= restart < grid.restarts:
         raise AnimationError(
-            f"animate: restart {restart} is not in the grid of {display_path(layout.config)} (restarts 0 to {grid.restarts - 1})"
+            f"animate: restart {restart} is not in the grid of {display_path(layout.config)} (restarts 0 to {grid.restarts - 1})",
+            parameter="animate",
         )
     out = Path(out) if out is not None else layout.figures / f"animation-{dataset}-{weight_function}-{restart:03d}.gif"
     if out.suffix not in (".gif", ".mp4"):

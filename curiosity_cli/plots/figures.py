@@ -37,7 +37,7 @@ from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import atomic_path, display_path
-from curiosity_cli.plots import palette
+from curiosity_cli.plots import missing_glyphs_noted, palette
 from curiosity_cli.plots.experiment_inputs import (
     MI_COLUMNS,
     SUMMARY_COLUMNS,
@@ -688,11 +688,16 @@ def figure_style():
 
 
 def save_figure(fig, stem: Path) -> list[Path]:
-    """Write ``stem``.png and ``stem``.pdf atomically; returns both paths."""
+    """Write ``stem``.png and ``stem``.pdf atomically; returns both paths.
+
+    A character the font lacks (an emoji in a legend's class name) is one note for both
+    files (:func:`~curiosity_cli.plots.missing_glyphs_noted`).
+    """
     paths = []
-    for suffix in (".png", ".pdf"):
-        path = stem.with_name(stem.name + suffix)
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=_DPI, format=suffix[1:])
-        paths.append(path)
+    with missing_glyphs_noted():
+        for suffix in (".png", ".pdf"):
+            path = stem.with_name(stem.name + suffix)
+            with atomic_path(path) as tmp:
+                fig.savefig(tmp, dpi=_DPI, format=suffix[1:])
+            paths.append(path)
     return paths

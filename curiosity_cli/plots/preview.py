@@ -9,6 +9,7 @@ import numpy as np
 from curiosity_cli.maps.map_data import MapClass, MapData
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import atomic_path
+from curiosity_cli.plots import missing_glyphs_noted
 
 #: Pixels per side a map is shrunk to before drawing: keeps figures small, and a huge map
 #: from taking gigabytes in matplotlib.
@@ -90,5 +91,5 @@ def write_preview(maps: list[MapData], out: Path) -> None:
         for ax in (ax_image, ax_labels):
             ax.set_xticks([])
             ax.set_yticks([])
-    with atomic_path(out) as tmp:
+    with missing_glyphs_noted(), atomic_path(out) as tmp:  # a class name may hold an emoji
         fig.savefig(tmp, dpi=110, format=out.suffix.lower()[1:])

@@ -18,8 +18,9 @@ import numpy as np
 
 from curiosity_cli.checks import check_int
 from curiosity_cli.config import WordsConfig
+from curiosity_cli.maps.datasets import stride_problem
 from curiosity_cli.maps.map_data import MapData
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import CuriosityError, ParameterError
 from curiosity_cli.files import CorruptFileError, note
 from curiosity_cli.paths import DEFAULT_CACHE
 from curiosity_cli.words.kinds import OrbSettings, Picture, WordRecipe
@@ -102,18 +103,26 @@ def extract_words(
 
     Raises
     ------
+    ParameterError
+        A bad stride or cell width: not an int >= 1, a cell wider than the image, or a
+        stride wider than a cell, naming the one given.
     CuriosityError
-        A bad stride or cell width, a missing or malformed vocabulary, a grey image with
-        colour words on.
+        A missing or malformed vocabulary, a grey image with colour words on.
     """
     import cv2
 
+    # the one given is at fault when the two do not go together (the dataset's own were checked when it loaded)
+    blamed = "stride" if stride is not None else "cell_width"
     stride = check_int("stride", map_data.config.word_stride if stride is None else stride, 1)
     cell_width = check_int("cell_width", map_data.config.cell_width if cell_width is None else cell_width, 1)
     if cell_width > min(map_data.image.shape[:2]):
-        raise CuriosityError(
-            f"cell_width: got {cell_width}, expected at most the image's smaller side ({min(map_data.image.shape[:2])} px)"
+        raise ParameterError(
+            f"cell_width: got {cell_width}, expected at most the image's smaller side ({min(map_data.image.shape[:2])} px)",
+            parameter="cell_width",
         )
+    problem = stride_problem(stride, cell_width)
+    if problem is not None:
+        raise ParameterError(f"{blamed}: {problem}", parameter=blamed)
     image = map_data.image
     if words.colour_words and np.array_equal(image[:, :, 0], image[:, :, 1]) and np.array_equal(image[:, :, 1], image[:, :, 2]):
         raise CuriosityError(

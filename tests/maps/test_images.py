@@ -151,3 +151,24 @@ def test_geotiff_tags_give_no_warning_on_the_terminal(tmp_path):
     assert result.returncode == 0, result.stderr
     assert result.stderr == ""
     assert "image: uint16, R = band 2, G = band 1, B = band 0; stretched R " in result.stdout
+
+
+@pytest.mark.parametrize("offset, damage", [
+    (lambda size: size // 2, r"is corrupt \(its IDAT chunk at byte \d+ fails its CRC check\)"),  # a byte of the pixels
+    (lambda size: 10, r"is corrupt \(its chunks do not add up to the file, from byte 8\)"),  # the header's length
+])
+def test_a_png_with_a_flipped_byte_is_called_corrupt_in_one_line_without_libpngs_own(own_map, tmp_path, offset, damage):
+    image = own_map.parent / "map.png"
+    data = bytearray(image.read_bytes())
+    data[offset(len(data))] ^= 0xFF
+    image.write_bytes(bytes(data))
+    with pytest.raises(DatasetError, match=rf"own\.yaml: image: .*map\.png {damage}; expected an intact PNG image$"):
+        load_map(own_map)
+    # libpng prints its own "libpng error: IDAT: CRC error" on stderr when it meets one: it must not meet it
+    result = subprocess.run(
+        [sys.executable, "-m", "curiosity_cli", "datasets", "show", str(own_map), "--out", str(tmp_path / "p.png")],
+        capture_output=True, text=True, check=False,
+    )
+    assert result.returncode == 1 and len(result.stderr.splitlines()) == 1, result.stderr
+    assert result.stderr.startswith("Error: ") and "is corrupt" in result.stderr
+    assert not (tmp_path / "p.png").exists()

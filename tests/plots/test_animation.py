@@ -39,14 +39,14 @@ def test_animate_refuses_what_it_cannot_draw(own_map, tmp_path):
     box = " ".join(re.sub("[│╭╮╰╯─]", " ", bad.stderr).split())  # click wraps its box to the terminal
     assert bad.exit_code == 2 and "expected MAP/WALKER/RESTART" in box
     other = runner.invoke(app, ["plot", str(folder), "--animate", "nowhere/topic-perplexity/0"])
-    assert other.exit_code == 1 and "animate: map 'nowhere' is not in" in other.stderr
+    assert other.exit_code == 1 and "Error: --animate: map 'nowhere' is not in" in other.stderr
     avi = runner.invoke(app, ["plot", str(folder), "--animate", "own/topic-perplexity/0", "--out", str(tmp_path / "a.avi")])
     assert avi.exit_code == 1 and "--out: got" in avi.stderr and "expected a .gif or .mp4 file" in avi.stderr
     outside = runner.invoke(app, ["plot", str(folder), "--animate", "own/topic-perplexity/99"])
-    assert outside.exit_code == 1 and "animate: restart 99 is not in the grid of" in outside.stderr
+    assert outside.exit_code == 1 and "Error: --animate: restart 99 is not in the grid of" in outside.stderr
     assert "(restarts 0 to 0)" in outside.stderr and "not finished" not in outside.stderr
     walker = runner.invoke(app, ["plot", str(folder), "--animate", "own/lawnmower/0"])
-    assert walker.exit_code == 1 and "animate: walker 'lawnmower' is not in" in walker.stderr
+    assert walker.exit_code == 1 and "Error: --animate: walker 'lawnmower' is not in" in walker.stderr
     (folder / "runs" / "own" / "topic-perplexity" / "restart-000" / "run.json").unlink()
     missing = runner.invoke(app, ["plot", str(folder), "--animate", "own/topic-perplexity/0"])
     assert missing.exit_code == 1 and "restart-000" in missing.stderr

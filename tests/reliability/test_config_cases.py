@@ -155,7 +155,7 @@ CASES = {
         ["datasets", "show", "own.yaml"], 1, ["map.png: Too many levels of symbolic links"]),
     "a word stride wider than a cell": (
         lambda w: _own_map(w, word_stride=256), ["datasets", "show", "own.yaml"], 1,
-        ["own.yaml: word_stride: got 256, expected at most cell_width (16)"]),
+        ["own.yaml: word_stride: got a stride of 256 px with cells of 16 px, expected a stride of at most the cell width"]),
     # 7. out-of-range numbers on the command line are usage errors
     "a huge texton vocabulary": (
         lambda w: None, ["vocab", "build", "--out", "results/vocab", "--texton-words", "100000000"], 2,

@@ -50,6 +50,34 @@ def test_texton_vocabulary_build_is_seeded(monkeypatch):
     assert build_texton_vocabulary(20, seed=6).sha256 != a.sha256
 
 
+def test_a_vocabulary_built_by_the_same_recipe_is_kept_so_a_stopped_build_goes_on(monkeypatch, tmp_path):
+    import curiosity_cli.words.vocab as vocab
+    from curiosity_cli import api
+
+    monkeypatch.setattr(vocab, "SOURCE_IMAGES", ("camera", "coins"))
+    monkeypatch.setattr(vocab, "TEXTON_SAMPLES_PER_IMAGE", 2000)
+    save_vocabulary(build_texton_vocabulary(2, seed=0), tmp_path)  # a build stopped after its texton words
+    texton = tmp_path / "texton-2.npz"
+    stamp = texton.stat().st_mtime_ns
+    lines = []
+    written = api.build_vocabularies(tmp_path, orb_words=2, texton_words=2, log=lines.append)
+    assert [path.name for path, _ in written] == ["texton-2.npz", "orb-2.npz"]
+    assert lines[0].startswith("kept ") and "texton-2.npz, built by the same recipe" in lines[0]
+    assert texton.stat().st_mtime_ns == stamp and not [line for line in lines if "texton:" in line]
+    assert [line for line in lines if "orb: clustering" in line]
+
+    def clustered(seed: int) -> list[str]:
+        lines.clear()
+        api.build_vocabularies(tmp_path, orb_words=2, texton_words=2, seed=seed, log=lines.append)
+        return [line.split(":")[0].strip() for line in lines if ": clustering" in line]
+
+    orb = tmp_path / "orb-2.npz"
+    orb.write_bytes(orb.read_bytes()[: orb.stat().st_size // 2])
+    assert clustered(0) == ["orb"]  # a file cut short is no vocabulary: built again
+    assert clustered(1) == ["texton", "orb"]  # another seed is another recipe
+    assert load_vocabulary(tmp_path, "texton", 2).recipe["seed"] == 1
+
+
 @pytest.mark.slow
 def test_shipped_vocabularies_are_rebuilt_bit_for_bit_from_their_recipe(tmp_path):
     from typer.testing import CliRunner
