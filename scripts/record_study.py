@@ -1,4 +1,4 @@
-"""Record a finished study's tables in ``studies/`` (:mod:`curiosity_cli.study_record`), for a study run without ``--record``.
+"""Record a finished study's tables in ``studies/`` (:mod:`curiosity_cli.study.record`), for a study run without ``--record``.
 
 ``curiosity reproduce CONFIG --record studies/NAME`` records each combination as it
 finishes; this does the same afterwards for every finished combination folder
@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 
 from curiosity_cli.errors import CuriosityError
-from curiosity_cli.study_record import keep_experiment
+from curiosity_cli.study.record import keep_experiment
 
 COMBINATION = re.compile(r"^specification-(?P<specification>.+)_seed-(?P<seed>\d+)$")
 

@@ -21,7 +21,7 @@ import pandas as pd
 
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.paths import DEFAULT_RESULTS
-from curiosity_cli.reproduce import reproduce
+from curiosity_cli.study.pipeline import reproduce
 
 LENGTHS = (80, 320)
 

@@ -33,14 +33,8 @@ ALLOWED["drive"] = {"maps", "config", "words", "topics", "experiment"}
 ORCHESTRATORS = {
     "cli": "the command line: thin commands over every stage",
     "__main__": "`python -m curiosity_cli`: runs the command line",
-    "reproduce": "`curiosity reproduce`: extract, explore, label, evaluate and plot one experiment end to end",
-    "sweep": "`curiosity reproduce --sweep`: each combination through reproduce, their headlines compared",
-    "sweep_report": "a sweep's SWEEP.md: every combination's tables, each treatment's seeds pooled (evaluate), "
-    "and a study's specification curve",
-    "specifications": "a study's declared specifications planned as sweep combinations, and its specification curve "
-    "(evaluate's pooled statistics, plots' figure)",
-    "study_record": "a study's results of record: its experiments' tables kept and taken back, checked against "
-    "the recipes (experiment) its config and maps give now",
+    "study": "`curiosity reproduce`: one experiment end to end, a sweep or a study's specifications through it, "
+    "their report and curve (evaluate's pooled statistics, plots' figures), and a study's results of record",
     "api": "curiosity from Python: the commands as functions, an experiment's results as frames",
 }
 
@@ -84,7 +78,7 @@ def violations(package: Path = PACKAGE) -> list[str]:
         allowed = ALLOWED.get(own, set()) | {own}
         for name, line in imported_modules(path, module):
             target = room(name)
-            if target in (*STAGES, "config", "drive", "cli", "__main__") and target not in allowed:
+            if target in (*STAGES, "config", "drive", "study", "cli", "__main__") and target not in allowed:
                 found.append(f"{path.relative_to(package.parent)}:{line}: imports {name}")
     return found
 

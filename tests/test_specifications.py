@@ -13,8 +13,9 @@ from test_sweep import sweep, tiny_yaml
 
 from curiosity_cli.config import CONFIG_DIR
 from curiosity_cli.evaluate.comparisons import next_best_interval, next_best_null, ratio_interval
-from curiosity_cli.specifications import Specification, declared_specifications
-from curiosity_cli.sweep import declared_sweeps, parse_sweeps, plan_sweep
+from curiosity_cli.study.specifications import declared_specifications
+from curiosity_cli.study.sweep import declared_sweeps, parse_sweeps, plan_sweep
+from curiosity_cli.study.types import Specification
 
 WALKERS = ["random-walk", "stochastic-coverage", "topic-perplexity"]
 SPECIFICATIONS = {"default": {}, "clamp": {"explore.coverage": "clamp", "explore.min_d2": 0.5}}

@@ -13,7 +13,7 @@ from test_sweep import sweep
 
 from curiosity_cli import api
 from curiosity_cli.errors import UsageError
-from curiosity_cli.study_record import RECORD_FILE, TABLES
+from curiosity_cli.study.record import RECORD_FILE, TABLES
 
 #: One specification keeps the study small; the record's layout does not depend on how many.
 ONE = {"default": {}}

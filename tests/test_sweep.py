@@ -13,15 +13,8 @@ from typer.testing import CliRunner
 from curiosity_cli.cli import app
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.errors import ConfigError
-from curiosity_cli.sweep import (
-    SweepAxis,
-    SweepSyntaxError,
-    combination_name,
-    combinations,
-    parse_sweeps,
-    plan_sweep,
-    split_values,
-)
+from curiosity_cli.study.sweep import combination_name, combinations, parse_sweeps, plan_sweep, split_values
+from curiosity_cli.study.types import SweepAxis, SweepSyntaxError
 
 runner = CliRunner()
 
@@ -262,7 +255,7 @@ def test_a_declared_sweep_that_is_not_a_mapping_of_lists_is_refused_naming_the_f
 
 
 def test_a_declared_sweep_reads_as_sweep_options_and_the_command_line_replaces_a_key_in_place(tmp_path):
-    from curiosity_cli.sweep import declared_sweeps, merge_sweeps
+    from curiosity_cli.study.sweep import declared_sweeps, merge_sweeps
 
     config = tmp_path / "exp.yaml"
     config.write_text(

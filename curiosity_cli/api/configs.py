@@ -27,8 +27,9 @@ def _study(config: str | Path, overrides: typing.Iterable[str]) -> str:
     """For a config that declares a sweep or specifications: every experiment it makes checked
     (as ``reproduce`` would, before it runs), and what they are, as YAML comments after the config."""
     from curiosity_cli.config import SPECIFICATIONS_KEY, SWEEP_KEY
-    from curiosity_cli.specifications import declared_specifications, study_size
-    from curiosity_cli.sweep import count, declared_sweeps, parse_sweeps, plan_sweep
+    from curiosity_cli.study.specifications import declared_specifications, study_size
+    from curiosity_cli.study.sweep import declared_sweeps, parse_sweeps, plan_sweep
+    from curiosity_cli.study.types import count
 
     sweeps, specifications = declared_sweeps(config), declared_specifications(config)
     if not sweeps and not specifications:

@@ -73,8 +73,8 @@ def _refuse_many(config: str | Path, overrides: Sequence[str]) -> None:
     from curiosity_cli.config import config_file
     from curiosity_cli.errors import ConfigError
     from curiosity_cli.files import display_path
-    from curiosity_cli.specifications import declared_specifications
-    from curiosity_cli.sweep import declared_sweeps, split_values
+    from curiosity_cli.study.specifications import declared_specifications
+    from curiosity_cli.study.sweep import declared_sweeps, split_values
 
     fixed = {text.split("=", 1)[0] for text in overrides}
     swept = [text.split("=", 1) for text in declared_sweeps(config)]
@@ -333,7 +333,7 @@ def reproduce(
         Take label files and batch references another experiment computed from the same
         inputs (:mod:`~curiosity_cli.label.shared_items`); False computes them all.
     record : Path, optional
-        A study's record, e.g. ``studies/multiverse`` (:mod:`~curiosity_cli.study_record`):
+        A study's record, e.g. ``studies/multiverse`` (:mod:`~curiosity_cli.study.record`):
         the seeds and specifications recorded there are taken, not computed; each one
         computed is recorded there. Only for a config that declares specifications and
         sweeps only ``seed``.
@@ -347,9 +347,9 @@ def reproduce(
         A recorded combination made from other recipes than the study gives now, or edited.
     """
     from curiosity_cli.config import load_config, with_converged_labels
-    from curiosity_cli.reproduce import reproduce as run_pipeline
-    from curiosity_cli.specifications import declared_specifications
-    from curiosity_cli.sweep import declared_sweeps, merge_sweeps
+    from curiosity_cli.study.pipeline import reproduce as run_pipeline
+    from curiosity_cli.study.specifications import declared_specifications
+    from curiosity_cli.study.sweep import declared_sweeps, merge_sweeps
 
     _check_scheduler(backend, scheduler)
     config, overrides, sweeps = config_argument(config), overrides_argument(overrides), strings(sweeps, "sweeps", "seed=0,1")
@@ -390,8 +390,9 @@ def reproduce(
 def _reproduce_sweep(config, overrides, sweeps, specifications, from_file, *, on_status, **options) -> Path:
     """A sweep, or a study's specifications: every option and combination checked, then all run."""
     from curiosity_cli.files import display_path
-    from curiosity_cli.specifications import study_size
-    from curiosity_cli.sweep import SweepSyntaxError, count, parse_sweeps, plan_sweep, run_sweep
+    from curiosity_cli.study.specifications import study_size
+    from curiosity_cli.study.sweep import parse_sweeps, plan_sweep, run_sweep
+    from curiosity_cli.study.types import SweepSyntaxError, count
 
     try:
         axes = parse_sweeps(sweeps, overrides)

@@ -5,7 +5,7 @@ differ only in their seed are replicates of one treatment, not treatments of the
 Pooling their pairs (a restart of one seed is paired with the same restart of the same
 seed, never across seeds) gives one ratio with one interval and one p, from as many
 pairs as the replicates hold together. A sweep over ``seed`` pools this way
-(:func:`curiosity_cli.sweep_report.pool_treatments`), and so does a study's specification
+(:func:`curiosity_cli.study.report.pool_treatments`), and so does a study's specification
 curve (:mod:`curiosity_cli.evaluate.specification_curve`).
 """
 

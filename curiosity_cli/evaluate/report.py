@@ -565,6 +565,12 @@ def number(value, digits: int = 2) -> str:
     return f"{value:.{digits}f}" if value == value else ""
 
 
+def p_text(value) -> str:
+    """A p-value for a table: 3 decimals, ``< 0.001`` below that."""
+    text = number(value, 3)
+    return "< 0.001" if text and float(value) < 0.001 else text
+
+
 def _steering_section(steering, lengths: list[int]) -> list[str]:
     """Per map and walker, the mean steering at the headline's length (else the shortest),
     with what it means (:mod:`~curiosity_cli.evaluate.steering`)."""

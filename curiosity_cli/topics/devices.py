@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from curiosity_cli.config import LABEL_DEVICES as DEVICE_CHOICES
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.files import note
-from curiosity_cli.topics.chains import CpuEngine, CudaEngine
+from curiosity_cli.topics.engines import CpuEngine, CudaEngine
 
 #: How a user gets numba-cuda.
 CUDA_EXTRA = "pip install 'curiosity[cuda]' (from a checkout: pip install -e '.[cuda]')"

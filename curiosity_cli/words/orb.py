@@ -65,8 +65,6 @@ def pad_for_levels(n_levels: int, scale_factor: float) -> int:
 
 def _orb_keypoints(window: np.ndarray, fast_threshold: int, n_levels: int, scale_factor: float):
     """Every ORB keypoint of a grey window (no cap) and its descriptor, from OpenCV."""
-    import cv2
-
     # nfeatures caps keypoints per level by Harris response; above the window's pixel
     # count (level 0 gets the largest share, ~(1 - 1/scale) of it) it never binds, so
     # every keypoint comes back and any selection is ours (per tile) rather than

@@ -4,14 +4,12 @@ from __future__ import annotations
 
 import json
 import shutil
-import zipfile
 
 import dask
 import distributed
-import numpy as np
 import pytest
+from experiments import label_contents, small_experiment
 from small_maps import grid_yaml
-from test_pipeline import small_experiment
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
@@ -27,21 +25,6 @@ def scheduler():
     """The address of a local cluster of 2 one-thread worker processes."""
     with dask_client(None, 2) as (client, _):
         yield client.scheduler.address
-
-
-def label_contents(folder) -> dict:
-    """Each label and batch file's arrays, byte for byte (the zip's timestamps and a batch reference's timing aside)."""
-    out = {}
-    for path in sorted([*(folder / "labels").rglob("*.npz"), *(folder / "batch").glob("*.npz")]):
-        with zipfile.ZipFile(path) as npz:
-            members = {name: npz.read(name) for name in npz.namelist()}
-        if path.parent.name == "batch":
-            with np.load(path) as npz:
-                meta = json.loads(str(npz["meta"]))
-            assert meta.pop("seconds") >= 0
-            members["meta.npy"] = meta
-        out[path.relative_to(folder).as_posix()] = members
-    return out
 
 
 def test_labels_on_a_cluster_equal_the_loky_labels_byte_for_byte(own_map, tmp_path, scheduler):

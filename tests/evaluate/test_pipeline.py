@@ -8,6 +8,7 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from experiments import small_experiment
 from small_maps import grid_config, grid_yaml
 from typer.testing import CliRunner
 
@@ -21,14 +22,6 @@ from curiosity_cli.explore.runs import read_run
 from curiosity_cli.words.store import load_store
 
 runner = CliRunner()
-
-
-def small_experiment(own_map, tmp_path, **explore):
-    """A grid of 4 weight functions x 2 restarts x 12 steps on own_map, explored and labelled."""
-    config = grid_config(own_map, **explore)
-    config = dataclasses.replace(config, label=dataclasses.replace(config.label, sweeps=2, batch_sweeps=8))
-    run_grid(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
-    return config, tmp_path / "grid"
 
 
 def test_label_and_evaluate_write_every_table(own_map, tmp_path):

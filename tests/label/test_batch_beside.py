@@ -8,8 +8,7 @@ import threading
 
 import numpy as np
 import pytest
-from test_dask_labels import label_contents
-from test_pipeline import small_experiment
+from experiments import label_contents, small_experiment
 
 from curiosity_cli.label.batch_references import WrittenBatch, write_batch
 from curiosity_cli.label.stage import label_experiment
@@ -51,7 +50,7 @@ def test_a_block_waits_for_the_batch_file_made_from_its_recipe(tmp_path):
 
 
 def test_reproduce_computes_the_batch_reference_beside_the_exploration_and_it_is_the_label_stages(own_map, tmp_path):
-    from curiosity_cli.reproduce import reproduce
+    from curiosity_cli.study.pipeline import reproduce
 
     config, labelled = small_experiment(own_map, tmp_path / "label", restarts=1, weight_functions=("random-walk",))
     label_experiment(config, labelled, cache_dir=tmp_path / "label" / "cache", jobs=1, reuse=False)

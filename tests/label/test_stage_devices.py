@@ -7,8 +7,7 @@ import json
 import shutil
 
 import pytest
-from test_dask_labels import label_contents
-from test_pipeline import small_experiment
+from experiments import label_contents, small_experiment
 
 from curiosity_cli.label.stage import label_experiment
 from curiosity_cli.topics.devices import DEVICES
@@ -45,7 +44,7 @@ def test_a_device_taking_one_block_at_a_time_gets_every_chain_of_a_map_in_one_bl
 def test_reproduce_on_a_device_that_frees_the_cores_leaves_the_batch_references_to_the_label_stage(
     own_map, tmp_path, monkeypatch,
 ):
-    from curiosity_cli.reproduce import reproduce
+    from curiosity_cli.study.pipeline import reproduce
 
     config, _ = small_experiment(own_map, tmp_path / "explored", restarts=1, weight_functions=("random-walk",))
     one_block_at_a_time(monkeypatch)

@@ -9,7 +9,8 @@ import pytest
 
 from curiosity_cli.config import LABEL_DEVICES
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.topics.chains import CpuEngine, FrozenChains
+from curiosity_cli.topics.chains import FrozenChains
+from curiosity_cli.topics.engines import CpuEngine
 from curiosity_cli.topics.devices import AUTO, AUTO_FALLBACK, AUTO_PREFERS, DEVICES, Device, DeviceError, resolve_device
 
 ONE_CELL = dict(words=[3, 3, 0], cells=[0, 0, 0], neighbours=np.array([[-1, -1, -1, -1]], np.int32))

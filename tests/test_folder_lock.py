@@ -8,7 +8,7 @@ import subprocess
 import sys
 
 import pytest
-from test_pipeline import small_experiment
+from experiments import small_experiment
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app

@@ -1,7 +1,7 @@
-"""A sweep's report: ``SWEEP.md``, ``sweep.csv`` and ``sensitivity.csv`` (:mod:`curiosity_cli.sweep` runs it).
+"""A sweep's report: ``SWEEP.md``, ``sweep.csv`` and ``sensitivity.csv`` (:mod:`curiosity_cli.study.sweep` runs it).
 
 ``SWEEP.md`` opens with how to run the sweep again, then, for a study that declares
-specifications (:mod:`curiosity_cli.specifications`), the specification curve; else the
+specifications (:mod:`curiosity_cli.study.specifications`), the specification curve; else the
 sensitivity table, which pools the seeds of each treatment (:func:`pool_treatments`);
 then every combination's headline. ``sweep.csv`` has a row per combination and dataset,
 ``sensitivity.csv`` a row per treatment and dataset, the seeds pooled.
@@ -15,28 +15,20 @@ that shows a treatment's numbers reads them from that one pooling.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from curiosity_cli.config import PAPER_WALKERS
-from curiosity_cli.evaluate.report import number
+from curiosity_cli.evaluate.report import number, p_text
+from curiosity_cli.evaluate.specification_curve import DISTINCT_WALKERS
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import atomic_path, display_path
-from curiosity_cli.sweep import Combination, Outcome, Sweep, count
-
-if TYPE_CHECKING:
-    from curiosity_cli.evaluate.replicates import Pooled
+from curiosity_cli.study.types import REPLICATE_KEY, Outcome, Sweep, Treatment, count
 
 #: The headline columns, as ``headline.csv`` has them (:func:`curiosity_cli.evaluate.tables.headline`).
 HEADLINE_COLUMNS = (
     "dataset", "topic_perplexity", "next_best", "next_best_mi", "ratio", "p_value", "pairs", "paper_map", "paper_ratio",
     "ratio_ci_low", "ratio_ci_high", "detectable_ratio", "pairs_for_lead",
 )
-#: The key whose values are replicates, pooled in SWEEP.md's first table, not treatments.
-REPLICATE_KEY = "seed"
-#: The walkers whose distinct cells the first table of SWEEP.md shows beside the ratio.
-DISTINCT_WALKERS = ("stochastic-coverage", "topic-perplexity")
 
 
 def read_headline(folder: Path):
@@ -66,7 +58,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], 
     """Write ``SWEEP.md``, ``sweep.csv`` and ``sensitivity.csv`` from the combinations' tables (module docstring).
 
     A study that declares specifications also gets its specification curve
-    (:func:`curiosity_cli.specifications.specification_lead`: ``specifications.csv`` and
+    (:func:`curiosity_cli.study.curve.specification_lead`: ``specifications.csv`` and
     the figure), which SWEEP.md leads with in place of the sensitivity table: the same
     pooled numbers, in the same rows, and more. Every treatment's seeds are pooled once
     (:func:`pool_treatments`), over the paper's walkers only in a study.
@@ -79,7 +71,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], 
     outcomes : sequence of Outcome
         One per combination run, in product order.
     record : Path, optional
-        The study's record the sweep kept (:mod:`curiosity_cli.study_record`).
+        The study's record the sweep kept (:mod:`curiosity_cli.study.record`).
 
     Returns
     -------
@@ -89,7 +81,8 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], 
     import pandas as pd
 
     from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT
-    from curiosity_cli.specifications import specification_lead, study_size
+    from curiosity_cli.study.curve import specification_lead
+    from curiosity_cli.study.specifications import study_size
 
     folder = Path(folder)
     keys = sweep.keys
@@ -221,28 +214,6 @@ def _distinct_table(revisits) -> list[str]:
     return lines + [""]
 
 
-@dataclass(frozen=True)
-class Treatment:
-    """The combinations of a sweep that differ only in their seed, and their pairs pooled.
-
-    Attributes
-    ----------
-    values : dict of str to str
-        Each key of the sweep but the seed (``specification`` first in a study), and its value.
-    combinations : tuple of Combination
-        Its combinations that finished, one per seed.
-    pooled : Pooled or None
-        :func:`~curiosity_cli.evaluate.replicates.pool` of their folders; None when they
-        could not be pooled (``error`` says why).
-    error : str or None
-    """
-
-    values: dict[str, str]
-    combinations: tuple[Combination, ...]
-    pooled: Pooled | None
-    error: str | None = None
-
-
 def pool_treatments(
     sweep: Sweep, outcomes: Sequence[Outcome], walkers: Sequence[str] | None = None,
 ) -> list[Treatment]:
@@ -253,7 +224,7 @@ def pool_treatments(
     ----------
     sweep : Sweep
     outcomes : sequence of Outcome
-        Each pooled from the folder its tables are in (:attr:`~curiosity_cli.sweep.Outcome.tables`).
+        Each pooled from the folder its tables are in (:attr:`~curiosity_cli.study.types.Outcome.tables`).
     walkers : sequence of str, optional
         As :func:`~curiosity_cli.evaluate.replicates.pool`'s.
     """
@@ -326,11 +297,3 @@ def _sensitivity(sweep: Sweep, treatments: Sequence[Treatment]) -> tuple[list[st
                 ]) + " |"
             )
     return lines + [""], rows
-
-
-def p_text(value) -> str:
-    """A p-value for a table: 3 decimals, ``< 0.001`` below that."""
-    text = number(value, 3)
-    return "< 0.001" if text and float(value) < 0.001 else text
-
-

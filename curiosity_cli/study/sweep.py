@@ -1,6 +1,6 @@
 """Parameter sweeps: ``curiosity reproduce CONFIG --sweep KEY=V1,V2 --sweep KEY2=W1,...``.
 
-A sweep runs the whole pipeline (:func:`curiosity_cli.reproduce.reproduce`) once per
+A sweep runs the whole pipeline (:func:`curiosity_cli.study.pipeline.reproduce`) once per
 combination of values, the Cartesian product of the ``--sweep`` options, in the spirit
 of Hydra's ``--multirun key=a,b``, and compares the combinations' headlines in one report.
 
@@ -18,7 +18,7 @@ Every combination is loaded and validated with :func:`curiosity_cli.config.load_
 (the ``--set`` machinery: ``--set`` options first, then the combination's values)
 before the first one runs, so a bad key or value stops the sweep before anything is
 written. A study config may also declare specifications, named sets of overrides under
-each of which every combination runs (:mod:`curiosity_cli.specifications`): a
+each of which every combination runs (:mod:`curiosity_cli.study.specifications`): a
 combination is then a (specification, swept values) pair, named
 ``specification-NAME_KEY-VALUE...``.
 
@@ -30,7 +30,7 @@ For an experiment config named ``quick``, everything goes under
     quick-sweep/
       sweep.yaml                               the config, --set options, and per combination
                                                its folder and overrides (written first)
-      SWEEP.md, sweep.csv, sensitivity.csv     the report (written last: :mod:`curiosity_cli.sweep_report`)
+      SWEEP.md, sweep.csv, sensitivity.csv     the report (written last: :mod:`curiosity_cli.study.report`)
       model.topics-16_explore.restarts-20/     an ordinary experiment folder (config.yaml,
       model.topics-32_explore.restarts-20/       runs/, labels/, REPORT.md, ...) per combination
 
@@ -63,146 +63,36 @@ import hashlib
 import itertools
 import json
 import re
-import shlex
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
+from dataclasses import replace
 from pathlib import Path
 
-from curiosity_cli.config import ExperimentConfig, config_file, load_config
+from curiosity_cli.config import config_file, load_config
 from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.paths import DEFAULT_RESULTS
 from curiosity_cli.schema import MAX_NAME, OVERRIDES
-
-if TYPE_CHECKING:
-    from curiosity_cli.specifications import Specification
+from curiosity_cli.study.specifications import check_specifications, specification_error
+from curiosity_cli.study.types import (
+    SPECIFICATION,
+    Combination,
+    Outcome,
+    Specification,
+    Sweep,
+    SweepAxis,
+    SweepError,
+    SweepSyntaxError,
+    count,
+    overlap,
+    override_at,
+    parsed_value,
+    value_text,
+)
 
 _SAFE = re.compile(r"[^A-Za-z0-9_.-]+")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 _OPENING, _CLOSING = "[{", "]}"
-
-
-class SweepSyntaxError(ValueError):
-    """A malformed ``--sweep`` option; the command line reports it as a usage error."""
-
-
-class SweepError(CuriosityError):
-    """Combinations of a sweep that failed; the others are done and reported."""
-
-
-@dataclass(frozen=True)
-class SweepAxis:
-    """One ``--sweep KEY=V1,V2,...`` option: a dotted key and its values as given."""
-
-    key: str
-    values: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class Combination:
-    """One experiment of a sweep.
-
-    Attributes
-    ----------
-    index : int
-        1-based position in product order.
-    overrides : tuple of str
-        ``KEY=VALUE`` for every swept key, in ``--sweep`` order (``--set`` syntax); in a
-        study that declares specifications, ``specification=NAME`` first
-        (:data:`curiosity_cli.specifications.SPECIFICATION`).
-    name : str
-        Its experiment name and folder (module docstring).
-    config : ExperimentConfig
-        The validated config: the file, the ``--set`` options, the specification's
-        overrides, then the swept values.
-    """
-
-    index: int
-    overrides: tuple[str, ...]
-    name: str
-    config: ExperimentConfig
-
-    @property
-    def label(self) -> str:
-        """The overrides as a reader sees them, e.g. ``model.topics=16, seed=1``."""
-        return ", ".join(self.overrides)
-
-
-@dataclass(frozen=True)
-class Sweep:
-    """A validated sweep: every combination loaded, nothing written yet.
-
-    Attributes
-    ----------
-    name : str
-        The experiment config's name; the sweep goes to ``<results>/<name>-sweep/``.
-    config_path : Path
-        The experiment YAML.
-    sets : tuple of str
-        The ``--set`` options shared by every combination.
-    axes : tuple of SweepAxis
-    combinations : tuple of Combination
-        In product order (each specification's, in the order declared, in turn).
-    specifications : tuple of Specification
-        The specifications the config declares (:mod:`curiosity_cli.specifications`);
-        empty for a plain sweep.
-    """
-
-    name: str
-    config_path: Path
-    sets: tuple[str, ...]
-    axes: tuple[SweepAxis, ...]
-    combinations: tuple[Combination, ...] = field(repr=False)
-    specifications: tuple[Specification, ...] = ()
-
-    @property
-    def keys(self) -> list[str]:
-        """What tells the combinations apart, as their ``overrides`` name it: the swept keys,
-        after ``specification`` in a study that declares specifications."""
-        from curiosity_cli.specifications import SPECIFICATION
-
-        return [SPECIFICATION] * bool(self.specifications) + [axis.key for axis in self.axes]
-
-    def folder(self, results_dir: Path) -> Path:
-        """The sweep's folder under ``results_dir``."""
-        return Path(results_dir) / f"{self.name}-sweep"
-
-    def command(self, results_dir: Path = DEFAULT_RESULTS, record: Path | None = None) -> str:
-        """The ``curiosity reproduce`` command that runs (or resumes) this sweep in ``results_dir``,
-        keeping its ``record`` (:mod:`curiosity_cli.study_record`) if given."""
-        words = ["curiosity", "reproduce", display_path(self.config_path)]
-        if Path(results_dir) != DEFAULT_RESULTS:
-            words += ["--results-dir", display_path(results_dir)]
-        if record is not None:
-            words += ["--record", display_path(record)]
-        for text in self.sets:
-            words += ["--set", text]
-        for axis in self.axes:
-            words += ["--sweep", f"{axis.key}={','.join(axis.values)}"]
-        return shlex.join(words)
-
-
-@dataclass(frozen=True)
-class Outcome:
-    """What running one combination gave: its report, or why it failed, and its time.
-
-    Attributes
-    ----------
-    tables : Path or None
-        The folder its tables are in: its experiment folder, or the folder of a study's
-        record it was taken from (:mod:`curiosity_cli.study_record`); None if it failed.
-    taken : bool
-        Taken from a record, not computed.
-    """
-
-    combination: Combination
-    report: Path | None
-    error: str | None
-    seconds: float
-    tables: Path | None = None
-    taken: bool = False
 
 
 # --------------------------------------------------------------------------- parsing
@@ -336,13 +226,6 @@ def declared_sweeps(config_path: str | Path) -> list[str]:
     return options
 
 
-def value_text(value) -> str:
-    """A YAML value as a ``--sweep`` value that reads back to it: strings as typed when they can be."""
-    if isinstance(value, str) and _parsed(value) == value:
-        return value
-    return json.dumps(value)
-
-
 def merge_sweeps(declared: Sequence[str], given: Sequence[str]) -> list[str]:
     """The config's declared sweep with the command line's ``--sweep`` options: a given key
     replaces the declared key's values in place, and other given keys follow, in order."""
@@ -356,11 +239,6 @@ def merge_sweeps(declared: Sequence[str], given: Sequence[str]) -> list[str]:
         else:
             merged[i] = text
     return merged
-
-
-def overlap(key: str, other: str) -> bool:
-    """Whether two dotted keys set the same leaf (equal, or one a section of the other)."""
-    return key == other or key.startswith(other + ".") or other.startswith(key + ".")
 
 
 def combinations(axes: Sequence[SweepAxis]) -> list[tuple[str, ...]]:
@@ -408,15 +286,8 @@ def _part(key: str, value: str) -> str:
     safe = _SAFE.sub("-", value).strip("-")
     if safe == value:
         return f"{key}-{value}"
-    digest = _digest(json.dumps([key, _parsed(value)], sort_keys=True, default=str), 6)
+    digest = _digest(json.dumps([key, parsed_value(value)], sort_keys=True, default=str), 6)
     return f"{key}-{safe}-{digest}" if safe else f"{key}-{digest}"
-
-
-def _parsed(value: str):
-    """A value as an override reads it (YAML, with the numbers a person types)."""
-    from curiosity_cli.yamlfile import parse_yaml
-
-    return parse_yaml(value, "sweeps")
 
 
 def _digest(text: str, digits: int) -> str:
@@ -441,7 +312,7 @@ def plan_sweep(
     sets : sequence of str
         ``--set KEY=VALUE`` options applied to every combination, before its own values.
     specifications : sequence of Specification
-        A study's (:func:`curiosity_cli.specifications.declared_specifications`): every
+        A study's (:func:`curiosity_cli.study.specifications.declared_specifications`): every
         combination of ``axes`` runs under each, its overrides after ``sets``.
     declared : iterable of str
         The keys of ``axes`` whose values the config file's ``sweep:`` gave
@@ -459,8 +330,6 @@ def plan_sweep(
         when one of theirs is at fault, else followed by the combination; or a
         specification's key also swept or given with ``--set``.
     """
-    from curiosity_cli.specifications import SPECIFICATION, check_specifications, specification_error
-
     if not axes and not specifications:
         raise ValueError("a sweep needs at least one axis or specification")
     config_path = config_file(config_path)
@@ -526,16 +395,13 @@ def _combination_error(
     fault, else followed by the combination."""
     from curiosity_cli.config import SWEEP_KEY
 
-    if exc.parameter == OVERRIDES:
-        rest = str(exc)[len(OVERRIDES):]
-        if rest.startswith(" "):  # a malformed override: not the sweep's doing
-            return exc
-        for key in keys:
-            at = rest[2:]
-            if at.startswith(key) and at[len(key):len(key) + 1] in (":", ".", "["):
-                if key in declared:
-                    return ConfigError(f"{display_path(config_path)}: {SWEEP_KEY}.{at}")
-                return ConfigError(f"sweeps{rest}", parameter="sweeps")
+    if exc.parameter == OVERRIDES and str(exc)[len(OVERRIDES):].startswith(" "):
+        return exc  # a malformed override: not the sweep's doing
+    if (found := override_at(exc, keys)) is not None:
+        key, at = found
+        if key in declared:
+            return ConfigError(f"{display_path(config_path)}: {SWEEP_KEY}.{at}")
+        return ConfigError(f"sweeps: {at}", parameter="sweeps")
     return ConfigError(f"{exc} (with the sweep's {', '.join(overrides)})", parameter=exc.parameter)
 
 
@@ -559,13 +425,13 @@ def run_sweep(
     results_dir : Path
         The sweep's folder goes under ``results_dir``.
     on_stage : callable, optional
-        As :func:`~curiosity_cli.reproduce.reproduce`'s; each combination is also
+        As :func:`~curiosity_cli.study.pipeline.reproduce`'s; each combination is also
         announced as a stage without units, ``"combination 2/3: model.topics=32"``.
     record : Path, optional
-        A study's record (:mod:`curiosity_cli.study_record`): the combinations it holds are
+        A study's record (:mod:`curiosity_cli.study.record`): the combinations it holds are
         taken from it, not computed; each one computed is recorded there when it finishes.
     **pipeline
-        The other keywords of :func:`curiosity_cli.reproduce.reproduce` (``cache_dir``,
+        The other keywords of :func:`curiosity_cli.study.pipeline.reproduce` (``cache_dir``,
         ``jobs``, ``force``, ``backend``, ``scheduler``, ``on_done``), for every combination.
 
     Returns
@@ -580,11 +446,11 @@ def run_sweep(
         and ``sweep.csv`` hold the others).
     RecordError
         Before anything runs: ``sweep`` is not a study of seeds, or a recorded
-        combination was made otherwise (:meth:`~curiosity_cli.study_record.StudyRecord.recorded`).
+        combination was made otherwise (:meth:`~curiosity_cli.study.record.StudyRecord.recorded`).
     """
-    from curiosity_cli.reproduce import reproduce
-    from curiosity_cli.study_record import StudyRecord
-    from curiosity_cli.sweep_report import write_sweep_report
+    from curiosity_cli.study.pipeline import reproduce
+    from curiosity_cli.study.record import StudyRecord
+    from curiosity_cli.study.report import write_sweep_report
     from curiosity_cli.topics.devices import resolve_device
 
     kept = StudyRecord(record, sweep) if record is not None else None
@@ -651,8 +517,3 @@ def write_plan(sweep: Sweep, folder: Path) -> Path:
     with atomic_path(path) as tmp:
         tmp.write_text(yaml.safe_dump(plan, sort_keys=False))
     return path
-
-
-def count(n: int, noun: str) -> str:
-    """``n`` and ``noun``, plural unless ``n`` is 1: ``3 combinations``."""
-    return f"{n} {noun}{'' if n == 1 else 's'}"

@@ -38,7 +38,7 @@ from curiosity_cli.experiment.wholeness import changed, records
 from curiosity_cli.files import atomic_path, display_path
 
 if TYPE_CHECKING:
-    from curiosity_cli.sweep import Combination, Sweep
+    from curiosity_cli.study.types import Combination, Sweep
 
 #: The files a recorded experiment keeps, its own under the same names.
 TABLES = (
@@ -90,7 +90,7 @@ class StudyRecord:
     root : str or Path
         The record, e.g. ``studies/multiverse``; made when the first combination is kept.
     sweep : Sweep
-        The study (:func:`~curiosity_cli.sweep.plan_sweep`).
+        The study (:func:`~curiosity_cli.study.sweep.plan_sweep`).
 
     Raises
     ------
@@ -203,7 +203,7 @@ def keep_experiment(experiment: Path, target: Path) -> Path:
         with atomic_path(staging / RECORD_FILE) as tmp:
             tmp.write_text(
                 "# What the tables here were made from: curiosity reproduce --record takes them only while the\n"
-                "# study's config and maps give these recipes and the tables are these bytes (curiosity_cli/study_record.py)\n"
+                "# study's config and maps give these recipes and the tables are these bytes (curiosity_cli/study/record.py)\n"
                 + yaml.safe_dump(record, sort_keys=False)
             )
         try:

@@ -1,45 +1,5 @@
-"""Declared specifications: a study config's named sets of overrides, and its specification curve.
+"""A study's specification curve: the lead of ``SWEEP.md``, its table and figures.
 
-A study asks whether a finding survives every defensible way of doing the experiment
-(Simonsohn, Simmons & Nelson's specification-curve analysis). Each way is a
-**specification**: a name and the config overrides that make it, declared in the study
-config beside the sweep of its seeds::
-
-    sweep:
-      seed: [0, 1, 2]                        # replicates, pooled
-    specifications:                          # name -> overrides, as --set takes them
-      default: {}                            # the config as it is
-      clamp: {explore.coverage: clamp}
-      beta-1: {model.beta: 1.0}
-      clamp-beta-1:
-        explore.coverage: clamp
-        model.beta: 1.0
-
-Names are 1 to 80 letters, digits, ``_``, ``.`` or ``-``, starting with a letter or
-digit. Keys are dotted config keys and values YAML values, as ``--set KEY=VALUE`` reads
-them; ``{}`` (or nothing) leaves the config as it is. A key may not be given both by a
-specification and by ``--set`` or a sweep (``sweep:`` or ``--sweep``), nor twice in one
-specification, and ``name`` cannot be a specification's.
-
-Planning and running
---------------------
-``curiosity reproduce CONFIG`` runs every specification, in the order declared, on every
-map of the config's ``datasets`` and every combination of its sweep, each as an ordinary
-experiment folder under ``<results>/<name>-sweep/`` (:func:`curiosity_cli.sweep.plan_sweep`,
-:func:`~curiosity_cli.sweep.run_sweep`). Every (specification, combination) is loaded
-and validated before the first runs: a bad key or value is refused in one line naming
-the config file, the specification and the key
-(``study.yaml: specifications.clamp.explore.coverage: got 'clmap', expected one of ...``).
-
-A folder is named by the specification's name and the swept values only
-(:func:`~curiosity_cli.sweep.combination_name` of ``specification=NAME`` and then the
-swept ``KEY=VALUE``: ``specification-clamp_seed-1``), so adding a specification finds
-the finished ones where they were, and a killed study resumes with its finished runs and
-labels kept. The overrides are not in the name: after changing a specification's
-overrides, its folders refuse the new config as any experiment does; give it a new name.
-
-The report
-----------
 ``SWEEP.md`` leads with the specification curve (:func:`specification_lead`): topic
 perplexity against each of the paper's other walkers (the decision), and the ratio to the
 next best with its null reference (a summary); the figure ``specification-curve.png``
@@ -50,161 +10,31 @@ their null reference (:mod:`curiosity_cli.evaluate.specification_curve`); then t
 against Z_b (``specifications-batch.csv``, ``specification-curve-batch.png``). It takes the place of the
 sweep's sensitivity table, which would repeat the same pooled numbers in the same rows;
 ``sensitivity.csv`` is still written. Every number comes from one pooling of each
-specification's seeds (:func:`curiosity_cli.sweep_report.pool_treatments`), over the
+specification's seeds (:func:`curiosity_cli.study.report.pool_treatments`), over the
 paper's four walkers.
 """
 
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from curiosity_cli.config import SPECIFICATIONS_KEY, config_file
-from curiosity_cli.schema import OVERRIDES
-from curiosity_cli.errors import ConfigError
 from curiosity_cli.files import atomic_path, display_path
-from curiosity_cli.sweep import overlap, value_text
+from curiosity_cli.study.types import REPLICATE_KEY, SPECIFICATION, Sweep, Treatment
 
 if TYPE_CHECKING:
     from curiosity_cli.config import ExperimentConfig
-    from curiosity_cli.sweep import Sweep
-    from curiosity_cli.sweep_report import Treatment
 
-#: How a combination's overrides and a sweep's report name its specification: ``specification=NAME``.
-SPECIFICATION = "specification"
+
 #: The table and the figure of a study's curve, in its sweep folder: MI against human labels, and against Z_b.
 TABLE, FIGURE = "specifications.csv", "specification-curve"
 BATCH_TABLE, BATCH_FIGURE = "specifications-batch.csv", "specification-curve-batch"
+
+
 #: The mechanism's figure (SWEEP.md's "Does surprise point at what is new?").
 MECHANISM_FIGURE = "mechanism"
-#: A name leaves room in its folders' names (at most MAX_NAME) for ``specification-`` and the swept values.
-_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,79}$")
-
-
-@dataclass(frozen=True)
-class Specification:
-    """One declared specification.
-
-    Attributes
-    ----------
-    name : str
-    overrides : tuple of str
-        ``KEY=VALUE``, ``--set`` syntax, in the order declared.
-    """
-
-    name: str
-    overrides: tuple[str, ...]
-
-    @property
-    def keys(self) -> list[str]:
-        """The dotted keys it sets."""
-        return [text.partition("=")[0] for text in self.overrides]
-
-
-def declared_specifications(config_path: str | Path) -> tuple[Specification, ...]:
-    """The specifications a study config declares under its top-level ``specifications`` key.
-
-    Parameters
-    ----------
-    config_path : str or Path
-        The study YAML, or a shipped config's name.
-
-    Returns
-    -------
-    tuple of Specification
-        In the order declared; empty when the file declares none.
-
-    Raises
-    ------
-    ConfigError
-        ``specifications`` is not a mapping of names to mappings of keys to values, a
-        name that is not one, a key given twice or ``name``; naming the file, the
-        specification and the key.
-    """
-    from curiosity_cli.yamlfile import read_yaml
-
-    config_path = config_file(config_path)
-    declared = read_yaml(config_path, "config file").get(SPECIFICATIONS_KEY)
-    if declared is None:
-        return ()
-    where = f"{display_path(config_path)}: {SPECIFICATIONS_KEY}"
-    if not isinstance(declared, dict) or not declared:
-        raise ConfigError(f"{where}: expected a mapping of names to overrides, e.g. clamp: {{explore.coverage: clamp}}")
-    found = []
-    for name, overrides in declared.items():
-        if not isinstance(name, str) or not _NAME.match(name):
-            raise ConfigError(
-                f"{where}: {name!r}: expected a name of 1 to 80 letters, digits, '_', '.' or '-', starting with a "
-                "letter or digit"
-            )
-        overrides = {} if overrides is None else overrides
-        if not isinstance(overrides, dict):
-            raise ConfigError(
-                f"{where}.{name}: expected a mapping of dotted keys to values, e.g. {{explore.coverage: clamp}}, "
-                "or {} for the config as it is"
-            )
-        texts: list[str] = []
-        for key, value in overrides.items():
-            if not isinstance(key, str) or not key.strip() or "=" in key:
-                raise ConfigError(f"{where}.{name}: {key!r}: expected a dotted config key, e.g. explore.coverage")
-            if key == "name":
-                raise ConfigError(f"{where}.{name}.name: a specification cannot rename the experiment; each is named by its own name")
-            for earlier in texts:
-                if overlap(key, earlier.partition("=")[0]):
-                    raise ConfigError(f"{where}.{name}.{key}: {earlier.partition('=')[0]} is set too; give each key once")
-            texts.append(f"{key}={value_text(value)}")
-        found.append(Specification(name, tuple(texts)))
-    return tuple(found)
-
-
-def check_specifications(config_path: Path, specifications: Sequence[Specification], swept: Sequence[str], sets: Sequence[str]) -> None:
-    """Refuse a specification's key that a sweep or a ``--set`` option gives too.
-
-    Raises
-    ------
-    ConfigError
-        Naming the file, the specification and the key.
-    """
-    given = [(key, "swept") for key in swept] + [(text.partition("=")[0].strip(), "given with --set") for text in sets]
-    for specification in specifications:
-        for key in specification.keys:
-            for other, how in given:
-                if overlap(key, other):
-                    raise ConfigError(
-                        f"{display_path(config_path)}: {SPECIFICATIONS_KEY}.{specification.name}.{key}: {other} is "
-                        f"also {how}; give it in one of them"
-                    )
-
-
-def specification_error(exc: ConfigError, config_path: Path, specification: Specification) -> ConfigError | None:
-    """The error of a specification whose own key is at fault, naming the file, the specification
-    and the key; None when the error is not about one of its keys."""
-    if exc.parameter != OVERRIDES:
-        return None
-    rest = str(exc)[len(OVERRIDES):]
-    if not rest.startswith(": "):
-        return None
-    at = rest[2:]
-    for key in specification.keys:
-        if at.startswith(key) and at[len(key):len(key) + 1] in (":", ".", "["):
-            return ConfigError(f"{display_path(config_path)}: {SPECIFICATIONS_KEY}.{specification.name}.{at}")
-    return None
-
-
-def study_size(sweep: Sweep) -> str:
-    """A study's size in words: ``4 specifications x 3 seeds`` (or ``x 6 sweep combinations``)."""
-    from curiosity_cli.sweep import count
-
-    per = len(sweep.combinations) // max(len(sweep.specifications), 1)
-    noun = "seed" if [axis.key for axis in sweep.axes] == ["seed"] else "sweep combination"
-    return f"{count(len(sweep.specifications), 'specification')} x {count(per, noun)}"
-
-
-# --------------------------------------------------------------------------- the report
 
 
 def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatment]) -> list[str]:
@@ -219,7 +49,7 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
         The study's sweep folder.
     treatments : sequence of Treatment
         Each specification (and any other swept key but the seed) with its seeds pooled
-        (:func:`curiosity_cli.sweep_report.pool_treatments`).
+        (:func:`curiosity_cli.study.report.pool_treatments`).
 
     Returns
     -------
@@ -322,8 +152,7 @@ def _mechanism_section(table, names: list[str], folder: Path, datasets: list[str
 def _curve_rows(table, names: list[str]) -> list[str]:
     """The curve's points as a Markdown table: each walker compared alone, then the next-best summary."""
     from curiosity_cli.evaluate.specification_curve import STEERING_WALKER, VERSUS
-    from curiosity_cli.evaluate.report import number
-    from curiosity_cli.sweep_report import p_text
+    from curiosity_cli.evaluate.report import number, p_text
 
     def versus(r: dict, walker: str) -> str:
         low, high = r[f"ratio_{walker}_low"], r[f"ratio_{walker}_high"]
@@ -351,8 +180,6 @@ def _curve_rows(table, names: list[str]) -> list[str]:
 
 def _choices(sweep: Sweep, treatment: Treatment) -> dict[str, str]:
     """The value of each varied key (set by any specification, or swept but the seed) in a treatment."""
-    from curiosity_cli.sweep_report import REPLICATE_KEY
-
     keys = list(dict.fromkeys(k for s in sweep.specifications for k in s.keys))
     keys += [axis.key for axis in sweep.axes if axis.key != REPLICATE_KEY and axis.key not in keys]
     config = treatment.combinations[0].config
