@@ -36,10 +36,10 @@ CONFIG_DIR = SHIPPED_CONFIGS
 SHIPPED_VOCABULARIES = {"shipped": SHIPPED_DATA / "vocab"}
 
 #: The top-level key of an experiment config that declares a sweep over its other keys
-#: (:func:`curiosity_cli.sweep.declared_sweeps`); an experiment never sees it.
+#: (:func:`curiosity_cli.study.sweep.declared_sweeps`); an experiment never sees it.
 SWEEP_KEY = "sweep"
 #: The top-level key of a study config that declares named specifications, each a set of
-#: overrides run on every map and replicate seed (:mod:`curiosity_cli.specifications`); an
+#: overrides run on every map and replicate seed (:mod:`curiosity_cli.study.specifications`); an
 #: experiment never sees it either.
 SPECIFICATIONS_KEY = "specifications"
 
@@ -471,7 +471,7 @@ def _load_chain(path: Path, raw: Raw, seen: tuple[Path, ...] = ()) -> None:
     for key, what in ((SWEEP_KEY, "a sweep"), (SPECIFICATIONS_KEY, "specifications")):
         if key in data and seen:
             raise ConfigError(f"{display_path(path)}: {key}: only the experiment config itself may declare {what}")
-        # the sweep's, not an experiment's (curiosity_cli.sweep.declared_sweeps, curiosity_cli.specifications)
+        # the sweep's, not an experiment's (curiosity_cli.study.sweep.declared_sweeps, curiosity_cli.study.specifications)
         data.pop(key, None)
     base = data.pop("base", None)
     if base is not None:
@@ -694,8 +694,13 @@ def _check_coverage(explore: ExploreConfig, raw: Raw) -> None:
 
 def _check_drive(drive: DriveConfig, raw: Raw) -> None:
     """Rules that tie ``drive`` keys together: the first broken one, where its key was set."""
+    # the grid is named, not frame_width: a grid too fine is what a user mistypes, and a run would meet it
+    # only at its first frame, after loading the model
+    fits = f"at most frame_width ({drive.frame_width}): a frame is resized to {drive.frame_width} px wide"
     rules = [
-        (drive.frame_width >= drive.grid_cols, "frame_width", f"at least grid_cols ({drive.grid_cols})"),
+        (drive.grid_cols <= drive.frame_width, "grid_cols", f"{fits}, a pixel at least to each column of cells"),
+        (drive.grid_rows <= drive.frame_width, "grid_rows", f"{fits}, and stretched no taller than that to give each "
+         "row of cells a pixel"),
         (drive.surge_min <= drive.surge_max, "surge_min", f"at most surge_max ({drive.surge_max})"),
         (drive.keepalive < drive.watchdog, "keepalive", f"shorter than the robot's watchdog ({drive.watchdog} s)"),
     ]

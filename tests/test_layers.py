@@ -118,3 +118,70 @@ def test_the_check_sees_imports_inside_functions_relative_ones_and_the_bottom_la
         "curiosity_cli/topics/model.py:1: imports curiosity_cli.evaluate.tables",
         "curiosity_cli/workers.py:1: imports curiosity_cli.maps.datasets",
     ]
+
+
+def import_circles(package: Path = PACKAGE) -> list[list[str]]:
+    """Groups of modules that import each other, directly or round a circle (imports inside
+    functions and under ``TYPE_CHECKING`` included); each sorted."""
+    found = modules(package)
+    names = {module for _, module in found}
+    graph = {}
+    for path, module in found:
+        targets = set()
+        for name, _ in imported_modules(path, module):
+            parts = name.split(".")
+            # `from a.b import c` imports module a.b.c if there is one, else a name in a.b
+            target = next((".".join(parts[:i]) for i in range(len(parts), 0, -1) if ".".join(parts[:i]) in names), None)
+            if target is not None and target != module:
+                targets.add(target)
+        graph[module] = targets
+    # Tarjan's strongly connected components, iteratively: a component of more than one module is a circle
+    index, low, on_stack, stack, circles = {}, {}, set(), [], []
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            module, targets = work[-1]
+            target = next(targets, None)
+            if target is not None:
+                if target not in index:
+                    index[target] = low[target] = len(index)
+                    stack.append(target)
+                    on_stack.add(target)
+                    work.append((target, iter(sorted(graph[target]))))
+                elif target in on_stack:
+                    low[module] = min(low[module], index[target])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[module])
+            if low[module] == index[module]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == module:
+                        break
+                if len(component) > 1:
+                    circles.append(sorted(component))
+    return circles
+
+
+def test_no_import_circles():
+    assert import_circles() == []
+
+
+def test_an_import_circle_is_found(tmp_path):
+    fake = tmp_path / "curiosity_cli"
+    (fake / "study").mkdir(parents=True)
+    (fake / "__init__.py").write_text("")
+    (fake / "study" / "__init__.py").write_text("")
+    (fake / "study" / "a.py").write_text("def f():\n    from curiosity_cli.study.b import g\n")
+    (fake / "study" / "b.py").write_text("from curiosity_cli.study import a\n")
+    (fake / "study" / "c.py").write_text("from curiosity_cli.study.a import f\n")
+    assert import_circles(fake) == [["curiosity_cli.study.a", "curiosity_cli.study.b"]]

@@ -2,7 +2,7 @@
 naming the argument, as a wrong value is, never a ``TypeError`` from deep inside.
 
 The command line cannot give these wrong (its options are parsed into the right types),
-but for an empty path, which it checks here too (:func:`~curiosity_cli.cli.usage_errors`);
+but for an empty path, which it checks here too (:func:`~curiosity_cli.cli.app.usage_errors`);
 a notebook can.
 """
 

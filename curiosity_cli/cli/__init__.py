@@ -1,136 +1,17 @@
 """The ``curiosity`` command line: thin commands over :mod:`curiosity_cli.api`.
 
-Every command module registers itself on :data:`app`; a command parses its options, calls
+Every command module registers itself on :data:`~curiosity_cli.cli.app.app`; a command parses its options, calls
 the API function of the same name and reports what it returns. A library
 :class:`CuriosityError` becomes ``Error: …`` on stderr and exit code 1; usage mistakes
-exit 2 (click's own, and a :class:`UsageError` of the API, :func:`usage_errors`).
+exit 2 (click's own, and a :class:`UsageError` of the API, :func:`~curiosity_cli.cli.app.usage_errors`).
 Heavy libraries are imported inside commands so ``curiosity --help`` stays instant.
 """
 
 from __future__ import annotations
 
-import functools
-import inspect
-from pathlib import Path
-
 import typer
-from typer.core import TyperGroup
 
-from curiosity_cli import __version__
-from curiosity_cli.errors import CuriosityError, UsageError
-
-
-class _ErrorMappingGroup(TyperGroup):
-    """Turns a library error or an OS error anywhere below into one line and exit code 1, never a traceback.
-
-    An OS error (a full disk, a read-only folder, a file where a folder belongs) is the
-    user's machine speaking, not a bug: it is reported by the path it concerns. A broken
-    pipe on stdout is left to click, which exits quietly, and an error raised while Ctrl-C
-    unwinds the command is left to :func:`main`, which reports the interrupt.
-    """
-
-    def invoke(self, ctx):
-        from curiosity_cli.files import os_error_message
-
-        try:
-            return super().invoke(ctx)
-        except CuriosityError as exc:
-            if _unwinding_interrupt(exc):
-                raise
-            typer.echo(f"Error: {_command_line_message(exc, self.get_command(ctx, ctx.invoked_subcommand or ''))}", err=True)
-            raise typer.Exit(1) from None
-        except BrokenPipeError:
-            raise
-        except OSError as exc:
-            if _unwinding_interrupt(exc):
-                raise
-            typer.echo(f"Error: {os_error_message(exc)}", err=True)
-            raise typer.Exit(1) from None
-
-
-def _command_line_message(exc: CuriosityError, command) -> str:
-    """``exc`` in the command line's words: the option that gave the argument at fault, and
-    the command that makes the files at fault anew (every stage spells ``force`` ``--force``).
-
-    ``command`` is the command (or group of commands) the user ran; the argument is
-    looked up by name among its options and, for a group, its commands' options.
-    """
-    option = None
-    if exc.parameter is not None:
-        option = next((flag for name, flag in _options(command) if name == exc.parameter), None)
-    remedy = f"`curiosity {exc.rerun}{' --force' if exc.force else ''}`" if exc.rerun else None
-    return exc.render(option=option, rerun=remedy)
-
-
-def _options(command):
-    """(parameter name, first flag) of every option of ``command`` and of the commands below it."""
-    if command is None:
-        return
-    for param in command.params:
-        if param.opts and param.opts[0].startswith("-"):
-            yield param.name, param.opts[0]
-    for sub in getattr(command, "commands", {}).values():
-        yield from _options(sub)
-
-
-def usage_errors(command):
-    """``command`` with the API's :class:`UsageError` reported as click's usage error (exit code 2) on the
-    option that gave its parameter, other arguments it names written as their options.
-
-    Its ``Path`` options and arguments reach it as the API checks a path
-    (:func:`~curiosity_cli.api.arguments.optional_path`): an empty one is such a usage error.
-    """
-    parameters = inspect.signature(command).parameters
-    flags = {
-        name: param.default.param_decls[0] for name, param in parameters.items()
-        if isinstance(param.default, typer.models.OptionInfo) and param.default.param_decls
-    }
-    paths = [
-        name for name, param in parameters.items()
-        if param.annotation in (Path, "Path") and isinstance(param.default, typer.models.ParameterInfo)
-    ]
-    for name in paths:
-        # typer would make an empty string Path(""), the current folder: let the string through to be checked
-        parameters[name].default.path_type = str
-
-    @functools.wraps(command)
-    def reporting(*args, **kwargs):
-        from curiosity_cli.api.arguments import optional_path
-
-        try:
-            for name in paths:
-                kwargs[name] = optional_path(kwargs[name], name)
-            return command(*args, **kwargs)
-        except UsageError as exc:
-            raise typer.BadParameter(exc.detail(flags), param_hint=flags.get(exc.parameter, exc.parameter)) from None
-
-    return reporting
-
-
-app = typer.Typer(
-    cls=_ErrorMappingGroup,
-    help="Curiosity-driven exploration experiments (Girdhar & Dudek) on map mosaics, "
-    "and a serial robot driver with the same model.",
-    no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
-)
-
-
-def _print_version(value: bool) -> None:
-    if value:
-        typer.echo(f"curiosity {__version__}")
-        raise typer.Exit()
-
-
-@app.callback()
-def _root(
-    version: bool = typer.Option(
-        False, "--version", callback=_print_version, is_eager=True, help="Print the version and exit."
-    ),
-) -> None:
-    """Curiosity-driven exploration experiments on map mosaics."""
-
+from curiosity_cli.cli.app import _unwinding_interrupt, app
 
 # Registration order is the order `--help` lists the commands: the pipeline's order.
 from curiosity_cli.cli import datasets, vocab, extract, explore, label, evaluate, plot, reproduce, drive, config_cmd  # noqa: E402,F401
@@ -167,20 +48,3 @@ def main() -> None:
             raise
         typer.echo("Interrupted; finished work is kept, run the same command again to resume.", err=True)
         sys.exit(128 + received[0])
-
-
-def _unwinding_interrupt(error: BaseException) -> bool:
-    """Whether ``error`` was raised while a KeyboardInterrupt (a signal, see :func:`main`) unwound the command.
-
-    A library's clean-up can raise its own error as the interrupt passes through it
-    (``np.savez_compressed`` closing a half-opened zip member raises ValueError), and
-    that error, not the interrupt, is what comes up; it is the interrupt's echo, not a
-    fault to report.
-    """
-    seen = set()
-    while error is not None and id(error) not in seen:
-        if isinstance(error, KeyboardInterrupt):
-            return True
-        seen.add(id(error))
-        error = error.__cause__ or error.__context__
-    return False

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app, usage_errors
+from curiosity_cli.cli.app import app, usage_errors
 
 config_app = typer.Typer(help="Inspect experiment configs, or start one of your own.", no_args_is_help=True)
 app.add_typer(config_app, name="config")

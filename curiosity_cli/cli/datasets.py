@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app, usage_errors
+from curiosity_cli.cli.app import app, usage_errors
 
 datasets_app = typer.Typer(help="List and preview the maps (embedded or your own).", no_args_is_help=True)
 app.add_typer(datasets_app, name="datasets")

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app, usage_errors
+from curiosity_cli.cli.app import app, usage_errors
 from curiosity_cli.cli.progress import StagedProgress
 
 _CONFIG_HELP = "Experiment config whose model, words and drive sections (and seed) to use: a YAML file or a shipped config's name."
@@ -25,6 +25,23 @@ def _parse_start(text: str | None) -> tuple[float, float] | None:
     return row, col
 
 
+#: The options `drive --timeline` takes: it draws from a run folder's log, and would ignore any other.
+_TIMELINE_OPTIONS = ("timeline", "clock")
+
+
+def _refuse_driving_options(ctx: typer.Context) -> None:
+    """With ``--timeline``, refuse the first driving option given (on the command line or from the environment):
+    ignored in silence, ``--out`` or ``--camera`` would seem to have been used."""
+    for param in ctx.command.params:
+        source = ctx.get_parameter_source(param.name)
+        given = source is not None and source.name in ("COMMANDLINE", "ENVIRONMENT")
+        if given and param.name not in _TIMELINE_OPTIONS:
+            raise typer.BadParameter(
+                "goes with a drive, not --timeline (which draws a run's timeline again, with --clock alone)",
+                param_hint=param.opts[0],
+            )
+
+
 class Clock(str, enum.Enum):
     """The clock of a replay's timeline (``curiosity_cli.drive.timeline.CLOCKS``)."""
 
@@ -35,6 +52,7 @@ class Clock(str, enum.Enum):
 @app.command("drive")
 @usage_errors
 def drive(
+    ctx: typer.Context,
     serial: str = typer.Option(None, "--serial", metavar="PORT", help="Serial device or pyserial URL of the robot; default the config's drive.port."),
     baud: int = typer.Option(None, "--baud", min=1, help="Serial speed; default the config's drive.baud (115200)."),
     dry_run: bool = typer.Option(False, "--dry-run", help="No serial port: commands are computed and logged, not sent (with --camera sim the robot is simulated in this process, one frame period per command)."),
@@ -67,6 +85,7 @@ def drive(
     from curiosity_cli.files import display_path
 
     if timeline is not None:
+        _refuse_driving_options(ctx)
         for path in api.redraw_timeline(timeline, clock.value):
             typer.echo(f"wrote {display_path(path)}")
         return

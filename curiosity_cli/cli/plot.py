@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app, usage_errors
+from curiosity_cli.cli.app import app, usage_errors
 from curiosity_cli.paths import DEFAULT_RESULTS
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app, usage_errors
+from curiosity_cli.cli.app import app, usage_errors
 from curiosity_cli.cli.explore import Backend
 from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS

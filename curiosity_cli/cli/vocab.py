@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from curiosity_cli.cli import app, usage_errors
+from curiosity_cli.cli.app import app, usage_errors
 from curiosity_cli.config import MAX_VOCABULARY
 
 vocab_app = typer.Typer(help="Learn visual vocabularies from photographs unrelated to the maps.", no_args_is_help=True)

@@ -75,7 +75,7 @@ class FrameWords:
         if height < self._drive.grid_rows or width < self._drive.grid_cols:
             raise ParameterError(
                 f"frame: got {height} x {width} px, expected at least one pixel per image cell "
-                f"({self._drive.grid_rows} x {self._drive.grid_cols})"
+                f"(drive.grid_rows x drive.grid_cols: {self._drive.grid_rows} x {self._drive.grid_cols})"
             )
         # INTER_AREA averages the pixels a smaller pixel covers: no aliasing in the textures
         return cv2.resize(frame, (self._drive.frame_width, rows), interpolation=cv2.INTER_AREA)

@@ -13,12 +13,13 @@ class JsonLines:
 
     ``write(event, **fields)`` adds ``{"event": ..., "time": <s since open>, ...}``, and
     raises ValueError for a field that is not finite (every line is valid JSON);
-    :attr:`ended` tells whether an ``end`` event was written.
+    :attr:`ended` tells whether an ``end`` event was written. ``path`` must be new: a file
+    there is never emptied (FileExistsError), whoever made it since its caller looked.
     """
 
     def __init__(self, path: Path):
         Path(path).parent.mkdir(parents=True, exist_ok=True)
-        self._file = open(path, "w", encoding="utf-8")
+        self._file = open(path, "x", encoding="utf-8")
         self._lock = threading.Lock()
         self._start = time.monotonic()
         self.ended = False

@@ -15,7 +15,7 @@ import numpy as np
 from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.drive.controller import Command
 from curiosity_cli.files import atomic_path, display_path
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import CuriosityError, UsageError
 
 MAX_OPACITY = 0.6
 _BLUE = (40, 90, 255)  # RGB
@@ -87,6 +87,24 @@ def write_png(image: np.ndarray, path: Path) -> None:
         tmp.write_bytes(data.tobytes())
 
 
+#: The annotated video's container (its file name's suffix) and the codec written in it.
+VIDEO_CODECS = {".mp4": "mp4v", ".avi": "MJPG", ".mkv": "mp4v"}
+
+
+def check_video_out(path: Path) -> None:
+    """Refuse a video file name whose suffix is no container of :data:`VIDEO_CODECS`.
+
+    Raises
+    ------
+    UsageError
+        Naming ``video_out``.
+    """
+    if Path(path).suffix.lower() not in VIDEO_CODECS:
+        raise UsageError(
+            f"video_out: got {display_path(Path(path))}, expected a .mp4, .avi or .mkv file name", parameter="video_out"
+        )
+
+
 class VideoSink:
     """An annotated video, written to a temporary file that takes its name on :meth:`close`.
 
@@ -98,18 +116,15 @@ class VideoSink:
     Parameters
     ----------
     path : Path
+        A ``.mp4``, ``.avi`` or ``.mkv`` file (:func:`check_video_out`; a drive checks it before
+        it writes anything).
     fps : float
         Frame rate written into the file.
     """
 
-    _CODECS = {".mp4": "mp4v", ".avi": "MJPG", ".mkv": "mp4v"}
-
     def __init__(self, path: Path, fps: float):
         self.path = Path(path)
-        if self.path.suffix.lower() not in self._CODECS:
-            raise CuriosityError(
-                f"video_out {display_path(self.path)}: expected a .mp4, .avi or .mkv file name", parameter="video_out"
-            )
+        check_video_out(self.path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self._tmp = self.path.with_name(f".{self.path.stem}.tmp{self.path.suffix}")
         self._fps = fps
@@ -123,7 +138,7 @@ class VideoSink:
 
         if self._writer is None:
             self._size = (image.shape[1], image.shape[0])  # OpenCV's (width, height)
-            fourcc = cv2.VideoWriter_fourcc(*self._CODECS[self.path.suffix.lower()])
+            fourcc = cv2.VideoWriter_fourcc(*VIDEO_CODECS[self.path.suffix.lower()])
             self._writer = cv2.VideoWriter(str(self._tmp), fourcc, self._fps, self._size)
             if not self._writer.isOpened():
                 raise CuriosityError(

@@ -113,8 +113,9 @@ def warm_up(config: ExperimentConfig) -> None:
     costs, and the robot is not kept waiting through a compilation.
     """
     rng = np.random.default_rng(0)
-    drive = config.drive
-    frame = rng.integers(0, 256, (drive.sim_view_rows, drive.sim_view_cols, 3), dtype=np.uint8)
+    width = config.drive.frame_width
+    # square at the width frames are resized to: a pixel to each image cell whatever grid the config allows
+    frame = rng.integers(0, 256, (width, width, 3), dtype=np.uint8)
     pipeline = CuriosityPipeline(config, seed=0)
     pipeline.process(frame)
     model = pipeline.stream.model

@@ -19,7 +19,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
-import shutil
+import re
 from collections.abc import Callable
 from datetime import datetime
 from pathlib import Path
@@ -30,6 +30,7 @@ from curiosity_cli.drive import camera as cameras
 from curiosity_cli.drive.driver import RUN_LOG, Outcome, Outputs, StopRequest, prepare_folder, run, stopping_on_signals
 from curiosity_cli.drive.jsonlines import JsonLines
 from curiosity_cli.drive.link import LinkTiming, RobotLink
+from curiosity_cli.drive.overlay import check_video_out
 from curiosity_cli.drive.pipeline import CuriosityPipeline, warm_up
 from curiosity_cli.drive.sim import Body, Pose
 from curiosity_cli.drive.simrobot import Noise, SimRobot, open_pty
@@ -44,8 +45,6 @@ def open_camera(camera: str, topic: str | None = None):
 
     Raises
     ------
-    ParameterError
-        ``topic`` with a camera that is not a bag.
     CameraError
         As the camera.
     """
@@ -53,16 +52,44 @@ def open_camera(camera: str, topic: str | None = None):
 
     if is_bag(camera):
         return BagCamera(camera, topic)
-    if topic is not None:
-        raise ParameterError(f"topic: got {topic!r}, but camera {camera!r} is not a bag; a topic names a bag's images")
     return cameras.OpenCVCamera(camera)
+
+
+def check_replay_options(camera: str, *, topic: str | None = None, strict: bool = False, clock: str = "bag") -> None:
+    """Refuse a bag replay's options for a ``camera`` that is not a bag (a device, a video, a stream, ``sim``).
+
+    Each would be ignored there: a video has no topics, no damaged messages to skip and no
+    header stamps, so a run would not do what the command says.
+
+    Raises
+    ------
+    ParameterError
+        Naming the first such option given.
+    """
+    from curiosity_cli.drive.bags import is_bag
+
+    if camera != "sim" and is_bag(camera):
+        return
+    not_a_bag = f"camera {camera!r} is not a bag"
+    if topic is not None:
+        raise ParameterError(f"topic: got {topic!r}, but {not_a_bag}; a topic names a bag's images", parameter="topic")
+    if clock != "bag":
+        raise ParameterError(
+            f"clock: got {clock!r}, but {not_a_bag}; a replay's timeline reads a bag's clocks", parameter="clock"
+        )
+    if strict:
+        raise ParameterError(
+            f"strict: {not_a_bag}; strict stops a replay at a bag's first damaged message", parameter="strict"
+        )
 
 
 def check_run_folder(out: Path | None, *, force: bool = False) -> None:
     """Refuse ``out`` as a run's folder when it holds anything: an earlier run's files would mix with the new ones.
 
     With ``force``, a folder that holds an earlier run (its :data:`RUN_LOG`) may be
-    replaced; a folder of anything else never is. None (a new folder) is always fine.
+    replaced, unless what that run wrote holds a path of the user's
+    (:func:`earlier_run_files`); a folder of anything else never is. None (a new folder)
+    is always fine.
 
     Raises
     ------
@@ -79,6 +106,7 @@ def check_run_folder(out: Path | None, *, force: bool = False) -> None:
         return
     if (out / RUN_LOG).is_file():
         if force:
+            earlier_run_files(out)  # refused now, before the camera and the model, if it holds a file of the user's
             return
         raise ParameterError(
             f"out: {display_path(out)} holds an earlier run ({RUN_LOG} and {len(held) - 1} more); give a new folder, "
@@ -90,8 +118,57 @@ def check_run_folder(out: Path | None, *, force: bool = False) -> None:
     )
 
 
-#: What a drive writes in its run folder (besides the folder lock): ``--force`` removes these, and only these.
-RUN_OUTPUTS = (RUN_LOG, "config.yaml", "provenance.yaml", "timeline.png", "timeline.pdf", "frames", "surprising")
+#: The files a drive writes at the top of its run folder (besides the folder lock).
+RUN_FILES = (RUN_LOG, "config.yaml", "provenance.yaml", "timeline.png", "timeline.pdf")
+
+#: Its folders of frames: ``png_every``'s annotated ones, and a replay's most surprising.
+FRAME_FOLDERS = ("frames", "surprising")
+
+#: A frame a run writes into :data:`FRAME_FOLDERS` (``frame-NNNNNN.png``), or the temporary file
+#: a run killed while writing one leaves (:func:`~curiosity_cli.files.atomic_path`).
+FRAME_FILE = re.compile(r"frame-\d{6,}\.png|\.frame-\d{6,}\.\w+\.tmp\.png")
+
+
+def earlier_run_files(out: Path) -> list[Path]:
+    """The files of the run in ``out`` that ``force`` replaces: :data:`RUN_FILES`, and the frames in :data:`FRAME_FOLDERS`.
+
+    Everything is checked before anything is deleted: a user may keep notes beside a
+    run, or link a folder of their own where a run writes its frames, and a replay
+    into the folder must not take those with it.
+
+    Raises
+    ------
+    ParameterError
+        Naming the first path there that a run does not write: a symlink, a folder where
+        a run writes a file, a file in a folder of frames that is not a frame.
+    """
+    files = []
+    for name in RUN_FILES:
+        path = out / name
+        if path.is_symlink() or (path.exists() and not path.is_file()):
+            raise _not_written_by_a_run(out, path)
+        if path.exists():
+            files.append(path)
+    for name in FRAME_FOLDERS:
+        folder = out / name
+        if folder.is_symlink() or (folder.exists() and not folder.is_dir()):
+            raise _not_written_by_a_run(out, folder)
+        if not folder.exists():
+            continue
+        for path in sorted(folder.iterdir()):
+            if path.is_symlink() or not path.is_file() or not FRAME_FILE.fullmatch(path.name):
+                raise _not_written_by_a_run(out, path)
+            files.append(path)
+    return files
+
+
+def _not_written_by_a_run(out: Path, path: Path) -> ParameterError:
+    what = "a symlink" if path.is_symlink() else "a folder" if path.is_dir() else "a file"
+    shown = os.path.join(display_path(path.parent), path.name)  # a symlink by its own name, not its target's
+    return ParameterError(
+        f"out: {shown} is {what} no run writes; --force replaces only a run's own files: "
+        f"move it out of {display_path(out)}, or give a new folder", parameter="out",
+    )
 
 
 @contextlib.contextmanager
@@ -101,14 +178,17 @@ def claimed_run_folder(out: Path | None, *, force: bool = False):
     ``out``, or a new ``results/drive/<date-time>``. Runs started in the same second without
     ``out`` each get their own folder (``<date-time>-2``, ``-3``, ...): a folder is made here,
     atomically, never taken when it exists. ``out`` is checked as :func:`check_run_folder`,
-    again once its lock is held; with ``force``, the earlier run's files (:data:`RUN_OUTPUTS`)
-    are removed then, and nothing else: a file of the user's stays. A second drive into
+    again once its lock is held; with ``force``, the earlier run's files
+    (:func:`earlier_run_files`) are removed then, and nothing else: a file of the user's
+    stays, and a folder of frames goes only if that leaves it empty. A second drive into
     the same folder while one runs is refused, naming the first (its process id).
 
     Raises
     ------
     FolderInUseError
         Another drive writes in ``out``.
+    ParameterError
+        As :func:`check_run_folder`.
     """
     from curiosity_cli.experiment.lock import working_in
 
@@ -118,12 +198,12 @@ def claimed_run_folder(out: Path | None, *, force: bool = False):
         out.mkdir(parents=True, exist_ok=True)
         with working_in(out, "drive"):
             check_run_folder(out, force=force)  # what another drive may have written before this one held the lock
-            for name in RUN_OUTPUTS:
-                path = out / name
-                if path.is_dir():
-                    shutil.rmtree(path)
-                else:
-                    path.unlink(missing_ok=True)
+            for path in earlier_run_files(out):  # all checked before the first is deleted
+                path.unlink()
+            for name in FRAME_FOLDERS:
+                folder = out / name
+                if folder.is_dir() and not any(folder.iterdir()):
+                    folder.rmdir()
             yield out
         return
     base = DEFAULT_RESULTS / "drive" / datetime.now().strftime("%Y%m%d-%H%M%S")
@@ -291,7 +371,11 @@ def drive_session(
     ------
     ParameterError
         ``camera="sim"`` without ``sim_map`` or the other way round; a dry run on
-        ``sim_map`` without ``start``; an ``out`` that is not new or empty (:func:`check_run_folder`).
+        ``sim_map`` without ``start``; a replay's ``topic``, ``strict`` or ``clock`` with a
+        camera that is not a bag (:func:`check_replay_options`); an ``out`` that is not new
+        or empty (:func:`check_run_folder`).
+    UsageError
+        A ``video_out`` that is no video file name (:func:`~curiosity_cli.drive.overlay.check_video_out`).
     LinkError
         The robot cannot be reached, or the link was lost (STOP was attempted).
     CuriosityError
@@ -303,6 +387,9 @@ def drive_session(
     lockstep = port is None and sim_map is not None
     if lockstep and start is None:
         raise ParameterError("start: a dry run on a simulated map needs the robot's start (row, col)")
+    if video_out is not None:  # a bad name found once the run is under way would leave its folder half-made
+        check_video_out(video_out)
+    check_replay_options(camera, topic=topic, strict=strict, clock=clock)
     check_run_folder(out, force=force)  # before the camera and the model: a folder in use is the only message
     with stopping_on_signals(StopRequest()) as stop, contextlib.ExitStack() as held:
         source = None if camera == "sim" else open_camera(camera, topic)
@@ -371,6 +458,15 @@ def drive_session(
     return outcome, out
 
 
+def _check_log_file(log_file: Path) -> None:
+    """Refuse a ``log_file`` that exists: the robot's events would be written over it."""
+    if log_file.exists() or log_file.is_symlink():
+        raise ParameterError(
+            f"log_file: {display_path(log_file)} exists; expected a new file name for the robot's events",
+            parameter="log_file",
+        )
+
+
 def _check_link(link: Path) -> None:
     """Refuse a ``link`` that cannot become a symlink: in a missing folder, or where a file is."""
     if not link.parent.is_dir():
@@ -420,7 +516,8 @@ def simrobot_session(
         Also a symlink to the pseudo-terminal here (replacing a symlink already there),
         removed when the session ends.
     log_file : Path, optional
-        The robot's events (frames received, watchdog, noise) as JSON Lines.
+        The robot's events (frames received, watchdog, noise) as JSON Lines: a new file,
+        never one that exists.
     on_ready : callable
         Called with the pseudo-terminal's path once a host can open it.
 
@@ -432,6 +529,8 @@ def simrobot_session(
     d = config.drive
     if link is not None:
         _check_link(link)
+    if log_file is not None:
+        _check_log_file(log_file)
     body = _body(sim_map, start, heading_deg, config)
     events = JsonLines(log_file) if log_file is not None else None
     master, slave, path = open_pty()

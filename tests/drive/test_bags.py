@@ -200,11 +200,12 @@ def test_a_topic_that_holds_no_images_is_named(tmp_path, frames):
 
 
 def test_a_topic_needs_a_bag():
-    from curiosity_cli.drive.session import open_camera
+    from curiosity_cli.drive.session import check_replay_options
     from curiosity_cli.errors import ParameterError
 
-    with pytest.raises(ParameterError, match=r"topic: got '/a', but camera '0' is not a bag; a topic names a bag's images"):
-        open_camera("0", "/a")
+    with pytest.raises(ParameterError, match=r"topic: got '/a', but camera '0' is not a bag; a topic names a bag's images") as info:
+        check_replay_options("0", topic="/a")
+    assert info.value.parameter == "topic"  # hostile-user F12: the command line names it --topic
 
 
 def test_a_replay_shows_its_progress_and_the_same_seed_gives_the_same_log(tmp_path, frames):
@@ -301,7 +302,6 @@ def test_a_replay_into_a_folder_in_use_is_refused_and_force_replaces_only_an_ear
     # issue 44: two drives into one folder at once both exited 0 and one run was lost; the second is refused
     import subprocess
     import sys
-    import time
 
     first = subprocess.Popen([sys.executable, "-c", (
         "import sys, time; from pathlib import Path; from curiosity_cli.drive.session import claimed_run_folder\n"
@@ -327,6 +327,89 @@ def test_a_replay_into_a_folder_in_use_is_refused_and_force_replaces_only_an_ear
         refused = replay(bag, other, *extra)
         assert refused.exit_code == 1 and "is not empty (mine.txt) and holds no run" in refused.stderr
     assert (other / "mine.txt").read_text() == "not a run"
+
+
+@pytest.fixture(scope="module")
+def earlier_run(tmp_path_factory, frames) -> tuple[Path, Path]:
+    """A bag, and a replay of it with an annotated PNG of every frame (``frames/``) beside its ``surprising/``."""
+    folder = tmp_path_factory.mktemp("earlier")
+    bag = write_bag(folder / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
+    result = replay(bag, folder / "run", "--png-every", "1")
+    assert result.exit_code == 0, result.output
+    return bag, folder / "run"
+
+
+def _contents(folder: Path) -> dict[str, bytes | str]:
+    """Every path below ``folder``: a file's bytes, a symlink's target."""
+    return {
+        str(p.relative_to(folder)): str(p.readlink()) if p.is_symlink() else p.read_bytes()
+        for p in sorted(folder.rglob("*")) if p.is_symlink() or p.is_file()
+    }
+
+
+def _users_frame_in_frames(run: Path, tmp_path: Path) -> Path:
+    (run / "frames" / "annotated-by-me.png").write_text("my own annotation")
+    return run / "frames" / "annotated-by-me.png"
+
+
+def _users_notes_in_surprising(run: Path, tmp_path: Path) -> Path:
+    (run / "surprising" / "operator-notes.txt").write_text("operator's notes")
+    return run / "surprising" / "operator-notes.txt"
+
+
+def _frames_linked_to_the_users_photos(run: Path, tmp_path: Path) -> Path:
+    (tmp_path / "photos").mkdir()
+    (tmp_path / "photos" / "holiday.jpg").write_text("photo")
+    for png in (run / "frames").iterdir():
+        png.unlink()
+    (run / "frames").rmdir()
+    (run / "frames").symlink_to(tmp_path / "photos")
+    return run / "frames"
+
+
+def _a_folder_where_the_timeline_goes(run: Path, tmp_path: Path) -> Path:
+    (run / "timeline.pdf").unlink()
+    (run / "timeline.pdf").mkdir()
+    (run / "timeline.pdf" / "mine.txt").write_text("not a timeline")
+    return run / "timeline.pdf"
+
+
+@pytest.mark.parametrize(
+    "users",
+    [_users_frame_in_frames, _users_notes_in_surprising, _frames_linked_to_the_users_photos, _a_folder_where_the_timeline_goes],
+)
+def test_force_refuses_a_path_of_the_users_among_a_runs_files_and_deletes_nothing(tmp_path, earlier_run, users):
+    """Hostile-user F1: ``--force`` deleted a user's files in ``frames/`` and ``surprising/``; with ``frames``
+    a symlink it half-deleted the run, then said "Cannot call rmtree on a symbolic link", naming no path."""
+    import shutil
+
+    bag, earlier = earlier_run
+    run = shutil.copytree(earlier, tmp_path / "run")
+    theirs = users(run, tmp_path)
+    before, photos = _contents(run), _contents(tmp_path / "photos") if (tmp_path / "photos").exists() else {}
+    result = replay(bag, run, "--max-frames", "2", "--png-every", "1", "--force")
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert result.stderr.strip().splitlines() == [  # refused before the model loads, the path named
+        f"Error: --out: {theirs} is a {'symlink' if theirs.is_symlink() else 'folder' if theirs.is_dir() else 'file'} "
+        f"no run writes; --force replaces only a run's own files: move it out of {run}, or give a new folder"
+    ]
+    assert _contents(run) == before, "nothing deleted"
+    assert not photos or _contents(tmp_path / "photos") == photos
+
+
+def test_force_replaces_the_frames_a_run_wrote_and_removes_their_folder_left_empty(tmp_path, earlier_run):
+    import shutil
+
+    bag, earlier = earlier_run
+    run = shutil.copytree(earlier, tmp_path / "run")
+    assert len(list((run / "frames").glob("frame-*.png"))) == FRAMES
+    (run / "frames" / ".frame-000004.k3j9_x2a.tmp.png").write_bytes(b"half a PNG")  # what a killed run leaves
+    (run / "my-notes.txt").write_text("the operator's notes")
+    result = replay(bag, run, "--max-frames", "2", "--force")
+    assert result.exit_code == 0, result.output
+    assert not (run / "frames").exists()  # this run wrote no PNG: the earlier run's are gone, and their folder
+    assert {p.name for p in (run / "surprising").iterdir()} <= {"frame-000000.png", "frame-000001.png"}
+    assert len(frame_records(run)) == 2 and (run / "my-notes.txt").read_text() == "the operator's notes"
 
 
 def test_runs_started_in_the_same_second_get_folders_of_their_own(tmp_path, monkeypatch):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
@@ -87,3 +88,78 @@ def test_a_serial_port_that_does_not_exist_is_a_one_line_error(tmp_path):
     # the run folder stays as the attempt's log, and the line says where
     assert line.endswith(f"; the session's log is kept in {tmp_path / 'run' / 'log.jsonl'}")
     assert '"error":"serial port' in (tmp_path / "run" / "log.jsonl").read_text()
+
+
+@pytest.mark.parametrize(
+    "given",
+    [
+        ["--out", "elsewhere"], ["--camera", "clip.avi"], ["--camera", "0"], ["--max-frames", "1"], ["--serial", "/dev/x"],
+        ["--dry-run"], ["--force"], ["--strict"], ["--set", "drive.gamma=0.5"], ["--config", "quick"], ["--seed", "1"],
+        ["--video-out", "v.avi"], ["--png-every", "1"], ["--topic", "/camera/image_raw"],
+    ],
+)
+def test_a_timeline_refuses_every_driving_option_by_name(tmp_path, given):
+    """Hostile-user F7: ``drive --timeline RUN --out elsewhere ...`` ignored them and exited 0."""
+    result = runner.invoke(app, ["drive", "--timeline", str(tmp_path / "run"), *given])
+    assert f"Invalid value for {given[0]}: goes with a drive, not --timeline" in usage_error(result)
+    assert not any(tmp_path.iterdir())
+
+
+def test_a_timeline_takes_its_clock():
+    result = runner.invoke(app, ["drive", "--timeline", "no-such-run", "--clock", "header"])
+    assert "no-such-run/log.jsonl: not found; give a run folder of `curiosity drive`" in one_line_error(result)
+
+
+def _video(path):
+    """A 5-frame Motion JPEG video of random 120 x 160 frames."""
+    import cv2
+    import numpy as np
+
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 5, (160, 120))
+    for i in range(5):
+        writer.write(np.random.default_rng(i).integers(0, 256, (120, 160, 3), dtype=np.uint8))
+    writer.release()
+    return path
+
+
+@pytest.mark.parametrize(
+    "given, says",
+    [
+        (["--topic", "/camera/image_raw"], "--topic: got '/camera/image_raw', but camera '{camera}' is not a bag"),
+        (["--clock", "header"], "--clock: got 'header', but camera '{camera}' is not a bag"),
+        (["--strict"], "--strict: camera '{camera}' is not a bag; strict stops a replay at a bag's first damaged message"),
+    ],
+)
+@pytest.mark.parametrize("camera", ["clip.avi", "sim"])
+def test_a_replays_options_are_refused_for_a_camera_that_is_not_a_bag(tmp_path, monkeypatch, given, says, camera):
+    """Hostile-user F8 and F12: ``--clock header`` and ``--strict`` with a video were taken in silence, and
+    ``--topic`` was refused as ``topic:``, the API's argument."""
+    monkeypatch.chdir(tmp_path)
+    _video(tmp_path / "clip.avi")
+    sim = ["--sim-map", "reef-mosaic"] if camera == "sim" else []
+    # a frame at most: a dry run on the simulated camera that took them would run until stopped
+    result = runner.invoke(app, ["drive", "--dry-run", "--camera", camera, *sim, "--out", "run", "--max-frames", "1", *given])
+    assert f"Error: {says.format(camera=camera)}" in one_line_error(result)
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_grid_finer_than_the_resized_frame_is_refused_by_its_key_before_any_work(tmp_path):
+    """Hostile-user F15: ``--set drive.grid_rows=100000`` failed after the warm-up, blaming a 360 x 480 "frame"."""
+    drive = ["drive", "--dry-run", "--camera", str(tmp_path / "clip.avi"), "--out", str(tmp_path / "run")]
+    result = runner.invoke(app, [*drive, "--set", "drive.grid_rows=100000"])
+    line = one_line_error(result)
+    assert line.startswith("Error: --set: drive.grid_rows: got 100000, expected at most frame_width (192): a frame is")
+    assert "loading" not in result.stderr and not any(tmp_path.iterdir())
+
+
+def test_a_video_out_that_is_no_video_is_a_usage_error_before_anything_is_written(tmp_path):
+    """Hostile-user F18: ``--video-out v.txt`` was found once the run folder was written (exit 1), and the
+    corrected command was then refused for the earlier run in that folder."""
+    video = _video(tmp_path / "clip.avi")
+    drive = ["drive", "--dry-run", "--camera", str(video), "--out", str(tmp_path / "run"), "--max-frames", "1"]
+    message = usage_error(runner.invoke(app, [*drive, "--video-out", str(tmp_path / "v.txt")]))
+    assert f"Invalid value for --video-out: got {tmp_path / 'v.txt'}, expected a .mp4, .avi or .mkv file name" in message
+    assert not (tmp_path / "run").exists() and not (tmp_path / "v.txt").exists()
+    corrected = runner.invoke(app, [*drive, "--video-out", str(tmp_path / "v.avi")])
+    assert corrected.exit_code == 0, corrected.output
+    assert (tmp_path / "v.avi").is_file()

@@ -91,7 +91,11 @@ def test_steer_turns_towards_the_target_and_limits_apply():
     [
         (dict(surge_min=1.0), "drive.surge_min: got 1.0, expected at most surge_max (0.5)"),
         (dict(keepalive=1.5), "drive.keepalive: got 1.5, expected shorter than the robot's watchdog (1.0 s)"),
-        (dict(frame_width=16, grid_cols=32), "drive.frame_width: got 16, expected at least grid_cols (32)"),
+        (dict(frame_width=16, grid_cols=32), "drive.grid_cols: got 32, expected at most frame_width (16): a frame is "
+         "resized to 16 px wide, a pixel at least to each column of cells"),
+        # hostile-user F15: accepted, then refused after the warm-up for a "frame" of the simulated camera
+        (dict(grid_rows=100000), "drive.grid_rows: got 100000, expected at most frame_width (192): a frame is resized "
+         "to 192 px wide, and stretched no taller than that to give each row of cells a pixel"),
     ],
 )
 def test_drive_keys_that_contradict_each_other_are_refused_in_one_line(tmp_path, change, message):

@@ -37,6 +37,17 @@ def test_a_non_finite_number_is_refused_at_the_edge_naming_the_option(tmp_path, 
     assert not (tmp_path / "run").exists()
 
 
+def test_a_log_file_that_exists_is_refused_not_emptied(tmp_path):
+    """Hostile-user F2: ``simrobot --log FILE`` emptied a file of the user's, then served the robot.
+
+    In a process of its own, with a time limit: a simrobot that took the file would serve until stopped.
+    """
+    (tmp_path / "precious.txt").write_text("precious data\n")
+    outcome = run_cli(["simrobot", "--map", "reef-mosaic", "--log", "precious.txt"], cwd=tmp_path, timeout=120)
+    assert_clean_error(outcome, "--log: precious.txt exists; expected a new file name")
+    assert (tmp_path / "precious.txt").read_text() == "precious data\n"
+
+
 def test_a_record_that_is_not_finite_is_refused_not_written(tmp_path):
     log = JsonLines(tmp_path / "log.jsonl")
     log.write("start", heading=0.5)
