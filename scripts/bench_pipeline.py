@@ -37,7 +37,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.config import CONFIG_DIR, LABEL_DEVICES, load_config
 from curiosity_cli.maps.datasets import dataset_path, load_dataset_config
 from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.evaluate.information import contingency
@@ -65,7 +65,7 @@ def main() -> None:
     parser.add_argument("--grid-only", action="store_true", help="with --full-grid: skip part 1")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--results-dir", type=Path, default=None)
-    parser.add_argument("--device", choices=["cpu", "cuda", "auto"], default="cpu", help="label.device: where Z_p's chains run")
+    parser.add_argument("--device", choices=LABEL_DEVICES, default="cpu", help="label.device: where Z_p's chains run")
     args = parser.parse_args()
 
     config = load_config(args.config)

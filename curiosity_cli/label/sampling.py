@@ -111,8 +111,9 @@ def label_paths(
         Per path, start from placed topics instead of uniformly random ones
         (:meth:`~curiosity_cli.topics.chains.FrozenChains.start`): the second chain of a
         convergence check.
-    device : {"cpu", "cuda"}
-        Where the chains run; the labels are the same bytes on either.
+    device : str
+        Where the chains run, a name in :data:`curiosity_cli.topics.devices.DEVICES`; the
+        labels are the same bytes on each.
 
     Yields
     ------

@@ -208,12 +208,19 @@ def test_refine_realtime_matches_twin(eta):
     assert_matches(model, twin)
 
 
-def test_refine_realtime_with_observation_times_matches_twin():
-    rng = np.random.default_rng(10)
-    model = TopicModel(5, 10, stream_neighbours(SquareGrid(2, 2), 4), alpha=0.3, beta=0.2, seed=10)
+def frames_model(seed: int, *, fewest_words: int, spacing: int) -> TopicModel:
+    """A stream model of 4 frames of 2 x 2 cells, each with ``fewest_words`` to 4 words, observed
+    every ``spacing`` time steps."""
+    rng = np.random.default_rng(seed)
+    model = TopicModel(5, 10, stream_neighbours(SquareGrid(2, 2), 4), alpha=0.3, beta=0.2, seed=seed)
     for frame in range(4):
         for cell in range(frame * 4, frame * 4 + 4):
-            model.add_cell(cell, rng.integers(0, 10, rng.integers(1, 5)), time=2 * frame)
+            model.add_cell(cell, rng.integers(0, 10, rng.integers(fewest_words, 5)), time=spacing * frame)
+    return model
+
+
+def test_refine_realtime_with_observation_times_matches_twin():
+    model = frames_model(10, fewest_words=1, spacing=2)
     twin = NaiveModel.of(model)
     done, newest = model.refine_realtime(60, eta=0.4, return_newest=True)
     twin_done, _, twin_newest = refine_realtime_naive(twin, 60, 0.4)
@@ -226,11 +233,7 @@ def test_refine_realtime_cut_into_pieces_matches_twin(monkeypatch, picks):
     # a large budget goes to the kernel in pieces, so that a signal can stop it; each piece
     # resumes the last one's picks: the same as one call, which the twin is
     monkeypatch.setattr(model_module, "RESPONSIVE_SAMPLES", 3)
-    rng = np.random.default_rng(12)
-    model = TopicModel(5, 10, stream_neighbours(SquareGrid(2, 2), 4), alpha=0.3, beta=0.2, seed=12)
-    for frame in range(4):
-        for cell in range(frame * 4, frame * 4 + 4):
-            model.add_cell(cell, rng.integers(0, 10, rng.integers(0, 5)), time=frame)
+    model = frames_model(12, fewest_words=0, spacing=1)
     twin = NaiveModel.of(model)
     done, newest = model.refine_realtime(200, eta=0.3, picks=picks, return_newest=True)
     twin_done, _, twin_newest = refine_realtime_naive(twin, 200, 0.3, picks)
