@@ -153,6 +153,7 @@ def test_an_error_without_a_signal_is_not_taken_for_an_interrupt():
 # A step's refinement at the bound of explore.samples_per_step (10^8 word samples: seconds
 # in one kernel call), after a small one has compiled the kernel.
 _LONG_REFINEMENT = """
+import signal
 import numpy as np
 from curiosity_cli.config import MAX_SAMPLES
 from curiosity_cli.maps.cell_grid import SquareGrid
@@ -163,6 +164,8 @@ model = TopicModel(16, 1000, SquareGrid(8, 8).neighbour_table(4), alpha=0.3, bet
 for cell in range(64):
     model.add_cell(cell, rng.integers(0, 1000, 200), time=cell)
 model.refine_realtime(1000, eta=0.5)
+# Python's own Ctrl-C handler, as the command line has one: a test process may hand down SIGINT ignored
+signal.signal(signal.SIGINT, signal.default_int_handler)
 print("refining", flush=True)
 model.refine_realtime(MAX_SAMPLES, eta=0.5)
 print("finished", flush=True)
