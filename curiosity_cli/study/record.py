@@ -35,7 +35,7 @@ from curiosity_cli.errors import CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.recipes import ABSENT, differences, label_recipe
 from curiosity_cli.experiment.wholeness import changed, records
-from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.files import display_path
 
 if TYPE_CHECKING:
     from curiosity_cli.study.types import Combination, Sweep
@@ -200,12 +200,12 @@ def keep_experiment(experiment: Path, target: Path) -> Path:
         for name in TABLES:
             shutil.copyfile(experiment / name, staging / name)
         record = {"tables": records(staging, list(TABLES)), "recipes": recipes(opened)}
-        with atomic_path(staging / RECORD_FILE) as tmp:
-            tmp.write_text(
-                "# What the tables here were made from: curiosity reproduce --record takes them only while the\n"
-                "# study's config and maps give these recipes and the tables are these bytes (curiosity_cli/study/record.py)\n"
-                + yaml.safe_dump(record, sort_keys=False)
-            )
+        # the staging folder is renamed whole below: its files need no rename of their own
+        (staging / RECORD_FILE).write_text(
+            "# What the tables here were made from: curiosity reproduce --record takes them only while the\n"
+            "# study's config and maps give these recipes and the tables are these bytes (curiosity_cli/study/record.py)\n"
+            + yaml.safe_dump(record, sort_keys=False)
+        )
         try:
             os.replace(staging, target)
         except OSError:
