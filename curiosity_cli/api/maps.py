@@ -124,7 +124,7 @@ def build_vocabularies(
         Progress lines, and a line for each file written or kept.
     """
     from curiosity_cli.config import MAX_VOCABULARY
-    from curiosity_cli.errors import UsageError
+    from curiosity_cli.errors import ParameterError
     from curiosity_cli.files import display_path
     from curiosity_cli.words.vocab import (
         build_orb_vocabulary, build_texton_vocabulary, built_vocabulary, save_vocabulary, vocabulary_path,
@@ -140,7 +140,7 @@ def build_vocabularies(
     )
     for name, _, _, size in plan:
         if isinstance(size, bool) or not isinstance(size, int) or not 2 <= size <= MAX_VOCABULARY:
-            raise UsageError(f"{name}: got {size!r}, expected 2 to {MAX_VOCABULARY}", parameter=name)
+            raise ParameterError(f"{name}: got {size!r}, expected 2 to {MAX_VOCABULARY}", parameter=name)
     written = []
     for _, kind, builder, size in plan:
         path, vocabulary = vocabulary_path(out, kind, size), built_vocabulary(out, kind, size, seed)

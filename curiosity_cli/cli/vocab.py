@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli.app import app, usage_errors
+from curiosity_cli.config import MAX_VOCABULARY
 
 vocab_app = typer.Typer(help="Learn visual vocabularies from photographs unrelated to the maps.", no_args_is_help=True)
 app.add_typer(vocab_app, name="vocab")
@@ -17,10 +18,10 @@ app.add_typer(vocab_app, name="vocab")
 def build(
     out: Path = typer.Option(Path("data/vocab"), "--out", help="Folder to write orb-N.npz and texton-N.npz to."),
     orb_words: int = typer.Option(
-        5000, "--orb-words", help="ORB vocabulary size (the paper's 5000)."
+        5000, "--orb-words", min=2, max=MAX_VOCABULARY, help="ORB vocabulary size (the paper's 5000)."
     ),
     texton_words: int = typer.Option(
-        1000, "--texton-words", help="Texton vocabulary size (the paper's 1000)."
+        1000, "--texton-words", min=2, max=MAX_VOCABULARY, help="Texton vocabulary size (the paper's 1000)."
     ),
     seed: int = typer.Option(0, "--seed", min=0, help="Seed of the clustering."),
 ) -> None:
