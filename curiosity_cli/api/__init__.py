@@ -37,7 +37,8 @@ command                function
 ``config init``        :func:`init_config`
 =====================  ==============================================
 
-:func:`load` gives a config, :func:`open_experiment` an experiment's results.
+:func:`load` gives a config, :func:`open_experiment` an experiment's results, :func:`open_mission` a drive's
+frames.
 """
 
 from __future__ import annotations
@@ -48,10 +49,11 @@ from curiosity_cli.api.pipeline import (
     Config, animate, evaluate, explore, extract, label, load, plot, reproduce, word_store,
 )
 from curiosity_cli.api.results import Results, open_experiment
-from curiosity_cli.api.robot import RobotStart, drive, redraw_timeline, simrobot
+from curiosity_cli.api.robot import RobotStart, drive, open_mission, redraw_timeline, simrobot
 
 __all__ = [
     "Config", "DatasetRow", "Preview", "Results", "RobotStart", "animate", "build_vocabularies", "drive", "evaluate",
-    "explore", "extract", "init_config", "label", "list_datasets", "load", "open_experiment", "plot", "redraw_timeline",
+    "explore", "extract", "init_config", "label", "list_datasets", "load", "open_experiment", "open_mission", "plot",
+    "redraw_timeline",
     "reproduce", "show_config", "show_datasets", "simrobot", "word_store",
 ]

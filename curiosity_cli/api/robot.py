@@ -1,4 +1,5 @@
-"""The robot's commands as functions: ``drive`` (and its ``--timeline``) and ``simrobot``."""
+"""The robot's commands as functions: ``drive`` (and its ``--timeline``) and ``simrobot``; a drive's frames read back
+(``open_mission``)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,8 @@ from curiosity_cli.api.pipeline import Config, load
 from curiosity_cli.errors import ParameterError, UsageError
 
 if typing.TYPE_CHECKING:
+    import pandas as pd
+
     from curiosity_cli.drive.driver import Outcome
     from curiosity_cli.maps.map_data import MapData
 
@@ -74,7 +77,7 @@ def _check_start(start) -> None:
 
 def drive(
     *, serial: str | None = None, baud: int | None = None, dry_run: bool = False, camera: str = "0",
-    topic: str | None = None, sim_map: str | None = None, start: tuple[float, float] | None = None,
+    topic: str | None = None, odom_topic: str | None = None, foxglove: int | None = None, sim_map: str | None = None, start: tuple[float, float] | None = None,
     heading_deg: float | None = None, config: Config = ROBOT_CONFIG, overrides: typing.Iterable[str] = (),
     seed: int | None = None, out: Path | None = None, force: bool = False, clock: str = "bag", strict: bool = False,
     video_out: Path | None = None, png_every: int = 0, max_frames: int | None = None,
@@ -122,6 +125,11 @@ def drive(
     clock = _clock(clock)
     out, video_out = optional_path(out, "out"), optional_path(video_out, "video_out")
     seed, max_frames = optional_count(seed, "seed", 0), optional_count(max_frames, "max_frames")
+    foxglove = optional_count(foxglove, "foxglove", 0)
+    if foxglove is not None and foxglove > 65535:
+        raise UsageError(f"foxglove: got {foxglove}, expected a port 0..65535 (0: any free one)", parameter="foxglove")
+    if odom_topic is not None:
+        odom_topic = name_or_path(odom_topic, "odom_topic")
     # a device index may come as the int it is
     camera = str(camera) if isinstance(camera, int) and not isinstance(camera, bool) else name_or_path(camera, "camera")
     if dry_run and serial is not None:
@@ -151,7 +159,8 @@ def drive(
                 )
             start_at = _start(start, map_data.image.shape[:2])
     return drive_session(
-        resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic,
+        resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic, odom_topic=odom_topic,
+        foxglove=foxglove,
         port=None if dry_run else port, baud=baud, sim_map=map_data, start=start_at, heading_deg=heading_deg or 0.0,
         out=out, force=force, strict=strict, clock=clock, video_out=video_out, png_every=png_every, max_frames=max_frames,
         on_status=on_status, on_frame=on_frame, on_replay=on_replay,
@@ -215,3 +224,45 @@ def simrobot(
         seed=resolved.seed if seed is None else seed, estop_after=estop_after, link=link, log_file=log_file,
         on_ready=lambda path: on_ready(path, robot),
     )
+
+
+def open_mission(folder: Path | str) -> pd.DataFrame:
+    """A drive's frames, one row per frame, from its run folder: ``frames.parquet``
+    (:mod:`~curiosity_cli.drive.frames_table`), or its ``log.jsonl`` where the drive was
+    stopped before writing the table.
+
+    The frame's times are integer nanoseconds (``time_ns``: the bag time of a replay, the
+    host's clock live); ``surprise`` is the mean topic perplexity of its image cells, with
+    its parts, the refinement it got, its command and its pose (``x``, ``y``, ``z``,
+    ``yaw``; missing without one). ``attrs`` holds the run's ``config`` and ``provenance``
+    (as read from their YAML files) and its ``folder``.
+
+    Raises
+    ------
+    CuriosityError
+        No ``log.jsonl`` in ``folder`` (not a drive's run folder), a table or log that
+        cannot be read, naming the file.
+    """
+    import pandas as pd
+    import yaml
+
+    from curiosity_cli.drive.driver import RUN_LOG
+    from curiosity_cli.drive.frames_table import FRAMES_PARQUET, frames_table
+    from curiosity_cli.errors import CuriosityError
+    from curiosity_cli.files import display_path
+
+    folder = folder_argument(folder)
+    if not (folder / RUN_LOG).is_file():
+        raise CuriosityError(f"{display_path(folder / RUN_LOG)}: not found; give a run folder of `curiosity drive`")
+    try:
+        table = pd.read_parquet(folder / FRAMES_PARQUET) if (folder / FRAMES_PARQUET).is_file() else frames_table(folder / RUN_LOG)
+    except (OSError, ValueError) as exc:  # pyarrow's errors for a file that is no parquet are ValueErrors and OSErrors
+        raise CuriosityError(f"{display_path(folder / FRAMES_PARQUET)}: cannot be read ({' '.join(str(exc).split())})") from None
+    for name in ("config", "provenance"):
+        path = folder / f"{name}.yaml"
+        try:
+            table.attrs[name] = yaml.safe_load(path.read_text()) if path.is_file() else None
+        except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+            raise CuriosityError(f"{display_path(path)}: cannot be read ({' '.join(str(exc).split())})") from None
+    table.attrs["folder"] = str(folder)
+    return table

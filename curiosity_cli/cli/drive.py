@@ -58,6 +58,8 @@ def drive(
     dry_run: bool = typer.Option(False, "--dry-run", help="No serial port: commands are computed and logged, not sent (with --camera sim the robot is simulated in this process, one frame period per command)."),
     camera: str = typer.Option("0", "--camera", help="A device index, a video file, a stream URL, a recorded bag (ROS 1 .bag, ROS 2 bag folder, .mcap; needs the bags extra), or 'sim' for the simulated robot's camera."),
     topic: str = typer.Option(None, "--topic", help="With a bag: its image topic; may be left out when it has one."),
+    odom_topic: str = typer.Option(None, "--odom-topic", help="With a bag: its nav_msgs/msg/Odometry topic, whose nearest pose in time each frame gets (frames.parquet, mission.mcap, trajectory.png); default the bag's only one."),
+    foxglove: int = typer.Option(None, "--foxglove", min=0, max=65535, metavar="PORT", help="Serve the drive live to Foxglove over its WebSocket protocol on localhost at PORT (8765 is Foxglove's default; 0: any free one, printed)."),
     sim_map: str = typer.Option(None, "--sim-map", help="With --camera sim: the map the simulated robot is on (name or dataset YAML)."),
     start: str = typer.Option(None, "--start", metavar="ROW,COL", help="With --dry-run --camera sim: start position ROW,COL in map pixels; default the map's centre."),
     heading_deg: float = typer.Option(None, "--heading-deg", help="With --dry-run --camera sim: start heading, degrees clockwise from the map's +col axis (default 0)."),
@@ -104,7 +106,8 @@ def drive(
 
     with bar:
         outcome, folder = api.drive(
-            serial=serial, baud=baud, dry_run=dry_run, camera=camera, topic=topic, sim_map=sim_map,
+            serial=serial, baud=baud, dry_run=dry_run, camera=camera, topic=topic, odom_topic=odom_topic,
+            foxglove=foxglove, sim_map=sim_map,
             start=_parse_start(start), heading_deg=heading_deg, config=config, overrides=overrides, seed=seed, out=out,
             force=force, clock=clock.value, strict=strict, video_out=video_out, png_every=png_every, max_frames=max_frames,
             on_status=lambda line: typer.echo(line, err=True), on_frame=progress, on_replay=bar.stage,
@@ -112,6 +115,8 @@ def drive(
     stopped = {True: "; STOP acknowledged", False: "; STOP sent, not acknowledged", None: ""}[outcome.stop_acked]
     skipped = f"; {outcome.skipped} damaged messages skipped (`skipped` in the log)" if outcome.skipped else ""
     typer.echo(f"drove {outcome.frames} frames: {outcome.detail}{stopped}{skipped}; log in {display_path(folder / RUN_LOG)}")
+    if outcome.products:
+        typer.echo(f"wrote {', '.join(outcome.products)} in {display_path(folder)}")
     if video_out is not None:
         typer.echo(f"wrote {display_path(video_out)}")
     if outcome.reason in _SIGNAL_EXIT:

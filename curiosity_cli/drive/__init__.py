@@ -14,6 +14,12 @@
   robot's motion and view, and its protocol server on a pseudo-terminal.
 - :mod:`~curiosity_cli.drive.overlay`, :mod:`~curiosity_cli.drive.driver`: the paper's
   overlay, video and PNG output, and the loop that ties it together.
+- :mod:`~curiosity_cli.drive.bags`, :mod:`~curiosity_cli.drive.foxglove_mcap`,
+  :mod:`~curiosity_cli.drive.mcap_scan`, :mod:`~curiosity_cli.drive.odometry`: recorded
+  missions as a camera, with each frame's pose.
+- :mod:`~curiosity_cli.drive.mission`, :mod:`~curiosity_cli.drive.frames_table`,
+  :mod:`~curiosity_cli.drive.trajectory`, :mod:`~curiosity_cli.drive.timeline`: what a drive
+  leaves for Foxglove, pandas and a reader.
 - :mod:`~curiosity_cli.drive.session`: what ``curiosity drive`` and ``curiosity simrobot``
   open, run and close (camera, robot, run folder and log; the pseudo-terminal).
 

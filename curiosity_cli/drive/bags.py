@@ -1,9 +1,12 @@
 """Recorded missions as a camera: ROS 1 bags, ROS 2 bag folders (sqlite3 or MCAP storage) and
-bare ``.mcap`` or ``.db3`` files, read with ``rosbags`` (pure Python; no ROS installation).
+bare ``.mcap`` or ``.db3`` files, read with ``rosbags`` (pure Python; no ROS installation),
+and MCAP files of Foxglove images (:mod:`~curiosity_cli.drive.foxglove_mcap`).
 
 :class:`BagCamera` yields a topic's frames in recorded order, each with its bag time
-(seconds since the epoch). Images are ``sensor_msgs/Image`` in the encodings of
-:data:`ENCODINGS` or ``sensor_msgs/CompressedImage`` (JPEG, PNG); every frame becomes an
+(nanoseconds since the epoch) and, where the bag has odometry, its pose
+(:mod:`~curiosity_cli.drive.odometry`). Images are ``sensor_msgs/Image`` in the encodings of
+:data:`ENCODINGS` or ``sensor_msgs/CompressedImage`` (JPEG, PNG), or their Foxglove
+counterparts ``foxglove.RawImage`` and ``foxglove.CompressedImage``; every frame becomes an
 RGB ``(H, W, 3)`` uint8 array as the live cameras deliver it (16-bit values keep their
 top 8 bits, so a ``mono16`` frame of ``v * 257`` is the ``mono8`` frame of ``v``).
 
@@ -21,10 +24,14 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.drive.camera import CameraError, Frame
+from curiosity_cli.drive.foxglove_mcap import FOXGLOVE_COMPRESSED, FOXGLOVE_RAW
+from curiosity_cli.drive.odometry import ODOMETRY
 from curiosity_cli.files import display_path
 
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
+#: The message types a replay reads frames from: raw and compressed, ROS's and Foxglove's.
+IMAGE_TYPES = (IMAGE, COMPRESSED, FOXGLOVE_RAW, FOXGLOVE_COMPRESSED)
 #: What a bag's storage is told by: its suffix, or a ROS 2 bag folder's metadata file.
 BAG_SUFFIXES = (".bag", ".mcap", ".db3")
 #: YUV 4:2:2 encodings, two bytes a pixel: ROS's ``yuv422`` is UYVY order, ``yuv422_yuy2`` (usb_cam's) YUYV.
@@ -147,6 +154,14 @@ class BagCamera:
         A ROS 1 ``.bag``, a ROS 2 bag folder, or a ``.mcap`` / ``.db3`` file.
     topic : str, optional
         The image topic; may be left out when the bag has exactly one.
+    odom_topic : str, optional
+        A ``nav_msgs/msg/Odometry`` topic whose nearest pose in time each frame gets;
+        default the bag's only one, if it has one.
+
+    Attributes
+    ----------
+    odometry : Odometry or None
+        The poses frames are given; None: frames have none, and :attr:`pose_note` says why.
 
     Raises
     ------
@@ -154,13 +169,14 @@ class BagCamera:
         rosbags not installed (naming the ``bags`` extra); a missing, truncated or
         non-bag file; no image topic, several without ``topic``, an unknown topic or one
         that is not an image, each naming the bag's image topics and their message counts
-        (``parameter="topic"``, but for a bag without image topics).
+        (``parameter="topic"``, but for a bag without image topics); an ``odom_topic``
+        the bag does not have as odometry (``parameter="odom_topic"``).
     """
 
     #: What the drive's last line says when the frames run out.
     ending = "end of the bag"
 
-    def __init__(self, source: str, topic: str | None = None):
+    def __init__(self, source: str, topic: str | None = None, odom_topic: str | None = None):
         try:
             from rosbags.highlevel import AnyReader
         except ImportError:
@@ -174,18 +190,19 @@ class BagCamera:
             self._reader = AnyReader(paths)
             self._reader.open()
         except Exception as exc:  # rosbags raises its own errors, and Python's own for torn or foreign bytes
-            self._reader = _cut_mcap(paths)
+            self._reader = _foxglove_mcap(paths, where) or _cut_mcap(paths)
             if self._reader is None:
                 raise CameraError(f"{where}: not a readable bag ({_why_unreadable(exc, paths)})") from None
-            cut = (
-                f"{display_path(paths[0])} ends before its summary (a recording cut short?): replaying its "
-                f"{self._reader.message_count} whole messages; its last {self._reader.unfinished:,} bytes are an unfinished record"
-            )
-            self.note = f"{self.note}; {cut}" if self.note else cut
+            if hasattr(self._reader, "unfinished"):
+                cut = (
+                    f"{display_path(paths[0])} ends before its summary (a recording cut short?): replaying its "
+                    f"{self._reader.message_count} whole messages; its last {self._reader.unfinished:,} bytes are an unfinished record"
+                )
+                self.note = f"{self.note}; {cut}" if self.note else cut
         counts = {}
         for connection in self._reader.connections:
             counts.setdefault(connection.topic, [connection.msgtype, 0])[1] += connection.msgcount
-        images = {name: n for name, (kind, n) in counts.items() if kind in (IMAGE, COMPRESSED)}
+        images = {name: n for name, (kind, n) in counts.items() if kind in IMAGE_TYPES}
         listed = ", ".join(f"{name} ({n} messages)" for name, n in sorted(images.items())) or "none"
         if topic is None and not images:
             self.close()
@@ -208,12 +225,42 @@ class BagCamera:
             )
         self.topic = topic
         self.messages = images[topic]
+        try:
+            self.odom_topic, self.odometry, self.pose_note = self._read_odometry(odom_topic, counts, where)
+        except BaseException:
+            self.close()
+            raise
         connections = [c for c in self._reader.connections if c.topic == topic]
         self._messages = self._reader.messages(connections=connections)
         self._index = 0
 
+    def _read_odometry(self, odom_topic: str | None, counts: dict, where: str):
+        """(the odometry topic or None, its :class:`~curiosity_cli.drive.odometry.Odometry` or None, why frames have
+        no pose or what to know of it)."""
+        from curiosity_cli.drive.odometry import read_odometry
+
+        odometry = sorted(name for name, (kind, _) in counts.items() if kind == ODOMETRY)
+        if odom_topic is None and len(odometry) != 1:
+            why = "no odometry topic" if not odometry else f"odometry on {len(odometry)} topics ({', '.join(odometry)}): give one as odom_topic"
+            return None, None, f"frames have no pose: {where} has {why}"
+        if odom_topic is not None and odom_topic not in odometry:
+            listed = ", ".join(odometry) or "none"
+            held = f"holds {counts[odom_topic][0]}" if odom_topic in counts else "is not a topic there"
+            raise CameraError(
+                f"odom_topic: {odom_topic!r} {held}; the {ODOMETRY} topics of {where}: {listed}", parameter="odom_topic"
+            )
+        name = odom_topic or odometry[0]
+        try:
+            poses, damaged = read_odometry(self._reader, [c for c in self._reader.connections if c.topic == name])
+        except ValueError as exc:
+            raise CameraError(f"odom_topic: {name} of {where}: {exc}", parameter="odom_topic") from None
+        if poses is None:
+            return name, None, f"frames have no pose: none of the {damaged} messages of {name} decoded"
+        left_out = f" ({damaged} damaged messages left out)" if damaged else ""
+        return name, poses, f"poses from {name}: {len(poses)} messages{left_out}, each frame given the nearest in time"
+
     def read(self) -> Frame | None:
-        """The next frame, with its bag time; None after the last.
+        """The next frame, with its bag time and pose; None after the last.
 
         Raises
         ------
@@ -244,13 +291,35 @@ class BagCamera:
             exc.index, exc.bag_time = index, stamp / 1e9
             raise
         header = getattr(getattr(message, "header", None), "stamp", None)
-        header = None if header is None else header.sec + header.nanosec / 1e9
-        return Frame(image, time.monotonic(), stamp / 1e9, header)
+        header = None if header is None else int(header.sec) * 1_000_000_000 + int(header.nanosec)
+        pose = None if self.odometry is None else self.odometry.nearest(stamp)
+        return Frame(image, time.monotonic(), int(stamp), header, pose)
 
     def close(self) -> None:
         if hasattr(self, "_messages"):
             self._messages.close()
         self._reader.close()
+
+
+def _foxglove_mcap(paths: list[Path], where: str):
+    """A :class:`~curiosity_cli.drive.foxglove_mcap.FoxgloveMcap` of a lone, whole MCAP file rosbags could not open;
+    None for anything else (a file cut short, not an MCAP).
+
+    Raises
+    ------
+    CameraError
+        A whole MCAP file of neither ROS 2 nor Foxglove images, naming what it holds and what is read.
+    """
+    if len(paths) != 1 or paths[0].suffix.lower() != ".mcap" or not paths[0].is_file():
+        return None
+    from curiosity_cli.drive.foxglove_mcap import FoxgloveMcap, FoxgloveMcapError, NoImagesError
+
+    try:
+        return FoxgloveMcap(paths[0])
+    except NoImagesError as exc:
+        raise CameraError(f"{where}: not a readable bag: {exc}") from None
+    except (FoxgloveMcapError, ImportError, OSError):  # mcap missing: rosbags' own reason is given
+        return None
 
 
 def _cut_mcap(paths: list[Path]):
@@ -289,7 +358,7 @@ def decode(message, msgtype: str, where: str) -> np.ndarray:
     """
     import cv2
 
-    if msgtype == COMPRESSED:
+    if msgtype in (COMPRESSED, FOXGLOVE_COMPRESSED):
         data = np.frombuffer(bytes(message.data), np.uint8)
         image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
         if image is None or image.size == 0:

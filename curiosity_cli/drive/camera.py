@@ -32,16 +32,19 @@ class Frame(NamedTuple):
     captured : float
         The ``time.monotonic()`` at which it was captured (or read): the start of the
         frame-to-command latency.
-    recorded : float or None
-        A recorded frame's time, seconds since the epoch (a bag's record time); None for a live one.
-    header : float or None
-        A recorded image message's own header stamp, seconds since the epoch; None without one.
+    recorded_ns : int or None
+        A recorded frame's time, nanoseconds since the epoch (a bag's record time); None for a live one.
+    header_ns : int or None
+        A recorded image message's own header stamp, nanoseconds since the epoch; None without one.
+    pose : FramePose or None
+        A recorded frame's pose (:mod:`~curiosity_cli.drive.odometry`); None without odometry.
     """
 
     image: np.ndarray
     captured: float
-    recorded: float | None = None
-    header: float | None = None
+    recorded_ns: int | None = None
+    header_ns: int | None = None
+    pose: object = None
 
 
 class OpenCVCamera:

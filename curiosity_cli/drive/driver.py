@@ -16,6 +16,7 @@ command replaced before it was sent (the link was busy) shares its row's ``seq``
 from __future__ import annotations
 
 import contextlib
+import math
 import signal
 import time
 from dataclasses import dataclass
@@ -103,6 +104,7 @@ class Outcome:
     detail: str
     stop_acked: bool | None  # None without a robot (or a simulated one in this process)
     skipped: int = 0  # a replay's messages that held no usable frame (a ``skipped`` record each)
+    products: tuple[str, ...] = ()  # what the run folder holds for a reader (``session.PRODUCTS``), by name
 
 
 def _rounded(array, places: int = 3) -> list:
@@ -119,6 +121,7 @@ def run(
     max_frames: int | None,
     stop: StopRequest,
     strict: bool = False,
+    mission=None,
     on_frame=lambda frame_number, decision: None,
 ) -> Outcome:
     """Drive until the camera ends, ``max_frames``, ESTOP or a stop request.
@@ -140,6 +143,8 @@ def run(
         Stop at a replay's first message that holds no usable frame
         (:class:`~curiosity_cli.drive.bags.BadMessage`) instead of skipping it with a
         ``skipped`` record (its message index, bag time and reason).
+    mission : MissionFile, optional
+        Gets each frame's record and image (:mod:`~curiosity_cli.drive.mission`).
     on_frame : callable
         Called after each frame with its number and :class:`Decision` (progress output).
 
@@ -185,7 +190,7 @@ def run(
                     raise CameraError(f"every one of the {skipped} messages held no usable frame; the first: {first_bad}")
                 outcome = Outcome("end of video", frames, camera.ending, None)
                 break
-            image, captured, recorded, header = got
+            image, captured, recorded, header, pose = got
             state = robot.state() if robot is not None else None
             decision = pipeline.process(image)
             command = decision.command
@@ -194,8 +199,10 @@ def run(
             _flush(pending, robot, log)
             pending = {
                 "frame": frames,
-                **({} if recorded is None else {"bag_time": recorded}),
-                **({} if header is None else {"header_time": header}),
+                # the frame's time on the mission's clock: its bag time in a replay, the host's clock live
+                "time_ns": recorded if recorded is not None else time.time_ns(),
+                **({} if recorded is None else {"bag_time": recorded / 1e9, "bag_time_ns": recorded}),
+                **({} if header is None else {"header_time": header / 1e9, "header_time_ns": header}),
                 "latency_ms": round(latency * 1000, 2),
                 "seconds": {k: round(v, 5) for k, v in decision.seconds.items()},
                 "words": decision.words,
@@ -204,6 +211,7 @@ def run(
                     "t": round(state.t, 3), "x": round(state.x, 4), "y": round(state.y, 4),
                     "heading": round(state.heading, 4), "depth": round(state.depth, 3),
                 },
+                "pose": _pose_record(pose, state),
                 "perplexity": _rounded(decision.perplexity),
                 "scores": _rounded(decision.scores),
                 "target": list(decision.target),
@@ -214,6 +222,8 @@ def run(
                 },
                 "seq": seq,
             }
+            if mission is not None:
+                mission.frame(pending, image)
             png_now = outputs.png_every and frames % outputs.png_every == 0
             if video is not None or png_now:
                 annotated = draw_overlay(image, decision.scores, decision.target, caption_for(frames, command))
@@ -248,6 +258,24 @@ def run(
             }),
         )
     return Outcome(outcome.reason, outcome.frames, outcome.detail, stop_acked, skipped)
+
+
+def _pose_record(pose, state) -> dict | None:
+    """A frame's pose in its log record: a replay's odometry (:class:`~curiosity_cli.drive.odometry.FramePose`), else
+    the robot's reported state (its x, y, heading; z is minus its depth), else None."""
+    if pose is not None:
+        (x, y, z), (qx, qy, qz, qw) = pose.position, pose.orientation
+        return {
+            "source": "odometry", "frame_id": pose.frame_id, "x": x, "y": y, "z": z, "qx": qx, "qy": qy, "qz": qz, "qw": qw,
+            "yaw": round(pose.yaw, 6), "gap_ms": round(pose.gap_ns / 1e6, 3),
+        }
+    if state is None:
+        return None
+    half = state.heading / 2
+    return {
+        "source": "robot", "frame_id": "robot", "x": state.x, "y": state.y, "z": -state.depth,
+        "qx": 0.0, "qy": 0.0, "qz": math.sin(half), "qw": math.cos(half), "yaw": state.heading, "gap_ms": 0.0,
+    }
 
 
 def _flush(row: dict | None, robot, log: JsonLines) -> None:

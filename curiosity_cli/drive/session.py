@@ -17,6 +17,7 @@ they run, so a robot is stopped before the program ends: call them from the main
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import os
 import re
@@ -28,19 +29,22 @@ from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.maps.map_data import MapData
 from curiosity_cli.drive import camera as cameras
 from curiosity_cli.drive.driver import RUN_LOG, Outcome, Outputs, StopRequest, prepare_folder, run, stopping_on_signals
+from curiosity_cli.drive.frames_table import FRAMES_CSV, FRAMES_PARQUET
 from curiosity_cli.drive.jsonlines import JsonLines
 from curiosity_cli.drive.link import LinkTiming, RobotLink
+from curiosity_cli.drive.mission import MISSION_FILE, MissionFile
 from curiosity_cli.drive.overlay import check_video_out
 from curiosity_cli.drive.pipeline import CuriosityPipeline, warm_up
 from curiosity_cli.drive.sim import Body, Pose
 from curiosity_cli.drive.simrobot import Noise, SimRobot, open_pty
+from curiosity_cli.drive.trajectory import TRAJECTORY_FILE
 from curiosity_cli.errors import CuriosityError, ParameterError
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import display_path
 from curiosity_cli.paths import DEFAULT_RESULTS
 
 
-def open_camera(camera: str, topic: str | None = None):
+def open_camera(camera: str, topic: str | None = None, odom_topic: str | None = None):
     """A bag's frames (:class:`~curiosity_cli.drive.bags.BagCamera`) or an OpenCV source's.
 
     Raises
@@ -51,11 +55,13 @@ def open_camera(camera: str, topic: str | None = None):
     from curiosity_cli.drive.bags import BagCamera, is_bag
 
     if is_bag(camera):
-        return BagCamera(camera, topic)
+        return BagCamera(camera, topic, odom_topic)
     return cameras.OpenCVCamera(camera)
 
 
-def check_replay_options(camera: str, *, topic: str | None = None, strict: bool = False, clock: str = "bag") -> None:
+def check_replay_options(
+    camera: str, *, topic: str | None = None, odom_topic: str | None = None, strict: bool = False, clock: str = "bag"
+) -> None:
     """Refuse a bag replay's options for a ``camera`` that is not a bag (a device, a video, a stream, ``sim``).
 
     Each would be ignored there: a video has no topics, no damaged messages to skip and no
@@ -73,6 +79,10 @@ def check_replay_options(camera: str, *, topic: str | None = None, strict: bool 
     not_a_bag = f"camera {camera!r} is not a bag"
     if topic is not None:
         raise ParameterError(f"topic: got {topic!r}, but {not_a_bag}; a topic names a bag's images", parameter="topic")
+    if odom_topic is not None:
+        raise ParameterError(
+            f"odom_topic: got {odom_topic!r}, but {not_a_bag}; it names a bag's odometry", parameter="odom_topic"
+        )
     if clock != "bag":
         raise ParameterError(
             f"clock: got {clock!r}, but {not_a_bag}; a replay's timeline reads a bag's clocks", parameter="clock"
@@ -119,7 +129,14 @@ def check_run_folder(out: Path | None, *, force: bool = False) -> None:
 
 
 #: The files a drive writes at the top of its run folder (besides the folder lock).
-RUN_FILES = (RUN_LOG, "config.yaml", "provenance.yaml", "timeline.png", "timeline.pdf")
+RUN_FILES = (
+    RUN_LOG, "config.yaml", "provenance.yaml", "timeline.png", "timeline.pdf", MISSION_FILE, FRAMES_PARQUET, FRAMES_CSV,
+    TRAJECTORY_FILE,
+)
+
+#: What a drive leaves for a reader, named on its last line: a replay's timeline, the mission file Foxglove
+#: opens, the frames table, and the trajectory where frames have a pose.
+PRODUCTS = ("timeline.png", MISSION_FILE, FRAMES_PARQUET, TRAJECTORY_FILE)
 
 #: Its folders of frames: ``png_every``'s annotated ones, and a replay's most surprising.
 FRAME_FOLDERS = ("frames", "surprising")
@@ -289,6 +306,8 @@ def drive_session(
     camera: str,
     port: str | None,
     topic: str | None = None,
+    odom_topic: str | None = None,
+    foxglove: int | None = None,
     baud: int | None = None,
     sim_map: MapData | None = None,
     start: tuple[float, float] | None = None,
@@ -320,6 +339,13 @@ def drive_session(
         logged, not sent).
     topic : str, optional
         With a bag: its image topic, which may be left out when it has one.
+    odom_topic : str, optional
+        With a bag: its ``nav_msgs/msg/Odometry`` topic that gives each frame its pose
+        (:mod:`~curiosity_cli.drive.odometry`); default its only one, if it has one. A live
+        robot's frames take their pose from its reported state.
+    foxglove : int, optional
+        Serve the mission live over Foxglove's WebSocket protocol on this localhost port
+        while it runs (:mod:`~curiosity_cli.drive.mission`; 0: any free port).
     baud : int, optional
         Serial speed; default ``config.drive.baud``.
     sim_map : MapData, optional
@@ -331,9 +357,10 @@ def drive_session(
     heading_deg : float
         That robot's start heading, degrees clockwise from the map's +col axis.
     out : Path, optional
-        The run folder (``log.jsonl``, ``config.yaml``, ``provenance.yaml``,
-        ``frames/``), new or empty; default a new ``results/drive/<date-time>``
-        (:func:`claimed_run_folder`).
+        The run folder (``log.jsonl``, ``config.yaml``, ``provenance.yaml``, ``frames/``,
+        and at the end ``mission.mcap``, ``frames.parquet`` and ``.csv``, and
+        ``trajectory.png`` when frames have a pose), new or empty; default a new
+        ``results/drive/<date-time>`` (:func:`claimed_run_folder`).
     force : bool
         Replace the earlier run in ``out`` (never a folder of anything else).
     strict : bool
@@ -389,12 +416,14 @@ def drive_session(
         raise ParameterError("start: a dry run on a simulated map needs the robot's start (row, col)")
     if video_out is not None:  # a bad name found once the run is under way would leave its folder half-made
         check_video_out(video_out)
-    check_replay_options(camera, topic=topic, strict=strict, clock=clock)
+    check_replay_options(camera, topic=topic, odom_topic=odom_topic, strict=strict, clock=clock)
     check_run_folder(out, force=force)  # before the camera and the model: a folder in use is the only message
     with stopping_on_signals(StopRequest()) as stop, contextlib.ExitStack() as held:
-        source = None if camera == "sim" else open_camera(camera, topic)
+        source = None if camera == "sim" else open_camera(camera, topic, odom_topic)
         if getattr(source, "note", ""):  # a bag read otherwise than named (a recording cut short)
             on_status(source.note)
+        if getattr(source, "pose_note", ""):
+            on_status(source.pose_note)
         on_status("loading the vocabularies and the topic model's kernels")
         pipeline = CuriosityPipeline(config, seed)
         warm_up(config)
@@ -412,9 +441,13 @@ def drive_session(
         log.write(
             "start", seed=seed, camera=camera, topic=getattr(source, "topic", None), sim_map=map_name, serial=port,
             dry_run=port is None, **({"bag": bag_fingerprint(camera)} if isinstance(source, BagCamera) else {}),
+            **({"odom_topic": source.odom_topic, "poses": source.pose_note} if isinstance(source, BagCamera) else {}),
         )
-        robot = None
+        robot = mission = None
         try:
+            mission = MissionFile(out / MISSION_FILE, live_port=foxglove)
+            if mission.port is not None:
+                on_status(f"live view: open ws://127.0.0.1:{mission.port} in Foxglove")
             if port is not None:
                 timing = LinkTiming(d.hello_timeout, d.ack_timeout, d.resends, d.keepalive)
                 robot = RobotLink.open(port, baud or d.baud, timing, log=log.write)
@@ -433,8 +466,11 @@ def drive_session(
                 on_replay(f"replaying {source.topic}", frames)
             outputs = Outputs(out, video_out, png_every)
             outcome = run(
-                pipeline, source, robot, outputs, log, max_frames=max_frames, stop=stop, strict=strict, on_frame=on_frame
+                pipeline, source, robot, outputs, log, max_frames=max_frames, stop=stop, strict=strict,
+                mission=mission, on_frame=on_frame,
             )
+            mission.close()
+            _write_tables(out)
             if hasattr(source, "messages"):
                 _draw_timeline(out, camera, source.topic, f"{outcome.frames} frames", clock)
         except BaseException as exc:
@@ -445,17 +481,31 @@ def drive_session(
                 if robot is not None:
                     robot.close()
                 log.write("end", outcome=None, error=" ".join(str(exc).split()) or type(exc).__name__, frames=0)
-            elif isinstance(exc, CuriosityError) and hasattr(source, "messages"):
-                # a replay that stopped: the timeline of what it replayed; the error it stopped on is the message
+            elif isinstance(exc, CuriosityError):
+                # a drive that stopped: the tables and timeline of what it did; the error it stopped on is the message
                 with contextlib.suppress(CuriosityError, OSError):
-                    _draw_timeline(out, camera, source.topic, "stopped early", clock)
+                    if mission is not None:
+                        mission.close()
+                    _write_tables(out)
+                    if hasattr(source, "messages"):
+                        _draw_timeline(out, camera, source.topic, "stopped early", clock)
             if isinstance(exc, CuriosityError):  # the folder stays, as a log of the attempt: say where
                 kept = f"{exc.args[0]}; the session's log is kept in {display_path(out / RUN_LOG)}"
                 raise type(exc)(kept, parameter=exc.parameter, rerun=exc.rerun) from None
             raise
         finally:
+            if mission is not None:
+                mission.close()
             log.close()
-    return outcome, out
+    return dataclasses.replace(outcome, products=tuple(name for name in PRODUCTS if (out / name).is_file())), out
+
+
+def _write_tables(out: Path) -> None:
+    """The run's frames table and, where its frames have a pose, its trajectory figure."""
+    from curiosity_cli.drive.frames_table import write_frames_table
+    from curiosity_cli.drive.trajectory import write_trajectory
+
+    write_trajectory(out, write_frames_table(out))
 
 
 def _check_log_file(log_file: Path) -> None:

@@ -1,0 +1,128 @@
+"""A drive's frames as one flat table: ``frames.parquet`` and ``frames.csv``, one row per frame.
+
+The table is made from the run's ``log.jsonl`` (the record of the run), so it says what
+the log says: a frame's times as integer nanoseconds, its surprise (the mean of its
+image cells' topic perplexity, the paper's, section 5.2) and its parts, the refinement
+it got, the command it gave and its pose. The mission file
+(:mod:`~curiosity_cli.drive.mission`) takes its numbers from the same rows through
+:func:`frame_summary`, so the two agree value for value.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+#: The table's files in a run folder.
+FRAMES_PARQUET, FRAMES_CSV = "frames.parquet", "frames.csv"
+
+#: Its columns, in order; the integer ones that may be missing are pandas' nullable Int64.
+COLUMNS = (
+    "frame", "time_ns", "bag_time_ns", "header_time_ns", "surprise", "perplexity_max", "score_max", "refined",
+    "words", "target_row", "target_col", "surge", "yaw_rate", "pitch_rate", "latency_ms",
+    "pose_source", "pose_frame", "x", "y", "z", "yaw", "pose_gap_ms",
+)
+_NULLABLE_INTS = ("bag_time_ns", "header_time_ns")
+
+
+def frame_summary(row: dict) -> dict:
+    """A frame record's surprise and its parts.
+
+    Parameters
+    ----------
+    row : dict
+        A ``frame`` record of a drive's log.
+
+    Returns
+    -------
+    dict
+        ``surprise`` (mean cell perplexity), ``perplexity_max``, ``score_max`` (the decayed
+        score that steered), ``refined`` (word samples of its own refinement), ``words``.
+    """
+    perplexity = np.asarray(row["perplexity"], np.float64)
+    return {
+        "surprise": round(float(perplexity.mean()), 6),
+        "perplexity_max": float(perplexity.max()),
+        "score_max": float(np.max(row["scores"])),
+        "refined": int(row.get("refined", 0)),
+        "words": int(row["words"]),
+    }
+
+
+def frames_table(log: Path):
+    """The frames of a drive's log as a DataFrame with :data:`COLUMNS`.
+
+    Raises
+    ------
+    CuriosityError
+        A line before the last that is not a JSON object, or a frame record without a
+        field the table reads, naming the line.
+    """
+    import pandas as pd
+
+    from curiosity_cli.drive.timeline import _log_records
+    from curiosity_cli.errors import CuriosityError
+    from curiosity_cli.files import display_path
+
+    rows = []
+    for record in _log_records(Path(log)):
+        if record.get("event") != "frame":
+            continue
+        missing = [k for k in ("frame", "time_ns", "perplexity", "scores", "words", "target", "command") if k not in record]
+        if missing:
+            raise CuriosityError(f"{display_path(Path(log))}: line {record['_line']}: a frame record without {missing[0]!r}")
+        pose = record.get("pose") or {}
+        command = record["command"]
+        rows.append({
+            "frame": record["frame"],
+            "time_ns": record["time_ns"],
+            "bag_time_ns": record.get("bag_time_ns"),
+            "header_time_ns": record.get("header_time_ns"),
+            **frame_summary(record),
+            "target_row": record["target"][0],
+            "target_col": record["target"][1],
+            "surge": command["surge"],
+            "yaw_rate": command["yaw_rate"],
+            "pitch_rate": command["pitch_rate"],
+            "latency_ms": record.get("latency_ms"),
+            "pose_source": pose.get("source"),
+            "pose_frame": pose.get("frame_id"),
+            "x": pose.get("x"),
+            "y": pose.get("y"),
+            "z": pose.get("z"),
+            "yaw": pose.get("yaw"),
+            "pose_gap_ms": pose.get("gap_ms"),
+        })
+    table = pd.DataFrame(rows, columns=list(COLUMNS))
+    for name in _NULLABLE_INTS:
+        table[name] = table[name].astype("Int64")
+    for name in ("frame", "time_ns", "refined", "words", "target_row", "target_col"):
+        table[name] = table[name].astype(np.int64)
+    for name in ("pose_source", "pose_frame"):
+        table[name] = table[name].astype("string")
+    for name in ("latency_ms", "x", "y", "z", "yaw", "pose_gap_ms"):
+        table[name] = table[name].astype(np.float64)
+    return table
+
+
+def write_frames_table(folder: Path):
+    """Write :data:`FRAMES_PARQUET` and :data:`FRAMES_CSV` from ``folder``'s log; the table written.
+
+    Each is written whole under a temporary name and renamed into place.
+
+    Raises
+    ------
+    CuriosityError
+        As :func:`frames_table`.
+    """
+    from curiosity_cli.drive.driver import RUN_LOG
+    from curiosity_cli.files import atomic_path
+
+    folder = Path(folder)
+    table = frames_table(folder / RUN_LOG)
+    with atomic_path(folder / FRAMES_PARQUET) as tmp:
+        table.to_parquet(tmp, index=False)
+    with atomic_path(folder / FRAMES_CSV) as tmp:
+        table.to_csv(tmp, index=False)
+    return table

@@ -1,0 +1,368 @@
+"""A drive's mission for the tools robotics people use: ``mission.mcap`` decoded with the mcap project's own
+readers and Foxglove's schemas, ``frames.parquet`` and ``open_mission``, poses from a bag's odometry,
+``trajectory.png``, MCAP files of Foxglove images replayed, and the live view over a real WebSocket."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import struct
+import subprocess
+import threading
+from collections import Counter
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from curiosity_cli import api
+from curiosity_cli.cli import app
+from curiosity_cli.drive.frames_table import frame_summary
+from curiosity_cli.maps.map_data import load_map
+
+from conftest import CURIOSITY, START_SECONDS, read_log
+
+pytest.importorskip("rosbags")
+pytest.importorskip("foxglove")
+from mcap.reader import make_reader  # noqa: E402
+from mcap_protobuf.decoder import DecoderFactory  # noqa: E402
+from rosbags.rosbag2 import StoragePlugin, Writer  # noqa: E402
+from rosbags.typesys import Stores, get_typestore  # noqa: E402
+
+runner = CliRunner()
+START = 1_700_000_000_000_000_000  # bag time of the first frame, ns since the epoch
+PERIOD = 250_000_000  # 4 frames a second
+ODOMETRY_OFFSET = 7_000_000  # odometry at twice the frame rate, 7 ms after each half period
+GRID = ["--set", "drive.grid_rows=4", "--set", "drive.grid_cols=4"]
+
+
+def mission_frames(count: int) -> list[np.ndarray]:
+    """(120, 160, 3) RGB frames cut from the aerial mosaic along a diagonal."""
+    image = load_map("aerial-mosaic").image
+    return [np.ascontiguousarray(image[(5 * i) % 600 : (5 * i) % 600 + 120, (6 * i) % 600 : (6 * i) % 600 + 160])
+            for i in range(count)]
+
+
+def _png(frame: np.ndarray) -> bytes:
+    ok, png = cv2.imencode(".png", frame[:, :, ::-1])
+    assert ok
+    return png.tobytes()
+
+
+def write_ros2_mission(path: Path, frames: list[np.ndarray], odometry: tuple[str, ...] = ("/odom",)) -> Path:
+    """A ROS 2 MCAP bag: PNG frames on /camera/image and, on each of ``odometry``'s topics, a pose at twice
+    the frame rate moving 0.1 m along x and 0.05 m along y each, turning 0.01 rad each."""
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    t = store.types
+
+    def header(stamp: int, frame_id: str):
+        return t["std_msgs/msg/Header"](
+            stamp=t["builtin_interfaces/msg/Time"](sec=stamp // 10**9, nanosec=stamp % 10**9), frame_id=frame_id
+        )
+
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        camera = writer.add_connection("/camera/image", "sensor_msgs/msg/CompressedImage", typestore=store)
+        for topic in odometry:
+            connection = writer.add_connection(topic, "nav_msgs/msg/Odometry", typestore=store)
+            for i in range(2 * len(frames)):
+                stamp = START + i * PERIOD // 2 + ODOMETRY_OFFSET
+                yaw = 0.01 * i
+                pose = t["geometry_msgs/msg/Pose"](
+                    position=t["geometry_msgs/msg/Point"](x=0.1 * i, y=0.05 * i, z=0.0),
+                    orientation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=np.sin(yaw / 2), w=np.cos(yaw / 2)),
+                )
+                zero = t["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
+                message = t["nav_msgs/msg/Odometry"](
+                    header=header(stamp, "odom"), child_frame_id="base_link",
+                    pose=t["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=np.zeros(36)),
+                    twist=t["geometry_msgs/msg/TwistWithCovariance"](
+                        twist=t["geometry_msgs/msg/Twist"](linear=zero, angular=zero), covariance=np.zeros(36)
+                    ),
+                )
+                writer.write(connection, stamp, store.serialize_cdr(message, "nav_msgs/msg/Odometry"))
+        for i, frame in enumerate(frames):
+            stamp = START + i * PERIOD
+            message = t["sensor_msgs/msg/CompressedImage"](
+                header=header(stamp, "camera"), format="png", data=np.frombuffer(_png(frame), np.uint8)
+            )
+            writer.write(camera, stamp, store.serialize_cdr(message, "sensor_msgs/msg/CompressedImage"))
+    return path
+
+
+def write_foxglove_mission(path: Path, frames: list[np.ndarray], encoding: str) -> Path:
+    """An MCAP file as the Foxglove SDK records one: ``foxglove.CompressedImage`` (PNG) in protobuf, or
+    ``foxglove.RawImage`` (rgb8) in JSON with its data in base64."""
+    import foxglove
+    from foxglove.channels import CompressedImageChannel
+    from foxglove.messages import CompressedImage, Timestamp
+
+    context = foxglove.Context()
+    writer = foxglove.open_mcap(path, context=context)
+    if encoding == "protobuf":
+        channel = CompressedImageChannel("/cam", context=context)
+    else:
+        schema = foxglove.Schema(name="foxglove.RawImage", encoding="jsonschema", data=b'{"type":"object"}')
+        channel = foxglove.Channel("/cam", schema=schema, message_encoding="json", context=context)
+    for i, frame in enumerate(frames):
+        stamp = START + i * PERIOD
+        if encoding == "protobuf":
+            channel.log(
+                CompressedImage(timestamp=Timestamp(sec=stamp // 10**9, nsec=stamp % 10**9), frame_id="camera",
+                                data=_png(frame), format="png"),
+                log_time=stamp,
+            )
+        else:
+            rows, cols = frame.shape[:2]
+            message = {
+                "timestamp": {"sec": stamp // 10**9, "nsec": stamp % 10**9}, "frame_id": "camera", "width": cols,
+                "height": rows, "encoding": "rgb8", "step": 3 * cols, "data": base64.b64encode(frame.tobytes()).decode(),
+            }
+            channel.log(json.dumps(message).encode(), log_time=stamp)
+    writer.close()
+    return path
+
+
+def replay(camera: Path, out: Path, *extra: str):
+    return runner.invoke(app, ["drive", "--dry-run", "--camera", str(camera), "--out", str(out), *GRID, *extra])
+
+
+def frame_records(out: Path) -> list[dict]:
+    return [r for r in read_log(out) if r["event"] == "frame"]
+
+
+def decoded(mission: Path) -> dict[str, list]:
+    """Every message of a mission file by topic: (schema name, log time, decoded message), protobuf
+    through the mcap project's decoder from the schemas the file embeds, JSON as JSON."""
+    by_topic: dict[str, list] = {}
+    protobuf = DecoderFactory()
+    with mission.open("rb") as file:
+        for schema, channel, message in make_reader(file).iter_messages():
+            if channel.message_encoding == "json":
+                assert schema.encoding == "jsonschema"
+                body = json.loads(message.data)
+            else:
+                body = protobuf.decoder_for(channel.message_encoding, schema)(message.data)
+            by_topic.setdefault(channel.topic, []).append((schema.name, message.log_time, body))
+    return by_topic
+
+
+@pytest.fixture(scope="module")
+def replayed(tmp_path_factory) -> Path:
+    """A ROS 2 bag of 12 frames with odometry, replayed."""
+    folder = tmp_path_factory.mktemp("replayed")
+    bag = write_ros2_mission(folder / "bag", mission_frames(12))
+    result = replay(bag, folder / "out")
+    assert result.exit_code == 0, result.output
+    assert "wrote timeline.png, mission.mcap, frames.parquet, trajectory.png in" in result.output
+    assert "poses from /odom: 24 messages" in result.output
+    return folder / "out"
+
+
+def test_the_mission_file_decodes_with_foxglove_schemas_and_agrees_with_the_log(replayed):
+    records = frame_records(replayed)
+    channels = decoded(replayed / "mission.mcap")
+    assert {topic: (rows[0][0], len(rows)) for topic, rows in channels.items()} == {
+        "/camera/image": ("foxglove.CompressedImage", 12),
+        "/curiosity/surprise": ("curiosity.Surprise", 12),
+        "/curiosity/perplexity": ("foxglove.RawImage", 12),
+        "/curiosity/cells": ("foxglove.ImageAnnotations", 12),
+        "/curiosity/command": ("curiosity.Command", 12),
+        "/pose": ("foxglove.PoseInFrame", 12),
+    }
+    times = [START + i * PERIOD for i in range(12)]
+    for rows in channels.values():
+        assert [log_time for _, log_time, _ in rows] == times
+    for record, (_, _, image) in zip(records, channels["/camera/image"]):
+        assert image.format == "jpeg" and image.timestamp.ToNanoseconds() == record["header_time_ns"]
+        assert cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_COLOR).shape == (120, 160, 3)
+    for record, (_, _, surprise) in zip(records, channels["/curiosity/surprise"]):
+        assert surprise == {"frame": record["frame"], **frame_summary(record)}
+    for record, (_, _, grid) in zip(records, channels["/curiosity/perplexity"]):
+        assert (grid.width, grid.height, grid.encoding) == (4, 4, "32FC1")
+        values = np.frombuffer(grid.data, "<f4").reshape(4, 4)
+        np.testing.assert_array_equal(values, np.asarray(record["perplexity"], np.float32))
+    for record, (_, _, command) in zip(records, channels["/curiosity/command"]):
+        assert command == {"frame": record["frame"], "target_row": record["target"][0],
+                           "target_col": record["target"][1], **record["command"]}
+    for record, (_, _, cells) in zip(records, channels["/curiosity/cells"]):
+        corners = [(p.x, p.y) for p in cells.points[0].points]
+        row, col = record["target"]
+        assert corners[0] == (col * 40, row * 30) and corners[2] == ((col + 1) * 40, (row + 1) * 30)
+    for record, (_, _, pose) in zip(records, channels["/pose"]):
+        p = record["pose"]
+        assert pose.frame_id == "odom"
+        assert (pose.pose.position.x, pose.pose.position.y, pose.pose.orientation.z) == (p["x"], p["y"], p["qz"])
+
+
+def test_each_frame_gets_the_nearest_odometry_in_time_with_its_gap(replayed):
+    for record in frame_records(replayed):
+        i = record["frame"]
+        # the odometry 7 ms after the frame is the nearest (the one before is 118 ms before)
+        pose = record["pose"]
+        assert pose["source"] == "odometry" and pose["frame_id"] == "odom"
+        assert pose["x"] == pytest.approx(0.1 * 2 * i) and pose["y"] == pytest.approx(0.05 * 2 * i)
+        assert pose["yaw"] == pytest.approx(0.01 * 2 * i)
+        assert pose["gap_ms"] == 7.0
+    assert (replayed / "trajectory.png").stat().st_size > 10_000
+
+
+def test_the_frames_table_has_integer_nanoseconds_and_opens_with_its_config(replayed):
+    table = api.open_mission(replayed)
+    records = frame_records(replayed)
+    assert len(table) == 12 and table["frame"].tolist() == list(range(12))
+    assert table["time_ns"].dtype == np.int64
+    assert table["bag_time_ns"].tolist() == [START + i * PERIOD for i in range(12)]
+    assert table["surprise"].tolist() == [frame_summary(r)["surprise"] for r in records]
+    assert table["refined"].tolist() == [r["refined"] for r in records]
+    assert table["pose_gap_ms"].eq(7.0).all() and table["pose_source"].eq("odometry").all()
+    assert table.attrs["config"]["drive"]["grid_rows"] == 4 and table.attrs["provenance"]["seed"] == 0
+    csv = pd.read_csv(replayed / "frames.csv")
+    assert csv["time_ns"].tolist() == table["time_ns"].tolist()
+    assert csv["surprise"].tolist() == table["surprise"].tolist()
+
+
+def test_open_mission_reads_the_log_of_a_drive_stopped_before_its_table(replayed, tmp_path):
+    copy = tmp_path / "copy"
+    copy.mkdir()
+    for name in ("log.jsonl", "config.yaml", "provenance.yaml"):
+        (copy / name).write_bytes((replayed / name).read_bytes())
+    pd.testing.assert_frame_equal(api.open_mission(copy), api.open_mission(replayed), check_like=False)
+
+
+def test_open_mission_of_a_folder_that_is_no_run_is_one_error(tmp_path):
+    from curiosity_cli.errors import CuriosityError
+
+    with pytest.raises(CuriosityError, match=r"log.jsonl: not found; give a run folder of `curiosity drive`"):
+        api.open_mission(tmp_path)
+
+
+def test_a_bag_without_odometry_has_frames_without_pose_and_no_trajectory(tmp_path):
+    bag = write_ros2_mission(tmp_path / "bag", mission_frames(3), odometry=())
+    result = replay(bag, tmp_path / "out")
+    assert result.exit_code == 0, result.output
+    assert "frames have no pose: " in result.output and "has no odometry topic" in result.output
+    assert all(r["pose"] is None for r in frame_records(tmp_path / "out"))
+    assert not (tmp_path / "out" / "trajectory.png").exists()
+    assert "wrote timeline.png, mission.mcap, frames.parquet in" in result.output
+    assert "/pose" not in decoded(tmp_path / "out" / "mission.mcap")
+
+
+def test_odometry_on_several_topics_needs_one_named(tmp_path):
+    bag = write_ros2_mission(tmp_path / "bag", mission_frames(3), odometry=("/odom", "/odom_filtered"))
+    result = replay(bag, tmp_path / "out")
+    assert result.exit_code == 0 and "odometry on 2 topics (/odom, /odom_filtered): give one as odom_topic" in result.output
+    result = replay(bag, tmp_path / "named", "--odom-topic", "/odom_filtered")
+    assert result.exit_code == 0 and "poses from /odom_filtered: 6 messages" in result.output
+
+
+@pytest.mark.parametrize("topic, says", [
+    ("/camera/image", "--odom-topic: '/camera/image' holds sensor_msgs/msg/CompressedImage; the nav_msgs/msg/Odometry topics of"),
+    ("/nowhere", "--odom-topic: '/nowhere' is not a topic there; the nav_msgs/msg/Odometry topics of"),
+])
+def test_an_odom_topic_that_is_no_odometry_is_one_error(tmp_path, topic, says):
+    bag = write_ros2_mission(tmp_path / "bag", mission_frames(2))
+    result = replay(bag, tmp_path / "out", "--odom-topic", topic)
+    assert result.exit_code == 1 and says in result.output and "Traceback" not in result.output
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_odom_topic_needs_a_bag(tmp_path):
+    result = runner.invoke(app, ["drive", "--dry-run", "--camera", "0", "--odom-topic", "/odom"])
+    assert result.exit_code != 0 and "--odom-topic: got '/odom', but camera '0' is not a bag" in result.output
+
+
+@pytest.mark.parametrize("encoding", ["protobuf", "json"])
+def test_an_mcap_of_foxglove_images_replays_as_the_same_frames_in_a_ros_bag(tmp_path, replayed, encoding):
+    mission = write_foxglove_mission(tmp_path / "foxglove.mcap", mission_frames(12), encoding)
+    result = replay(mission, tmp_path / "out")
+    assert result.exit_code == 0, result.output
+    ours, ros = api.open_mission(tmp_path / "out"), api.open_mission(replayed)
+    for column in ("time_ns", "header_time_ns", "surprise", "refined", "words", "target_row", "target_col"):
+        assert ours[column].tolist() == ros[column].tolist(), column
+    assert ours["pose_source"].isna().all()
+
+
+def test_an_mcap_of_other_messages_names_what_is_read(tmp_path):
+    import foxglove
+    from foxglove.channels import LogChannel
+    from foxglove.messages import Log, Timestamp
+
+    context = foxglove.Context()
+    writer = foxglove.open_mcap(tmp_path / "logs.mcap", context=context)
+    LogChannel("/rosout", context=context).log(Log(timestamp=Timestamp(sec=1, nsec=0), message="hi"), log_time=10**9)
+    writer.close()
+    result = replay(tmp_path / "logs.mcap", tmp_path / "out")
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert re.search(
+        r"logs\.mcap: not a readable bag: its channels hold foxglove\.Log \(protobuf\); expected ROS 2 images "
+        r"\(profile ros2\) or Foxglove images \(foxglove\.CompressedImage or foxglove\.RawImage, encoded as "
+        r"protobuf or json\)", " ".join(result.output.split()),
+    ), result.output
+
+
+def test_a_simulated_drive_writes_its_mission_with_the_robots_pose(tmp_path):
+    result = runner.invoke(app, [
+        "drive", "--dry-run", "--camera", "sim", "--sim-map", "aerial-mosaic", "--max-frames", "5",
+        "--out", str(tmp_path / "out"), *GRID,
+    ])
+    assert result.exit_code == 0, result.output
+    assert "wrote mission.mcap, frames.parquet, trajectory.png in" in result.output
+    table = api.open_mission(tmp_path / "out")
+    assert table["pose_source"].eq("robot").all() and table["x"].notna().all()
+    live_times = table["time_ns"].tolist()
+    assert live_times == sorted(live_times) and table["bag_time_ns"].isna().all()
+    assert {topic: len(rows) for topic, rows in decoded(tmp_path / "out" / "mission.mcap").items()}["/pose"] == 5
+
+
+def test_the_live_view_serves_the_surprise_over_foxglove_websocket_and_changes_no_byte(tmp_path):
+    """A real WebSocket client connects while a replay runs, subscribes to the surprise channel, receives
+    frames whose values are the log's, and disconnects; the mission file is the one made without a viewer."""
+    from websockets.sync.client import connect
+
+    bag = write_ros2_mission(tmp_path / "bag", mission_frames(150))  # seconds of replay: time to subscribe
+    command = [CURIOSITY, "drive", "--dry-run", "--camera", str(bag), *GRID]
+    with subprocess.Popen([*command, "--out", str(tmp_path / "live"), "--foxglove", "0"],
+                          stderr=subprocess.PIPE, text=True) as process:
+        port = None
+        for line in process.stderr:
+            if found := re.search(r"live view: open ws://127\.0\.0\.1:(\d+) in Foxglove", line):
+                port = int(found.group(1))
+                break
+        assert port is not None
+        rest = threading.Thread(target=process.stderr.read)  # its progress must not fill the pipe and stall it
+        rest.start()
+        received = []
+        try:
+            with connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1", "foxglove.websocket.v1"],
+                         open_timeout=START_SECONDS) as socket:
+                while len(received) < 3:
+                    message = socket.recv(timeout=START_SECONDS)
+                    if isinstance(message, str):
+                        control = json.loads(message)
+                        if control["op"] == "advertise":
+                            ids = {c["topic"]: c["id"] for c in control["channels"]}
+                            assert {"/camera/image", "/curiosity/surprise", "/pose"} <= set(ids)
+                            socket.send(json.dumps({"op": "subscribe", "subscriptions": [
+                                {"id": 7, "channelId": ids["/curiosity/surprise"]}]}))
+                    else:
+                        assert message[0] == 1 and struct.unpack_from("<I", message, 1)[0] == 7  # message data, ours
+                        received.append((struct.unpack_from("<Q", message, 5)[0], json.loads(message[13:])))
+            process.wait(timeout=START_SECONDS * 3)
+        finally:
+            if process.poll() is None:
+                process.kill()
+            rest.join()
+    assert process.returncode == 0
+    records = {r["frame"]: r for r in frame_records(tmp_path / "live")}
+    frames = [body["frame"] for _, body in received]
+    assert frames == list(range(frames[0], frames[0] + 3))
+    for log_time, body in received:
+        record = records[body["frame"]]
+        assert log_time == record["time_ns"] and body == {"frame": body["frame"], **frame_summary(record)}
+    subprocess.run([*command, "--out", str(tmp_path / "alone")], check=True, capture_output=True)
+    assert (tmp_path / "live" / "mission.mcap").read_bytes() == (tmp_path / "alone" / "mission.mcap").read_bytes()
+    assert Counter(r["event"] for r in read_log(tmp_path / "live"))["frame"] == 150
