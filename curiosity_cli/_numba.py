@@ -65,7 +65,7 @@ def njit(*args, **overrides):
 
 
 def import_cuda():
-    """``numba.cuda`` (numba-cuda, the optional extra ``curiosity[cuda]``), importable with numpy 2.5.
+    """``numba.cuda`` (numba-cuda, the optional extra ``curiosity-cli[cuda]``), importable with numpy 2.5.
 
     numba-cuda up to at least 0.30 registers an implementation of ``np.row_stack``, which
     numpy 2.5 removed, and so fails to import there (``docs/PERFORMANCE.md``);

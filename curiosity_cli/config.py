@@ -119,7 +119,7 @@ COVERAGE_READINGS: dict[str, CoverageReading] = {
     )
 }
 
-#: Where labelling runs (``label.device``): the CPU, a CUDA GPU (the extra ``curiosity[cuda]``),
+#: Where labelling runs (``label.device``): the CPU, a CUDA GPU (the extra ``curiosity-cli[cuda]``),
 #: or a GPU when one is there; the same bytes on each (``topics/chains.py``). The one list of
 #: names: configs are checked here under every entry point without importing the topics stage,
 #: and :data:`curiosity_cli.topics.devices.DEVICES`, the table of devices, holds exactly these

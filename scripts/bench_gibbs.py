@@ -402,7 +402,7 @@ def main(argv: list[str] | None = None) -> None:
 
         print(f"tomotopy {tomotopy.__version__} ({tomotopy.isa})")
     except ImportError:
-        raise SystemExit("tomotopy is not installed: pip install 'curiosity[bench]' (or pip install tomotopy)") from None
+        raise SystemExit("tomotopy is not installed: pip install 'curiosity-cli[bench]' (or pip install tomotopy)") from None
 
     source = model_source_hash()
     print(f"topic model sources {source}")

@@ -15,7 +15,7 @@ does, with the shipped config's model and drive settings (``configs/paper-grid.y
   replay   a ``--replay``-frame MCAP bag of those views (JPEG), replayed through
            ``curiosity drive --dry-run --camera BAG`` once per setting, alternating:
            wall time, frames per second, the median stage times from the log, and the
-           replay's surprise timeline (kept with ``--keep DIR``). Needs curiosity[bags].
+           replay's surprise timeline (kept with ``--keep DIR``). Needs curiosity-cli[bags].
 
 The script prints and never asserts: the numbers depend on the machine.
 

@@ -361,7 +361,7 @@ def test_label_on_cuda_without_numba_cuda_is_one_error_line_naming_the_extra(tmp
     monkeypatch.setattr(curiosity_cli._numba, "import_cuda", missing)
     result = run("label", str(saved_experiment(tmp_path / "exp")), "--set", "label.device=cuda")
     assert result.exit_code == 1
-    assert result.stderr.strip().startswith("Error: label.device: cuda, but it needs numba-cuda, the extra curiosity[cuda]")
+    assert result.stderr.strip().startswith("Error: label.device: cuda, but it needs numba-cuda, the extra curiosity-cli[cuda]")
     assert len(result.stderr.strip().splitlines()) == 1 and "Traceback" not in result.output
     assert not (tmp_path / "exp" / "labels").exists()
 

@@ -41,7 +41,7 @@ def installed(tmp_path_factory) -> tuple[Path, Path]:
         capture_output=True, text=True, timeout=600,
     )
     assert built.returncode == 0, built.stdout[-2000:] + built.stderr[-2000:]
-    (wheel,) = (root / "dist").glob("curiosity-*.whl")
+    (wheel,) = (root / "dist").glob("curiosity_cli-*.whl")
     env = root / "env"
     venv.create(env, with_pip=True)
     python = env / "bin" / "python"

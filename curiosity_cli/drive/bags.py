@@ -181,7 +181,7 @@ class BagCamera:
             from rosbags.highlevel import AnyReader
         except ImportError:
             raise CameraError(
-                f"camera {source!r}: reading a bag needs rosbags: pip install 'curiosity[bags]'"
+                f"camera {source!r}: reading a bag needs rosbags: pip install 'curiosity-cli[bags]'"
             ) from None
         self.source = source
         where = display_path(Path(source))

@@ -21,7 +21,7 @@ exact sampler; this one lets a GPU resample a colour's cells at once.
 
 **Devices.** The chains run on the CPU (``device="cpu"``, :class:`~curiosity_cli.topics.engines.CpuEngine`, the numba
 kernels of ``_chain_kernels.py``) or on a CUDA GPU (``device="cuda"``, :class:`~curiosity_cli.topics.engines.CudaEngine`,
-``_chain_kernels_cuda.py``, the optional extra ``curiosity[cuda]``), behind one interface,
+``_chain_kernels_cuda.py``, the optional extra ``curiosity-cli[cuda]``), behind one interface,
 with the same bytes on both: the same streams, the same float32 operations in the same
 order, never fused. :data:`curiosity_cli.topics.devices.DEVICES` names each device's engine.
 What a device does for each step of the interface:

@@ -2,7 +2,7 @@
 
 :class:`~curiosity_cli.topics.chains.FrozenChains` runs on every device of
 :data:`DEVICES` with the same bytes (``topics/chains.py``): the CPU, or a CUDA GPU, which
-needs numba-cuda (the optional extra ``curiosity[cuda]``) and a GPU that numba sees.
+needs numba-cuda (the optional extra ``curiosity-cli[cuda]``) and a GPU that numba sees.
 ``label.device`` names one of them, or ``auto``: the first of :data:`AUTO_PREFERS` present
 here, else the CPU, saying once why.
 
@@ -25,7 +25,7 @@ from curiosity_cli.files import note
 from curiosity_cli.topics.engines import CpuEngine, CudaEngine
 
 #: How a user gets numba-cuda.
-CUDA_EXTRA = "pip install 'curiosity[cuda]' (from a checkout: pip install -e '.[cuda]')"
+CUDA_EXTRA = "pip install 'curiosity-cli[cuda]' (from a checkout: pip install -e '.[cuda]')"
 #: The name that asks for the first device present (:func:`resolve_device`).
 AUTO = "auto"
 
@@ -80,7 +80,7 @@ def cuda_missing() -> str | None:
     try:
         import_cuda()
     except ImportError as exc:
-        return f"it needs numba-cuda, the extra curiosity[cuda], which is not installed ({exc}): {CUDA_EXTRA}"
+        return f"it needs numba-cuda, the extra curiosity-cli[cuda], which is not installed ({exc}): {CUDA_EXTRA}"
     from curiosity_cli.topics._chain_kernels_cuda import gpu_available
 
     ready, why = gpu_available()

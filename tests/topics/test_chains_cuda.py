@@ -17,7 +17,7 @@ import pytest
 from cuda_cases import CASES
 
 pytestmark = pytest.mark.skipif(
-    importlib.util.find_spec("numba_cuda") is None, reason="numba-cuda (the extra curiosity[cuda]) is not installed"
+    importlib.util.find_spec("numba_cuda") is None, reason="numba-cuda (the extra curiosity-cli[cuda]) is not installed"
 )
 SCRIPT = Path(__file__).with_name("cuda_cases.py")
 
