@@ -38,7 +38,9 @@ command                function
 =====================  ==============================================
 
 :func:`load` gives a config, :func:`open_experiment` an experiment's results, :func:`open_mission` a drive's
-frames.
+frames. Long functions take progress callbacks (``on_stage(description, units)``, ``on_done()``);
+:class:`Progress` shows them (``with cur.Progress() as p: cur.label(folder, on_stage=p.stage,
+on_done=p.advance)``), and in a notebook a function given none shows its own.
 """
 
 from __future__ import annotations
@@ -48,12 +50,13 @@ from curiosity_cli.api.maps import DatasetRow, Preview, build_vocabularies, list
 from curiosity_cli.api.pipeline import (
     Config, animate, evaluate, explore, extract, label, load, plot, reproduce, word_store,
 )
-from curiosity_cli.api.results import Results, open_experiment
+from curiosity_cli.api.results import Results, open_experiment, verdict
 from curiosity_cli.api.robot import RobotStart, drive, open_mission, redraw_timeline, simrobot
+from curiosity_cli.progress import Progress
 
 __all__ = [
-    "Config", "DatasetRow", "Preview", "Results", "RobotStart", "animate", "build_vocabularies", "drive", "evaluate",
+    "Config", "DatasetRow", "Preview", "Progress", "Results", "RobotStart", "animate", "build_vocabularies", "drive", "evaluate",
     "explore", "extract", "init_config", "label", "list_datasets", "load", "open_experiment", "open_mission", "plot",
     "redraw_timeline",
-    "reproduce", "show_config", "show_datasets", "simrobot", "word_store",
+    "reproduce", "show_config", "show_datasets", "simrobot", "verdict", "word_store",
 ]

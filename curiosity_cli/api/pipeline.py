@@ -7,6 +7,7 @@ return. Arguments that do not go together raise :class:`~curiosity_cli.errors.Us
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import typing
@@ -156,6 +157,19 @@ def word_store(dataset: str, config: Config = "paper", *, cache_dir: Path = DEFA
     return extract(dataset, config=config, cache_dir=cache_dir).store
 
 
+@contextlib.contextmanager
+def _shown(on_stage, on_done):
+    """The progress callbacks given; in a notebook, where none are, a :class:`~curiosity_cli.progress.Progress`'s, so
+    a cell shows its stages as the command line does."""
+    from curiosity_cli.progress import Progress, in_notebook
+
+    if on_stage is not None or on_done is not None or not in_notebook():
+        yield on_stage, on_done
+        return
+    with Progress() as progress:
+        yield progress.stage, progress.advance
+
+
 def explore(
     config: Config = "quick", *, maps: Sequence[str] = (), weights: Sequence[str] | None = None,
     restarts: int | None = None, steps: int | None = None, overrides: typing.Iterable[str] = (),
@@ -231,11 +245,19 @@ def explore(
         resolved = dataclasses.replace(
             resolved, explore=dataclasses.replace(resolved.explore, path_length=steps, checkpoints=kept)
         )
-    return run_grid(
-        resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-        on_prepared=None if on_prepared is None else functools.partial(on_prepared, resolved.name), on_run=on_run,
-        backend=backend, scheduler=scheduler,
+    from curiosity_cli.progress import Progress, in_notebook
+
+    grid = functools.partial(
+        run_grid, resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, backend=backend,
+        scheduler=scheduler,
     )
+    if on_prepared is None and on_run is None and in_notebook():  # a cell shows the runs as the command line does
+        with Progress() as progress:
+            return grid(
+                on_prepared=lambda to_run, skipped: progress.stage(f"exploring ({skipped} runs already finished)", to_run),
+                on_run=progress.advance,
+            )
+    return grid(on_prepared=None if on_prepared is None else functools.partial(on_prepared, resolved.name), on_run=on_run)
 
 
 def label(
@@ -262,10 +284,11 @@ def label(
     jobs, cache_dir = optional_count(jobs, "jobs"), folder_argument(cache_dir, "cache_dir")
     force, converged, reuse = boolean(force, "force"), boolean(converged, "converged"), boolean(reuse, "reuse")
     config = load_saved_config(folder, with_converged_labels(overrides) if converged else overrides)
-    return label_experiment(
-        config, folder, cache_dir=cache_dir, jobs=jobs, force=force, on_stage=on_stage, on_done=on_done,
-        backend=backend, scheduler=scheduler, reuse=reuse,
-    )
+    with _shown(on_stage, on_done) as (on_stage, on_done):
+        return label_experiment(
+            config, folder, cache_dir=cache_dir, jobs=jobs, force=force, on_stage=on_stage, on_done=on_done,
+            backend=backend, scheduler=scheduler, reuse=reuse,
+        )
 
 
 def evaluate(folder: Path = DEFAULT_EXPERIMENT, *, partial: bool = False, cache_dir: Path = DEFAULT_CACHE) -> Evaluation:
@@ -357,34 +380,35 @@ def reproduce(
     force, converged = boolean(force, "force"), boolean(converged, "converged")
     results_dir, cache_dir = folder_argument(results_dir, "results_dir"), folder_argument(cache_dir, "cache_dir")
     record = optional_path(record, "record")
-    if converged:
-        overrides = with_converged_labels(overrides)
-    if _is_config(config):
-        if sweeps:
-            raise UsageError("sweeps: a resolved config is one experiment; give the config's name or path to sweep it", parameter="sweeps")
-        resolved = load(config, overrides)  # refuses overrides of a resolved config
-    else:
-        declared = declared_sweeps(config)
-        # the keys whose values only the file gives: an error in one names the file, not --sweep
-        from_file = {text.partition("=")[0] for text in declared} - {text.partition("=")[0].strip() for text in sweeps}
-        sweeps = merge_sweeps(declared, sweeps)
-        specifications = declared_specifications(config)
-        if sweeps or specifications:
-            return _reproduce_sweep(
-                config, overrides, sweeps, specifications, from_file, on_stage=on_stage, on_done=on_done, on_status=on_status,
-                results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, backend=backend, scheduler=scheduler,
-                reuse=reuse, record=record,
+    with _shown(on_stage, on_done) as (on_stage, on_done):
+        if converged:
+            overrides = with_converged_labels(overrides)
+        if _is_config(config):
+            if sweeps:
+                raise UsageError("sweeps: a resolved config is one experiment; give the config's name or path to sweep it", parameter="sweeps")
+            resolved = load(config, overrides)  # refuses overrides of a resolved config
+        else:
+            declared = declared_sweeps(config)
+            # the keys whose values only the file gives: an error in one names the file, not --sweep
+            from_file = {text.partition("=")[0] for text in declared} - {text.partition("=")[0].strip() for text in sweeps}
+            sweeps = merge_sweeps(declared, sweeps)
+            specifications = declared_specifications(config)
+            if sweeps or specifications:
+                return _reproduce_sweep(
+                    config, overrides, sweeps, specifications, from_file, on_stage=on_stage, on_done=on_done, on_status=on_status,
+                    results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, backend=backend, scheduler=scheduler,
+                    reuse=reuse, record=record,
+                )
+            resolved = load_config(config, overrides)  # neither a sweep nor specifications, just read: one experiment
+        if record is not None:
+            raise UsageError(
+                "record: keeps a study's seeds (a config that declares specifications and sweeps seed); this is one experiment",
+                parameter="record",
             )
-        resolved = load_config(config, overrides)  # neither a sweep nor specifications, just read: one experiment
-    if record is not None:
-        raise UsageError(
-            "record: keeps a study's seeds (a config that declares specifications and sweeps seed); this is one experiment",
-            parameter="record",
+        return run_pipeline(
+            resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
+            backend=backend, scheduler=scheduler, on_stage=on_stage, on_done=on_done, reuse=reuse,
         )
-    return run_pipeline(
-        resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
-        backend=backend, scheduler=scheduler, on_stage=on_stage, on_done=on_done, reuse=reuse,
-    )
 
 
 def _reproduce_sweep(config, overrides, sweeps, specifications, from_file, *, on_status, **options) -> Path:

@@ -121,3 +121,23 @@ def open_experiment(folder: Path | str | None = None, *, name: str = "quick", re
     if folder is None:
         folder = experiment_root(folder_argument(results_dir, "results_dir"), name_or_path(name, "name"))
     return Results(Experiment.open(folder_argument(folder)))
+
+
+def verdict(report: Path | str) -> list[str]:
+    """The verdict of an experiment's ``REPORT.md``: a line per map, each its answer and then the evidence (after
+    the first ``;``); empty for a sweep's ``SWEEP.md``, which has none.
+
+    Raises
+    ------
+    CuriosityError
+        A report that cannot be read, naming it.
+    """
+    from curiosity_cli.errors import CuriosityError
+    from curiosity_cli.evaluate.report import read_verdict
+    from curiosity_cli.files import display_path
+
+    report = folder_argument(report, "report")
+    try:
+        return read_verdict(report)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CuriosityError(f"{display_path(report)}: cannot be read ({exc})") from None

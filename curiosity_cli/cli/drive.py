@@ -8,7 +8,6 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli.app import app, usage_errors
-from curiosity_cli.cli.progress import StagedProgress
 
 _CONFIG_HELP = "Experiment config whose model, words and drive sections (and seed) to use: a YAML file or a shipped config's name."
 _START_HELP = "Start position ROW,COL in map pixels; default the map's centre."
@@ -91,7 +90,7 @@ def drive(
         for path in api.redraw_timeline(timeline, clock.value):
             typer.echo(f"wrote {display_path(path)}")
         return
-    bar = StagedProgress()
+    bar = api.Progress()
     replay = is_bag(camera)
 
     def progress(number, decision):

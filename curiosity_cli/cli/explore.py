@@ -8,7 +8,6 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli.app import app, usage_errors
-from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 
@@ -42,7 +41,7 @@ def explore(
     from curiosity_cli import api
     from curiosity_cli.files import display_path
 
-    with StagedProgress() as progress:
+    with api.Progress() as progress:
 
         def prepared(name: str, to_run: int, skipped: int) -> None:
             typer.echo(f"{name}: {to_run} runs to do, {skipped} already finished", err=True)

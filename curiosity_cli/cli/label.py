@@ -8,7 +8,6 @@ import typer
 
 from curiosity_cli.cli.app import app, usage_errors
 from curiosity_cli.cli.explore import Backend
-from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 EXPERIMENT = typer.Argument(DEFAULT_RESULTS / "quick", help="Experiment folder written by `curiosity explore`.")
@@ -30,7 +29,7 @@ def label(
     """Label each map with every run's checkpoint models (Z_p) and in batch mode (Z_b)."""
     from curiosity_cli import api
 
-    with StagedProgress() as progress:
+    with api.Progress() as progress:
         done = api.label(
             folder, overrides=overrides, jobs=jobs, force=force, cache_dir=cache_dir, backend=backend.value,
             scheduler=scheduler, converged=converged, on_stage=progress.stage, on_done=progress.advance, reuse=reuse,

@@ -8,7 +8,6 @@ import typer
 
 from curiosity_cli.cli.app import app, usage_errors
 from curiosity_cli.cli.explore import Backend
-from curiosity_cli.cli.progress import StagedProgress
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 
@@ -47,7 +46,7 @@ def reproduce(
 
     if quick and config is not None:
         raise typer.BadParameter(f"runs configs/quick.yaml; give it or a CONFIG ({config}), not both", param_hint="--quick")
-    with StagedProgress() as progress:
+    with api.Progress() as progress:
         report = api.reproduce(
             config if config is not None else ("quick" if quick else "paper-grid"), overrides=overrides, sweeps=sweeps,
             jobs=jobs, force=force, backend=backend.value, scheduler=scheduler, results_dir=results_dir,
@@ -55,3 +54,5 @@ def reproduce(
             record=record, on_status=lambda line: typer.echo(line, err=True),
         )
     typer.echo(f"wrote {display_path(report)}")
+    for line in api.verdict(report):  # the answer of each map, its evidence in the report
+        typer.echo(f"  {line.split('; ', 1)[0]}")

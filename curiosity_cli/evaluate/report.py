@@ -190,9 +190,27 @@ def _no_verdict(summary, dataset: str) -> str:
     return f"{dataset}: no verdict: no other walker to compare with."
 
 
+#: The heading of a report's answer, a line per map (:func:`read_verdict` finds it by this).
+VERDICT_HEADING = "## Verdict"
+
+
+def read_verdict(report: Path) -> list[str]:
+    """The verdict of a ``REPORT.md``, a line per map, without their list marks; empty for a file without one
+    (a sweep's ``SWEEP.md``)."""
+    lines = Path(report).read_text().splitlines()
+    if VERDICT_HEADING not in lines:
+        return []
+    verdict = []
+    for line in lines[lines.index(VERDICT_HEADING) + 2 :]:
+        if not line.startswith("- "):
+            break
+        verdict.append(line[2:])
+    return verdict
+
+
 def _verdicts(summary, top, effects, coverage: str) -> list[str]:
     """The answer first, a line per map; then how to read it."""
-    lines = ["## Verdict", ""]
+    lines = [VERDICT_HEADING, ""]
     rows = {r["dataset"]: r for r in top.to_dict("records")}
     for dataset in dict.fromkeys(summary["dataset"]):
         lines.append(f"- {verdict(rows[dataset], effects) if dataset in rows else _no_verdict(summary, dataset)}")

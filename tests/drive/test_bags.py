@@ -278,7 +278,7 @@ def test_without_rosbags_the_error_names_the_extra(tmp_path, frames, monkeypatch
 
     bag = write_bag(tmp_path / "mission.bag", "ros1", {"/a": "rgb8"}, frames)
     monkeypatch.setitem(sys.modules, "rosbags.highlevel", None)  # as if the extra were not installed
-    with pytest.raises(CameraError, match=r"reading a bag needs rosbags: pip install 'curiosity\[bags\]'"):
+    with pytest.raises(CameraError, match=r"reading a bag needs rosbags: pip install 'curiosity-cli\[bags\]'"):
         BagCamera(str(bag))
 
 

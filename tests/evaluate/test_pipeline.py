@@ -273,6 +273,9 @@ def test_a_reproduction_killed_while_labelling_resumes_to_the_tables_of_an_unint
                "--set", "label.warm_sweeps=50", "--no-reuse"]  # computed, not taken from the whole one's shared items
     whole = subprocess.run([*command, "--results-dir", str(tmp_path / "whole")], capture_output=True, text=True)
     assert whole.returncode == 0, whole.stderr
+    # output to a pipe, as nohup or CI take it: a line per stage and its end, and the verdict last
+    assert "labelling runs: 0/40\n" in whole.stderr and "labelling runs: 40/40 in " in whole.stderr
+    assert whole.stdout.splitlines()[-1].startswith("  own: topic perplexity ")
 
     killed = tmp_path / "killed" / "grid"
     process = subprocess.Popen([*command, "--results-dir", str(tmp_path / "killed")],
