@@ -30,14 +30,14 @@ COMMANDS = {
     "reproduce": (api.reproduce, {"quick"}),
     "drive": (api.drive, {"timeline"}),
     "simrobot": (api.simrobot, set()),
-    "datasets list": (api.list_datasets, set()),
+    "datasets list": (api.list_datasets, {"as_json"}),  # how the rows are printed
     "datasets show": (api.show_datasets, set()),
     "vocab build": (api.build_vocabularies, set()),
     "config show": (api.show_config, set()),
     "config init": (api.init_config, set()),
 }
 #: Arguments a command leaves unset for an option it keeps to decide (``reproduce`` without ``--quick``).
-DECIDED = {("reproduce", "config"): "paper-grid"}
+DECIDED = {("reproduce", "config"): "quick"}
 #: The functions of the options a command keeps: ``plot --animate``, ``drive --timeline``.
 OPTION_FUNCTIONS = {("plot", "animate"): api.animate, ("drive", "timeline"): api.redraw_timeline}
 
@@ -198,8 +198,9 @@ def test_reproduce_runs_a_declared_sweep_as_the_command_does(own_map, tmp_path):
         api.reproduce(config, sweeps=["seed"], results_dir=tmp_path / "results")
 
 
-def test_reproduce_defaults_to_the_papers_grid_as_the_command_does():
-    assert inspect.signature(api.reproduce).parameters["config"].default == "paper-grid"
+def test_reproduce_defaults_to_quick_as_explore_and_the_command_do():
+    assert inspect.signature(api.reproduce).parameters["config"].default == "quick"
+    assert inspect.signature(api.explore).parameters["config"].default == "quick"
     with pytest.raises(UsageError, match=r"^sweeps: a resolved config is one experiment"):
         api.reproduce(api.load("quick"), sweeps=["seed=0,1"])
 

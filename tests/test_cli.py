@@ -50,6 +50,19 @@ def test_version():
     assert result.exit_code == 0 and result.stdout.startswith("curiosity ")
 
 
+def test_datasets_list_as_json_gives_the_rows_of_the_api():
+    import json
+
+    from curiosity_cli import api
+
+    result = run("datasets", "list", "--json")
+    assert result.exit_code == 0, result.output
+    listed = json.loads(result.stdout)
+    assert listed == [json.loads(json.dumps(row._asdict())) for row in api.list_datasets()]
+    aerial = next(row for row in listed if row["name"] == "aerial-mosaic")
+    assert aerial["size"] == [1024, 1024] and aerial["grid"] == [64, 64] and aerial["pixels"] == "embedded"
+
+
 def test_datasets_list_shows_the_maps():
     result = run("datasets", "list")
     assert result.exit_code == 0, result.output

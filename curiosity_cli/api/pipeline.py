@@ -327,7 +327,7 @@ def animate(
 
 
 def reproduce(
-    config: Config = "paper-grid", *, overrides: typing.Iterable[str] = (), sweeps: Sequence[str] = (),
+    config: Config = "quick", *, overrides: typing.Iterable[str] = (), sweeps: Sequence[str] = (),
     jobs: int | None = None, force: bool = False, backend: str = BACKEND, scheduler: str | None = None,
     results_dir: Path = DEFAULT_RESULTS, cache_dir: Path = DEFAULT_CACHE, converged: bool = False,
     on_stage: Callable[[str, int], None] | None = None, on_done: Callable[[], None] | None = None,
@@ -342,7 +342,7 @@ def reproduce(
     Parameters
     ----------
     config : str, Path or ExperimentConfig
-        Default the paper's full grid (``paper-grid``).
+        Default ``quick``, as :func:`explore`'s: minutes on a laptop; the paper's full grid is ``paper-grid``.
     sweeps : sequence of str
         ``KEY=V1,V2,...``, each an axis of the sweep; one replaces the values of a key the
         config's ``sweep:`` declares.

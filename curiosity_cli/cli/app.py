@@ -108,7 +108,9 @@ app = typer.Typer(
     help="Curiosity-driven exploration experiments (Girdhar & Dudek) on map mosaics, "
     "and a serial robot driver with the same model.",
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,
+    # click's plain help: flags as flags (rich's panels show every one as `<bool>`), our text as written
+    rich_markup_mode=None,
     pretty_exceptions_enable=False,
 )
 

@@ -15,7 +15,7 @@ app.add_typer(config_app, name="config")
 @config_app.command("show")
 @usage_errors
 def show(
-    config: Path = typer.Argument(..., help="Experiment YAML, or a shipped config's name (quick, paper, paper-grid, readings)."),
+    config: Path = typer.Argument(..., metavar="CONFIG", help="Experiment YAML, or a shipped config's name (quick, paper, paper-grid, readings)."),
     overrides: list[str] = typer.Option(
         [], "--set", metavar="KEY=VALUE", help="Override a key, e.g. --set explore.restarts=3."
     ),
@@ -32,7 +32,7 @@ def show(
 @config_app.command("init")
 @usage_errors
 def init(
-    name: str = typer.Argument(..., help="The experiment's name; writes NAME.yaml in the current folder."),
+    name: str = typer.Argument(..., metavar="NAME", help="The experiment's name; writes NAME.yaml in the current folder."),
     source: str = typer.Option("quick", "--from", help="The shipped config to copy: quick, paper-grid or readings."),
 ) -> None:
     """Write an editable, commented copy of a shipped config into the current folder, named NAME.

@@ -21,13 +21,20 @@ def _table(header: list[str], rows: list[list[str]]) -> str:
 
 @datasets_app.command("list")
 @usage_errors
-def list_datasets() -> None:
+def list_datasets(
+    as_json: bool = typer.Option(False, "--json", help="One JSON object per map (name, size, cell_width, grid, classes, pixels, source, licence; sizes as [rows, cols], null where unknown), as a JSON list."),
+) -> None:
     """The maps registered in configs/datasets/, with size, grid and provenance.
 
     A fetched map that is not cached yet is listed from its YAML; nothing is downloaded.
     """
+    import json
+
     from curiosity_cli import api
 
+    if as_json:
+        typer.echo(json.dumps([row._asdict() for row in api.list_datasets()], indent=1))
+        return
     rows = [
         [
             row.name,
@@ -47,7 +54,7 @@ def list_datasets() -> None:
 @datasets_app.command("show")
 @usage_errors
 def show(
-    datasets: list[str] = typer.Argument(..., help="Registered names or paths to dataset YAMLs."),
+    datasets: list[str] = typer.Argument(..., metavar="MAP...", help="Registered names or paths to dataset YAMLs."),
     out: Path = typer.Option(
         None,
         "--out",

@@ -21,7 +21,7 @@ class Backend(str, enum.Enum):
 @app.command("explore")
 @usage_errors
 def explore(
-    config: Path = typer.Argument("quick", help="Experiment YAML, or a shipped config's name (quick, paper-grid, readings)."),
+    config: Path = typer.Argument("quick", metavar="CONFIG", help="Experiment YAML, or a shipped config's name (quick, paper-grid, readings)."),
     maps: list[str] = typer.Option([], "--map", help="Only this map (repeatable); default the config's datasets."),
     weights: str = typer.Option(None, "--weights", help="Comma-separated weight functions, e.g. random-walk,topic-perplexity."),
     restarts: int = typer.Option(None, "--restarts", min=1, help="Restarts per weight function."),

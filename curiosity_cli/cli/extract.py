@@ -13,7 +13,7 @@ from curiosity_cli.paths import DEFAULT_CACHE
 @app.command("extract")
 @usage_errors
 def extract(
-    dataset: str = typer.Argument(..., help="A registered map name or a path to a dataset YAML."),
+    dataset: str = typer.Argument(..., metavar="MAP", help="A registered map name or a path to a dataset YAML."),
     config: Path = typer.Option("paper", "--config", help="Config whose `words` section to use: a YAML file or a shipped config's name."),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override a words key, e.g. --set words.colour_words=true."),
     stride: int = typer.Option(None, "--stride", min=1, help="Texton words every N pixels, at most the cell width; default the dataset's word_stride."),

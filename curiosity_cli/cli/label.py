@@ -10,7 +10,7 @@ from curiosity_cli.cli.app import app, usage_errors
 from curiosity_cli.cli.explore import Backend
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
-EXPERIMENT = typer.Argument(DEFAULT_RESULTS / "quick", help="Experiment folder written by `curiosity explore`.")
+EXPERIMENT = typer.Argument(DEFAULT_RESULTS / "quick", metavar="EXPERIMENT", help="Experiment folder written by `curiosity explore`.")
 
 
 @app.command("label")

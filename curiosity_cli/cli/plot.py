@@ -14,7 +14,7 @@ from curiosity_cli.paths import DEFAULT_RESULTS
 @usage_errors
 def plot(
     folder: Path = typer.Argument(
-        DEFAULT_RESULTS / "quick", metavar="EXPERIMENT_DIR",
+        DEFAULT_RESULTS / "quick", metavar="EXPERIMENT",
         help="Experiment folder holding mi.csv and summary.csv from `curiosity evaluate`.",
     ),
     animate: str = typer.Option(None, "--animate", metavar="MAP/WALKER/RESTART", help="Instead of the figures, an animation of one run: its path growing over the map beside Z_p at each checkpoint, e.g. aerial-mosaic/topic-perplexity/0."),

@@ -14,8 +14,8 @@ from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 @app.command("reproduce")
 @usage_errors
 def reproduce(
-    config: Path = typer.Argument(None, help="Experiment YAML; default the paper's full grid, configs/paper-grid.yaml.", show_default=False),
-    quick: bool = typer.Option(False, "--quick", help="Run configs/quick.yaml instead: the real Zurich map, 10 restarts, paths up to 160 steps; minutes, not the full grid."),
+    config: Path = typer.Argument(None, metavar="CONFIG", help="Experiment YAML, or a shipped config's name; default quick, as explore's (minutes on a laptop); the paper's full grid is paper-grid.", show_default=False),
+    quick: bool = typer.Option(False, "--quick", help="Run configs/quick.yaml (the default): the real Zurich map, 10 restarts, paths up to 160 steps; minutes, not the full grid."),
     overrides: list[str] = typer.Option([], "--set", metavar="KEY=VALUE", help="Override any config key, e.g. --set seed=1."),
     sweeps: list[str] = typer.Option(
         [], "--sweep", metavar="KEY=V1,V2,...",
@@ -48,7 +48,7 @@ def reproduce(
         raise typer.BadParameter(f"runs configs/quick.yaml; give it or a CONFIG ({config}), not both", param_hint="--quick")
     with api.Progress() as progress:
         report = api.reproduce(
-            config if config is not None else ("quick" if quick else "paper-grid"), overrides=overrides, sweeps=sweeps,
+            config if config is not None else "quick", overrides=overrides, sweeps=sweeps,
             jobs=jobs, force=force, backend=backend.value, scheduler=scheduler, results_dir=results_dir,
             cache_dir=cache_dir, converged=converged, on_stage=progress.stage, on_done=progress.advance, reuse=reuse,
             record=record, on_status=lambda line: typer.echo(line, err=True),
