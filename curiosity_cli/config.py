@@ -348,6 +348,7 @@ class DriveConfig:
     orb_per_tile: int = spec(min=1)
     orb_fill_threshold: int | None = spec(min=1, max=19)
     samples_per_frame: int = spec(min=0, max=MAX_SAMPLES)
+    newest_share: float | None = spec(min=0, max=1)
     memory_frames: int | None = spec(min=2)
     surge_cruise: float = spec()
     surge_gain: float = spec(min=0)

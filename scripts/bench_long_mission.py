@@ -73,7 +73,7 @@ def memory_mb() -> tuple[float, float]:
 def model_child(words_file: Path, memory: int | None, frames: int, checkpoints: list[int]) -> dict:
     """Feed ``frames`` frames (the saved views, cycled) to a StreamModel; what each checkpoint saw."""
     from curiosity_cli.config import CONFIG_DIR, load_config
-    from curiosity_cli.drive.stream import StreamModel
+    from curiosity_cli.drive.stream import StreamModel, newest_share
 
     config = load_config(CONFIG_DIR / "paper-grid.yaml")
     saved = np.load(words_file)
@@ -84,7 +84,7 @@ def model_child(words_file: Path, memory: int | None, frames: int, checkpoints: 
         config.model.topics, config.words.orb_vocabulary + config.words.texton_vocabulary,
         (config.drive.grid_rows, config.drive.grid_cols), memory=memory,
         spatial=config.model.spatial_neighbours, temporal=config.drive.temporal_neighbours,
-        alpha=config.model.alpha, beta=config.model.beta, eta=config.model.eta,
+        alpha=config.model.alpha, beta=config.model.beta, newest_share=newest_share(config),
         budget=config.drive.samples_per_frame, seed=0,
     )
     model.add_frame(views[0])  # compiles the kernels before anything is measured

@@ -45,6 +45,7 @@ def test_paper_yaml_holds_the_papers_parameters():
     assert config.explore.weight_functions[4:] == ("lawnmower", "scattered-cells", "compact-block")
     assert config.explore.coverage == "literal", "eq. 8 as written: a visited neighbour has weight 0"
     assert config.drive.gamma == 0.7
+    assert config.drive.newest_share is None, "null: model.eta, eq. 6's eta read as the newest frame's share"
     assert config.datasets == ("zurich-zh17", "aerial-mosaic", "sentinel-coast", "reef-mosaic")
 
 
@@ -170,6 +171,9 @@ def _experiment(tmp_path: Path, text: str) -> Path:
         ("model:\n  spatial_neighbours: 8\n", "exp.yaml: model.spatial_neighbours: got 8 (int), expected one of 0, 4"),
         ("words:\n  colour_words: 1\n", "exp.yaml: words.colour_words: got 1 (int), expected true or false"),
         ("drive:\n  gamma: 1.0\n", "exp.yaml: drive.gamma: got 1.0 (float), expected a number >= 0 and < 1"),
+        ("drive:\n  newest_share: 1.5\n", "exp.yaml: drive.newest_share: got 1.5 (float), expected a number >= 0 and <= 1"),
+        ("drive:\n  newest_share: -0.1\n", "exp.yaml: drive.newest_share: got -0.1 (float), expected a number >= 0 and <= 1"),
+        ("drive:\n  newest_share: half\n", "exp.yaml: drive.newest_share: got 'half' (str), expected a finite number >= 0"),
         ("explore:\n  weight_functions: [random-walk, curious]\n", "exp.yaml: explore.weight_functions[1]: got 'curious'"),
         ("explore:\n  weight_functions: [random-walk, random-walk]\n", "expected each weight function once"),
         ("explore:\n  weight_functions: []\n", "exp.yaml: explore.weight_functions: got [] (list), expected a non-empty list"),
@@ -378,6 +382,14 @@ def test_a_top_up_without_a_tile_cap_is_refused_on_the_command_line():
 def test_the_float_forms_people_type_are_numbers(text, value):
     config = load_config(CONFIG_DIR / "quick.yaml", [f"drive.surge_cruise={text}"])
     assert config.drive.surge_cruise == value
+
+
+def test_the_newest_frames_share_is_a_share_of_the_budget_or_null():
+    assert load_config(CONFIG_DIR / "quick.yaml", ["drive.newest_share=0.25"]).drive.newest_share == 0.25
+    assert load_config(CONFIG_DIR / "quick.yaml", ["drive.newest_share=1"]).drive.newest_share == 1.0
+    assert load_config(CONFIG_DIR / "quick.yaml", ["drive.newest_share=null"]).drive.newest_share is None
+    with pytest.raises(ConfigError, match=r"^overrides: drive\.newest_share: got 2 \(int\), expected a number >= 0 and <= 1$"):
+        load_config(CONFIG_DIR / "quick.yaml", ["drive.newest_share=2"])
 
 
 def test_a_string_that_reads_as_a_float_is_saved_quoted(tmp_path):

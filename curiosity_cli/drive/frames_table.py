@@ -61,12 +61,12 @@ def frames_table(log: Path):
     """
     import pandas as pd
 
-    from curiosity_cli.drive.timeline import _log_records
+    from curiosity_cli.drive.jsonlines import read_records
     from curiosity_cli.errors import CuriosityError
     from curiosity_cli.files import display_path
 
     rows = []
-    for record in _log_records(Path(log)):
+    for record in read_records(Path(log)):
         if record.get("event") != "frame":
             continue
         missing = [k for k in ("frame", "time_ns", "perplexity", "scores", "words", "target", "command") if k not in record]

@@ -1,4 +1,4 @@
-"""Event logs as JSON Lines, written line by line."""
+"""Event logs as JSON Lines, written line by line, and read back."""
 
 from __future__ import annotations
 
@@ -37,3 +37,33 @@ class JsonLines:
     def close(self) -> None:
         with self._lock:
             self._file.close()
+
+
+def read_records(log: Path) -> list[dict]:
+    """The records of a drive's log, each with its line number (``_line``); a last line cut short left out, noted.
+
+    Raises
+    ------
+    CuriosityError
+        A line before the last that is not a JSON object, naming it.
+    """
+    from curiosity_cli.errors import CuriosityError
+    from curiosity_cli.files import display_path, note
+
+    try:
+        lines = log.read_text().splitlines()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CuriosityError(f"{display_path(log)}: cannot be read ({exc})") from None
+    records = []
+    for number, line in enumerate(lines, start=1):
+        try:
+            record = json.loads(line)
+        except ValueError:
+            if number == len(lines):
+                note(f"{display_path(log)}: its last line is cut short (a run stopped while writing it?); it is left out")
+                break
+            raise CuriosityError(f"{display_path(log)}: line {number}: not a JSON record") from None
+        if not isinstance(record, dict):
+            raise CuriosityError(f"{display_path(log)}: line {number}: expected a JSON object, got {type(record).__name__}")
+        records.append({**record, "_line": number})
+    return records

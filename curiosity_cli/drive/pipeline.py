@@ -11,7 +11,7 @@ from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.drive.controller import Command, steer
 from curiosity_cli.drive.curiosity import CuriosityScores, cell_perplexity
 from curiosity_cli.drive.frame_words import FrameWords
-from curiosity_cli.drive.stream import StreamModel
+from curiosity_cli.drive.stream import StreamModel, newest_share
 
 
 @dataclass(frozen=True)
@@ -30,8 +30,9 @@ class Decision:
     words : int
         Words extracted from the frame.
     refined : int
-        Word samples the frame itself got in its refinement; 0: eq. 6 never picked it, and
-        its perplexity reads the random topics its words were given.
+        Word samples the frame itself got in its refinement, its share of the budget
+        (:class:`~curiosity_cli.drive.stream.StreamModel`); 0 (a share that rounds to no
+        samples): its perplexity reads the random topics its words were given.
     seconds : dict of str to float
         Time spent per stage: ``words``, ``model`` (add and refine), ``score``.
     """
@@ -70,7 +71,7 @@ class CuriosityPipeline:
             temporal=drive.temporal_neighbours,
             alpha=model.alpha,
             beta=model.beta,
-            eta=model.eta,
+            newest_share=newest_share(config),
             budget=drive.samples_per_frame,
             seed=seed,
             vocabulary_hashes=self.words.vocabulary_hashes,

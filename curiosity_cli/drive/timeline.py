@@ -3,25 +3,37 @@
 :func:`write_timeline` reads a replay's ``log.jsonl`` and draws ``timeline.png`` (and
 ``.pdf``): two panels against time, each frame's topic perplexity (the mean over its image
 cells, the paper's surprise, section 5.2) and the decayed curiosity score that steered (the
-highest cell's), different quantities on axes of their own, under a strip of the most
-surprising frames, each linked to its peak. The time is the bag's record time, or the
-messages' header stamps (``clock``); the axis names the clock and the mission's start
-(UTC). Those frames are written whole as ``surprising/frame-NNNNNN.png``. A frame whose
-own refinement never picked it (log ``refined`` 0) reads its random first topics, not
-a discovery: it is marked, and never one of the most surprising.
+highest cell's), different quantities on axes of their own, under a strip of the
+surprising frames, each linked to its peak. A frame is surprising only when it stands out
+from the mission (:func:`surprise_threshold`: above its median by :data:`OUTLIER_MADS`
+median absolute deviations, a line on the plot); of those, the :data:`SURPRISING` highest
+peaks apart are shown, and a mission where none stands out says so. The time is the bag's
+record time, or the messages' header stamps (``clock``); the axis names the clock and the
+mission's start (UTC). The surprising frames are written whole as
+``surprising/frame-NNNNNN.png``. A frame whose own refinement never sampled its words (log
+``refined`` 0) reads its random first topics, not a discovery: it is marked, and never
+surprising.
 """
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
+from curiosity_cli.drive.jsonlines import read_records
 from curiosity_cli.files import atomic_path
 
-#: Thumbnails on the timeline: the most surprising frames, at least a share of the mission apart.
+#: Thumbnails on the timeline: at most this many surprising frames, the highest, at least a share of the mission apart.
 SURPRISING = 6
+#: A frame is surprising when its perplexity stands above the mission's median by more than this many median
+#: absolute deviations (MAD). Why 10: on 400 frames of one steady view (scripts/check_drive_surprise.py's, seeds
+#: 0-3) the noise reached 6.7 MADs, so a plateau marks nothing, with a margin for longer missions; a frame whose
+#: refinement was luck (a coin per pick, before drive.newest_share) read 40-50, and a new view more still.
+OUTLIER_MADS = 10
+#: The least spread the rule counts, as a share of the median: a mission whose frames read nearly all the same
+#: (a MAD near 0) does not make a frame surprising for standing a hair above them.
+MIN_SPREAD = 0.01
 
 
 #: The clocks a replay's timeline can run on, by name: the log key of each frame's time.
@@ -51,7 +63,7 @@ def surprise_series(log: Path, clock: str = "bag") -> dict:
     from curiosity_cli.errors import CuriosityError
     from curiosity_cli.files import display_path
 
-    records = [r for r in _log_records(Path(log)) if r.get("event") == "frame" and "bag_time" in r]
+    records = [r for r in read_records(Path(log)) if r.get("event") == "frame" and "bag_time" in r]
     for r in records:
         missing = [k for k in ("frame", "perplexity", "scores", "words") if k not in r]
         if missing:
@@ -72,36 +84,6 @@ def surprise_series(log: Path, clock: str = "bag") -> dict:
     }
 
 
-def _log_records(log: Path) -> list[dict]:
-    """The records of a drive's log, each with its line number (``_line``); a last line cut short left out, noted.
-
-    Raises
-    ------
-    CuriosityError
-        A line before the last that is not a JSON object, naming it.
-    """
-    from curiosity_cli.errors import CuriosityError
-    from curiosity_cli.files import display_path, note
-
-    try:
-        lines = log.read_text().splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CuriosityError(f"{display_path(log)}: cannot be read ({exc})") from None
-    records = []
-    for number, line in enumerate(lines, start=1):
-        try:
-            record = json.loads(line)
-        except ValueError:
-            if number == len(lines):
-                note(f"{display_path(log)}: its last line is cut short (a run stopped while writing it?); it is left out")
-                break
-            raise CuriosityError(f"{display_path(log)}: line {number}: not a JSON record") from None
-        if not isinstance(record, dict):
-            raise CuriosityError(f"{display_path(log)}: line {number}: expected a JSON object, got {type(record).__name__}")
-        records.append({**record, "_line": number})
-    return records
-
-
 def most_surprising(perplexity: np.ndarray, count: int = SURPRISING, eligible: np.ndarray | None = None) -> list[int]:
     """Indices of the ``count`` highest perplexities (of the ``eligible`` frames, default all), each at least
     ``len / (2 count)`` frames from another, by time."""
@@ -117,10 +99,32 @@ def most_surprising(perplexity: np.ndarray, count: int = SURPRISING, eligible: n
     return sorted(chosen)
 
 
+def surprise_threshold(perplexity: np.ndarray, eligible: np.ndarray | None = None) -> float:
+    """The perplexity a frame must exceed to be surprising: the median of the ``eligible`` frames (default all)
+    plus :data:`OUTLIER_MADS` times their median absolute deviation, or times :data:`MIN_SPREAD` of the median
+    if that is more; infinite without an eligible frame."""
+    values = perplexity if eligible is None else perplexity[eligible]
+    if values.size == 0:
+        return float("inf")
+    median = float(np.median(values))
+    spread = max(float(np.median(np.abs(values - median))), MIN_SPREAD * median)
+    return median + OUTLIER_MADS * spread
+
+
+def surprising(perplexity: np.ndarray, count: int = SURPRISING, eligible: np.ndarray | None = None) -> list[int]:
+    """Indices of the surprising frames (of the ``eligible``, default all): above :func:`surprise_threshold`, at
+    most ``count`` of them, the highest, peaks apart (:func:`most_surprising`); none on a plateau."""
+    eligible = np.ones(len(perplexity), bool) if eligible is None else np.asarray(eligible, bool)
+    above = eligible & (perplexity > surprise_threshold(perplexity, eligible))
+    return most_surprising(perplexity, count, above)
+
+
 def timeline_figure(series: dict, thumbnails: dict[int, np.ndarray], title: str):
-    """The figure: a strip of the most surprising frames over two panels, each frame's topic perplexity (the cell mean)
+    """The figure: a strip of the surprising frames over two panels, each frame's topic perplexity (the cell mean)
     and its curiosity score (decayed, the highest cell), against seconds since the first frame on the series' clock,
-    whose absolute start (UTC) the axis names; each thumbnail linked to its peak."""
+    whose absolute start (UTC) the axis names; each thumbnail linked to its peak. The perplexity panel draws the
+    line a surprising frame stands above (:func:`surprise_threshold`), its rule in the legend; the strip says so
+    when no frame stands above it."""
     from datetime import datetime, timezone
 
     import matplotlib
@@ -139,9 +143,18 @@ def timeline_figure(series: dict, thumbnails: dict[int, np.ndarray], title: str)
     if unrefined.any():
         surprise.plot(seconds[unrefined], series["perplexity"][unrefined], "x", ms=5, color="0.35")
         surprise.set_title(
-            f"x: {unrefined.sum()} frame{'s' if unrefined.sum() > 1 else ''} that no refinement picked (random topics: "
+            f"x: {unrefined.sum()} frame{'s' if unrefined.sum() > 1 else ''} never refined (random topics: "
             "not a discovery)", fontsize=8, loc="right", color="0.35",
         )
+    rule = f"the median + {OUTLIER_MADS} median absolute deviations (at least {OUTLIER_MADS * MIN_SPREAD:.0%} above it)"
+    threshold = surprise_threshold(series["perplexity"], series["refined"])
+    if np.isfinite(threshold):
+        surprise.axhline(threshold, color="tab:red", lw=0.8, ls="--", label=f"surprising above {rule}")
+        # above the panel, not over the data
+        surprise.legend(loc="lower left", bbox_to_anchor=(0, 1), fontsize=7, frameon=False, borderaxespad=0.1)
+    if not (series["refined"] & (series["perplexity"] > threshold)).any():
+        strip.text(0.5, 0.5, f"no frame stands out: none above {rule}", transform=strip.transAxes, ha="center",
+                   va="center", fontsize=9, color="0.35")
     surprise.set_ylabel("topic perplexity\n(mean of the frame's cells)", fontsize=9)
     score.plot(seconds, series["score"], color="tab:orange", lw=1.2)
     score.set_ylabel("curiosity score\n(decayed, highest cell)", fontsize=9)
@@ -166,7 +179,7 @@ def timeline_figure(series: dict, thumbnails: dict[int, np.ndarray], title: str)
 
 
 def write_timeline(folder: Path, camera, title: str, count: int = SURPRISING, clock: str = "bag") -> list[Path]:
-    """Write ``folder/timeline.png`` and ``.pdf`` from ``folder/log.jsonl``, and the most surprising frames as PNGs.
+    """Write ``folder/timeline.png`` and ``.pdf`` from ``folder/log.jsonl``, and the surprising frames as PNGs.
 
     Parameters
     ----------
@@ -177,7 +190,7 @@ def write_timeline(folder: Path, camera, title: str, count: int = SURPRISING, cl
         frames are read from it again (the run kept no frames in memory).
     title : str
     count : int
-        The most surprising frames shown.
+        The most surprising frames shown, of those that stand out (:func:`surprising`).
     clock : {"bag", "header"}
         The time axis (:func:`surprise_series`); a fall-back to header stamps is noted on stderr.
 
@@ -198,7 +211,7 @@ def write_timeline(folder: Path, camera, title: str, count: int = SURPRISING, cl
         from curiosity_cli.files import note
 
         note(f"{folder / RUN_LOG}: every frame has the same bag time; the timeline runs on the messages' header stamps")
-    chosen = most_surprising(series["perplexity"], count, series["refined"])
+    chosen = surprising(series["perplexity"], count, series["refined"])
     wanted = {int(series["frame"][i]): i for i in chosen}
     thumbnails, written = {}, []
     (folder / "surprising").mkdir(exist_ok=True)

@@ -1,8 +1,9 @@
-"""The stream model over an unbounded number of frames, the frame words, the pipeline."""
+"""The stream model over an unbounded number of frames, its refinement per frame, the frame words, the pipeline."""
 
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -12,14 +13,14 @@ from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.drive.frame_words import FrameWords, split_by_cell
 from curiosity_cli.drive.pipeline import CuriosityPipeline
-from curiosity_cli.drive.stream import StreamModel
+from curiosity_cli.drive.stream import StreamModel, newest_share
 from curiosity_cli.errors import ParameterError
 
 CONFIG = load_config(CONFIG_DIR / "paper-grid.yaml")
 
 
 def stream(**changes) -> StreamModel:
-    args = dict(memory=None, spatial=4, temporal=2, alpha=0.1, beta=0.1, eta=0.5, budget=500, seed=3)
+    args = dict(memory=None, spatial=4, temporal=2, alpha=0.1, beta=0.1, newest_share=0.5, budget=500, seed=3)
     return StreamModel(8, 50, (2, 3), **{**args, **changes})
 
 
@@ -69,6 +70,50 @@ def test_same_seed_same_counts():
     a, b = stream(memory=5), stream(memory=5)
     for cell_words in frames(20):
         assert np.array_equal(a.add_frame(cell_words), b.add_frame(cell_words))
+
+
+def expected_refined(words: list[int], share: float, budget: int) -> list[int]:
+    """By hand: each frame's ceil(round(share * budget) / n) whole passes over its n words; the first frame, with
+    no frame before it, also the rest of the budget, in whole passes (eq. 6 with one time picks it every time)."""
+    refined = []
+    for frame, n in enumerate(words):
+        passes = math.ceil(round(share * budget) / n) if n else 0
+        rest = max(budget - passes * n, 0) if frame == 0 else 0
+        refined.append(passes * n + (math.ceil(rest / n) * n if n else 0))
+    return refined
+
+
+@pytest.mark.parametrize("memory", [None, 3])
+@pytest.mark.parametrize("share, budget", [(0.5, 500), (0.3, 77), (1.0, 40), (0.0, 500)])
+def test_the_newest_frame_gets_its_share_of_the_budget_whatever_the_seed(memory, share, budget):
+    # issue 45: with a coin per pick, one frame of 400 near-identical ones drew one pass over its words where the
+    # median frame drew five, and read 2.33 times their perplexity; its share is no longer luck
+    words = frames(40)
+    words[7] = [np.zeros(0, np.int64)] * 6  # a frame without words: nothing to refine
+    words[9] = [np.zeros(0, np.int64)] * 5 + [np.array([3])]  # one word: its share in as many passes
+    sizes = [sum(w.size for w in cell_words) for cell_words in words]
+    for seed in (0, 1, 2):
+        model = stream(memory=memory, newest_share=share, budget=budget, seed=seed)
+        refined = []
+        for cell_words in words:
+            model.add_frame(cell_words)
+            refined.append(model.refined)
+        assert refined == expected_refined(sizes, share, budget), seed
+
+
+def test_the_rest_of_the_budget_refines_the_earlier_frames_only():
+    words = frames(6)
+    earlier = np.arange(5 * 6)  # the cells of the first five frames
+    for share, moved in [(1.0, False), (0.0, True)]:
+        model = stream(newest_share=share, budget=2000)
+        for cell_words in words[:5]:
+            model.add_frame(cell_words)
+        before = model.model.topics(earlier)
+        model.add_frame(words[5])
+        assert (not np.array_equal(model.model.topics(earlier), before)) == moved, share
+        assert (model.refined > 0) == (share > 0)
+    with pytest.raises(ParameterError, match="newest_share"):
+        stream(newest_share=1.5)
 
 
 def test_a_bad_frame_changes_nothing():
@@ -131,3 +176,15 @@ def test_the_pipeline_is_deterministic_for_a_seed():
     last = runs[0][-1]
     assert last.perplexity.shape == (6, 8) and (last.perplexity >= 1).all()
     assert last.scores[last.target] == last.scores.max()
+
+
+@pytest.mark.parametrize("setting, share", [(None, 0.5), (0.25, 0.25), (0.0, 0.0)])
+def test_the_pipeline_gives_the_newest_frame_drive_newest_share_else_model_eta(setting, share):
+    reef = load_map("reef-mosaic")
+    drive = dataclasses.replace(CONFIG.drive, samples_per_frame=2000, newest_share=setting)
+    config = dataclasses.replace(CONFIG, drive=drive)  # model.eta 0.5, the paper's
+    assert newest_share(config) == share
+    pipeline = CuriosityPipeline(config, seed=5)
+    decisions = [pipeline.process(reef.image[r : r + 240, 600:920]) for r in (900, 930, 960)]
+    words = [d.words for d in decisions]
+    assert [d.refined for d in decisions] == expected_refined(words, share, 2000)
