@@ -7,6 +7,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
+from curiosity_cli.config import MAX_VOCABULARY  # noqa: F401  (the bound `vocab build` shows)
 from curiosity_cli.paths import DEFAULT_RESULTS
 
 if typing.TYPE_CHECKING:

@@ -11,6 +11,7 @@ from curiosity_cli.paths import DEFAULT_RESULTS, experiment_root
 if typing.TYPE_CHECKING:
     import pandas as pd
 
+    from curiosity_cli.evaluate.tables import Evaluation
     from curiosity_cli.experiment.experiment import Experiment
     from curiosity_cli.explore.runs import Run
 
@@ -123,9 +124,10 @@ def open_experiment(folder: Path | str | None = None, *, name: str = "quick", re
     return Results(Experiment.open(folder_argument(folder)))
 
 
-def verdict(report: Path | str) -> list[str]:
-    """The verdict of an experiment's ``REPORT.md``: a line per map, each its answer and then the evidence (after
-    the first ``;``); empty for a sweep's ``SWEEP.md``, which has none.
+def verdict(source: Evaluation | Path | str) -> list[str]:
+    """The verdict, a line per map, each its answer and then the evidence (after the first ``;``): of the tables
+    :func:`~curiosity_cli.api.evaluate` returned, or of an experiment's ``REPORT.md`` (empty for a sweep's
+    ``SWEEP.md``, which has none).
 
     Raises
     ------
@@ -134,9 +136,13 @@ def verdict(report: Path | str) -> list[str]:
     """
     from curiosity_cli.errors import CuriosityError
     from curiosity_cli.evaluate.report import read_verdict
+    from curiosity_cli.evaluate.report import verdict as map_verdict
+    from curiosity_cli.evaluate.tables import Evaluation
     from curiosity_cli.files import display_path
 
-    report = folder_argument(report, "report")
+    if isinstance(source, Evaluation):
+        return [map_verdict(row, source.effects) for row in source.headline.to_dict("records")]
+    report = folder_argument(source, "source")
     try:
         return read_verdict(report)
     except (OSError, UnicodeDecodeError) as exc:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import functools
 import inspect
+import re
 from pathlib import Path
 
 import typer
@@ -51,11 +52,11 @@ def _command_line_message(exc: CuriosityError, command) -> str:
     ``command`` is the command (or group of commands) the user ran; the argument is
     looked up by name among its options and, for a group, its commands' options.
     """
-    option = None
-    if exc.parameter is not None:
-        option = next((flag for name, flag in _options(command) if name == exc.parameter), None)
+    flags = dict(reversed(list(_options(command))))  # a name's first flag where commands below share it
+    option = flags.get(exc.parameter) if exc.parameter is not None else None
     remedy = f"`curiosity {exc.rerun}{' --force' if exc.force else ''}`" if exc.rerun else None
-    return exc.render(option=option, rerun=remedy)
+    # another argument the message names in backquotes, as the command line spells it
+    return re.sub(r"`([a-z_]+)`", lambda m: flags.get(m.group(1), m.group(0)), exc.render(option=option, rerun=remedy))
 
 
 def _options(command):

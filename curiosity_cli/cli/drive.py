@@ -81,8 +81,6 @@ def drive(
     Protocol: curiosity_cli/drive/PROTOCOL.md. Ctrl-C sends STOP, then exits with 130.
     """
     from curiosity_cli import api
-    from curiosity_cli.drive.bags import is_bag
-    from curiosity_cli.drive.driver import RUN_LOG
     from curiosity_cli.files import display_path
 
     if timeline is not None:
@@ -91,11 +89,15 @@ def drive(
             typer.echo(f"wrote {display_path(path)}")
         return
     bar = api.Progress()
-    replay = is_bag(camera)
+    replaying = []  # a bag says how many frames it holds before the first (on_replay)
+
+    def replay(description: str, frames: int) -> None:
+        replaying.append(True)
+        bar.stage(description, frames)
 
     def progress(number, decision):
         bar.advance()
-        if number % 25 == 0 and not replay:  # a bag's frames get a bar; a live camera's a line every 25 frames
+        if number % 25 == 0 and not replaying:  # a bag's frames get a bar; a live camera's a line every 25 frames
             c = decision.command
             typer.echo(
                 f"frame {number}: target (row {decision.target[0]}, col {decision.target[1]}), "
@@ -109,11 +111,11 @@ def drive(
             foxglove=foxglove, sim_map=sim_map,
             start=_parse_start(start), heading_deg=heading_deg, config=config, overrides=overrides, seed=seed, out=out,
             force=force, clock=clock.value, strict=strict, video_out=video_out, png_every=png_every, max_frames=max_frames,
-            on_status=lambda line: typer.echo(line, err=True), on_frame=progress, on_replay=bar.stage,
+            on_status=lambda line: typer.echo(line, err=True), on_frame=progress, on_replay=replay,
         )
     stopped = {True: "; STOP acknowledged", False: "; STOP sent, not acknowledged", None: ""}[outcome.stop_acked]
     skipped = f"; {outcome.skipped} damaged messages skipped (`skipped` in the log)" if outcome.skipped else ""
-    typer.echo(f"drove {outcome.frames} frames: {outcome.detail}{stopped}{skipped}; log in {display_path(folder / RUN_LOG)}")
+    typer.echo(f"drove {outcome.frames} frames: {outcome.detail}{stopped}{skipped}; log in {display_path(outcome.log)}")
     if outcome.products:
         typer.echo(f"wrote {', '.join(outcome.products)} in {display_path(folder)}")
     if video_out is not None:

@@ -8,7 +8,6 @@ import typer
 
 from curiosity_cli.cli.app import app, usage_errors
 from curiosity_cli.cli.label import EXPERIMENT
-from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.paths import DEFAULT_CACHE
 
 #: Skipped pieces named on the terminal (skipped.json lists them all).
@@ -27,27 +26,17 @@ def evaluate(
     Every run of the grid needs its labels; with --partial, runs without usable labels are left out and listed in skipped.json.
     """
     from curiosity_cli import api
-    from curiosity_cli.errors import CuriosityError
-    from curiosity_cli.evaluate.report import verdict
-    from curiosity_cli.evaluate.tables import IncompleteLabelsError
-    from curiosity_cli.experiment.recipes import first_of
     from curiosity_cli.files import display_path
 
-    try:
-        result = api.evaluate(folder, partial=partial, cache_dir=cache_dir)
-    except IncompleteLabelsError as exc:
-        raise CuriosityError(
-            f"{len(exc.left_out)} runs of the grid have no usable labels ({first_of(exc.left_out)}); `curiosity label` "
-            "makes them once their runs are explored, or `curiosity evaluate --partial` leaves them out"
-        ) from None
+    result = api.evaluate(folder, partial=partial, cache_dir=cache_dir)
     if result.skipped:
         # the first few on the terminal; every one is in skipped.json
         shown = "; ".join(result.skipped[:_SHOWN])
         more = f"; and {len(result.skipped) - _SHOWN} more" if len(result.skipped) > _SHOWN else ""
         typer.echo(f"skipped {len(result.skipped)} (listed in skipped.json): {shown}{more}", err=True)
     typer.echo(
-        f"wrote {display_path(ExperimentFolder(folder).table('mi'))} ({len(result.mi)} rows), summary.csv, tests.csv, effects.csv, "
+        f"wrote {display_path(Path(folder) / 'mi.csv')} ({len(result.mi)} rows), summary.csv, tests.csv, effects.csv, "
         "classes.csv, classes_summary.csv, headline.csv"
     )
-    for row in result.headline.to_dict("records"):
-        typer.echo(verdict(row, result.effects))
+    for line in api.verdict(result):
+        typer.echo(line)

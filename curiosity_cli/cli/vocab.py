@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 
 from curiosity_cli.cli.app import app, usage_errors
-from curiosity_cli.config import MAX_VOCABULARY
+from curiosity_cli.api.maps import MAX_VOCABULARY
 
 vocab_app = typer.Typer(help="Learn visual vocabularies from photographs unrelated to the maps.", no_args_is_help=True)
 app.add_typer(vocab_app, name="vocab")

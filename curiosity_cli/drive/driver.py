@@ -105,6 +105,7 @@ class Outcome:
     stop_acked: bool | None  # None without a robot (or a simulated one in this process)
     skipped: int = 0  # a replay's messages that held no usable frame (a ``skipped`` record each)
     products: tuple[str, ...] = ()  # what the run folder holds for a reader (``session.PRODUCTS``), by name
+    log: Path | None = None  # the run's log, once its folder is known
 
 
 def _rounded(array, places: int = 3) -> list:

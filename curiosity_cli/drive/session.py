@@ -497,7 +497,8 @@ def drive_session(
             if mission is not None:
                 mission.close()
             log.close()
-    return dataclasses.replace(outcome, products=tuple(name for name in PRODUCTS if (out / name).is_file())), out
+    products = tuple(name for name in PRODUCTS if (out / name).is_file())
+    return dataclasses.replace(outcome, products=products, log=out / RUN_LOG), out
 
 
 def _write_tables(out: Path) -> None:

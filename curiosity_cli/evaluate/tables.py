@@ -124,7 +124,7 @@ class IncompleteLabelsError(EvaluationError):
     def __init__(self, left_out: list[str]):
         super().__init__(
             f"{len(left_out)} runs of the grid have no usable labels ({first_of(left_out)}); {RERUN} makes them "
-            "once their runs are explored, or evaluate with partial=True to leave them out", rerun="label", force=False,
+            "once their runs are explored, or evaluating with `partial` leaves them out", rerun="label", force=False,
         )
         self.left_out = left_out
 

@@ -7,7 +7,7 @@ import subprocess
 
 import cv2
 import numpy as np
-from conftest import RUN_SECONDS, drive_command, frame_rows, read_log, wait_for_frames
+from drive_processes import RUN_SECONDS, drive_command, frame_rows, read_log, wait_for_frames
 from pty_robot import PtyRobot
 
 from curiosity_cli.maps.map_data import load_map

@@ -24,7 +24,7 @@ from curiosity_cli.cli import app
 from curiosity_cli.drive.frames_table import frame_summary
 from curiosity_cli.maps.map_data import load_map
 
-from conftest import CURIOSITY, START_SECONDS, read_log
+from drive_processes import CURIOSITY, START_SECONDS, read_log
 
 pytest.importorskip("rosbags")
 pytest.importorskip("foxglove")

@@ -314,7 +314,7 @@ def test_a_run_left_out_is_an_error_unless_partial(work: Path, case: RedoCase):
     tables = (work / EXPERIMENT / "mi.csv").read_text()
     named = [said for said in case.says if said.endswith(".npz")]  # the file at fault, where the case names one
     line = assert_clean_error(run_cli(["evaluate", EXPERIMENT], cwd=work), "have no usable labels", *named)
-    assert "`curiosity label` makes them once their runs are explored, or `curiosity evaluate --partial` leaves them out" in line
+    assert "`curiosity label` makes them once their runs are explored, or evaluating with --partial leaves them out" in line
     assert (work / EXPERIMENT / "mi.csv").read_text() == tables  # the old set stays
 
 
