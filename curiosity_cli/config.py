@@ -582,7 +582,7 @@ def _read_chain(path: str | Path, overrides: typing.Iterable[str]) -> Raw:
     return raw
 
 
-#: The converged labelling schedule (README, "Reproducing the paper"): 256 sweeps from
+#: The converged labelling schedule (docs/GUIDE.md, "Reproducing the paper"): 256 sweeps from
 #: random topics at every checkpoint, which brought chains from two starts together in 35
 #: of the 36 map-length-target cells of the paper's grid. ``--converged`` of ``label`` and
 #: ``reproduce``; the experiment's config.yaml records the two keys it sets.

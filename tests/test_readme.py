@@ -27,14 +27,32 @@ def test_ci_runs_the_readme_test_command_verbatim():
 
 def test_readme_pictures_exist():
     pictures = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", README)
-    assert "docs/datasets.png" in pictures and "docs/specification-curve.png" in pictures
+    assert "docs/datasets.png" in pictures and "docs/specification-curve-seeds-0-1-2.png" in pictures
     assert all((PROJECT_ROOT / picture).is_file() for picture in pictures), pictures
 
 
 def test_readme_links_to_files_that_exist():
     targets = [t for t in re.findall(r"\]\(([^)]+)\)", README) if "://" not in t]
-    assert "docs/ARCHITECTURE.md" in targets
+    assert "docs/ARCHITECTURE.md" in targets and "docs/GUIDE.md" in targets
     assert all((PROJECT_ROOT / t.split("#")[0]).exists() for t in targets), targets
+
+
+def test_the_guide_links_to_files_and_headings_that_exist():
+    import unicodedata
+
+    docs = PROJECT_ROOT / "docs"
+    guide = (docs / "GUIDE.md").read_text()
+
+    def anchor(heading: str) -> str:  # as GitHub makes them: lower case, punctuation dropped, spaces as hyphens
+        text = unicodedata.normalize("NFKC", heading.strip().lower())
+        return re.sub(r"[^\w\- ]", "", text).replace(" ", "-")
+
+    anchors = {anchor(h) for h in re.findall(r"^#+ (.+)$", guide, re.M)}
+    targets = [t for t in re.findall(r"\]\(([^)]+)\)", guide) if "://" not in t]
+    assert "specification-curve.png" in targets and "../README.md" in targets
+    assert all((docs / t.split("#")[0]).exists() for t in targets if not t.startswith("#")), targets
+    readme_anchors = re.findall(r"\]\(docs/GUIDE\.md#([^)]+)\)", README)
+    assert readme_anchors and all(a in anchors for a in readme_anchors), readme_anchors
 
 
 def test_the_python_example_runs_as_written(tmp_path, monkeypatch):

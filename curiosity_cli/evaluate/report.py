@@ -321,7 +321,7 @@ def _convergence_section(convergence, config: ExperimentConfig) -> list[str]:
             "by about that much. Comparisons between walkers remain like for like, as every run is labelled the "
             "same way. More sweeps narrow it: on the embedded maps, 256 at every checkpoint (`curiosity label "
             "--converged`) brought the two starts together in 35 of 36 cells, at about ten times the labelling time "
-            "(README, \"Reproducing the paper\")."
+            "(docs/GUIDE.md, \"Reproducing the paper\")."
         )
     return lines + [""]
 
@@ -516,7 +516,7 @@ def _revisits_section(revisits, lengths: list[int], config: ExperimentConfig) ->
     lines = [
         "## Revisits",
         "",
-        f"Eq. 8 read as `{config.explore.coverage}` (`explore.coverage`; README, \"Readings of eq. 8\"). Per walker "
+        f"Eq. 8 read as `{config.explore.coverage}` (`explore.coverage`; docs/GUIDE.md, \"Readings of eq. 8\"). Per walker "
         "and path length L: the distinct cells the path saw, its steps onto a cell seen before (L minus distinct "
         "cells) and its moves made with every neighbour visited (boxed in); mean ± 95 % CI half-width over "
         "restarts. A walker ahead on MI with fewer distinct cells saw better cells, not more of them "
