@@ -25,7 +25,7 @@ import numpy as np
 
 from curiosity_cli.drive.camera import CameraError, Frame
 from curiosity_cli.drive.foxglove_mcap import FOXGLOVE_COMPRESSED, FOXGLOVE_RAW
-from curiosity_cli.drive.odometry import ODOMETRY
+from curiosity_cli.drive.odometry import POSE_TYPES
 from curiosity_cli.files import display_path
 
 IMAGE = "sensor_msgs/msg/Image"
@@ -155,8 +155,9 @@ class BagCamera:
     topic : str, optional
         The image topic; may be left out when the bag has exactly one.
     odom_topic : str, optional
-        A ``nav_msgs/msg/Odometry`` topic whose nearest pose in time each frame gets;
-        default the bag's only one, if it has one.
+        A ``nav_msgs/msg/Odometry`` topic (or ``foxglove.PoseInFrame``, in a Foxglove
+        recording) whose nearest pose in time each frame gets; default the bag's only one,
+        if it has one.
 
     Attributes
     ----------
@@ -239,7 +240,7 @@ class BagCamera:
         no pose or what to know of it)."""
         from curiosity_cli.drive.odometry import read_odometry
 
-        odometry = sorted(name for name, (kind, _) in counts.items() if kind == ODOMETRY)
+        odometry = sorted(name for name, (kind, _) in counts.items() if kind in POSE_TYPES)
         if odom_topic is None and len(odometry) != 1:
             why = "no odometry topic" if not odometry else f"odometry on {len(odometry)} topics ({', '.join(odometry)}): give one as odom_topic"
             return None, None, f"frames have no pose: {where} has {why}"
@@ -247,7 +248,8 @@ class BagCamera:
             listed = ", ".join(odometry) or "none"
             held = f"holds {counts[odom_topic][0]}" if odom_topic in counts else "is not a topic there"
             raise CameraError(
-                f"odom_topic: {odom_topic!r} {held}; the {ODOMETRY} topics of {where}: {listed}", parameter="odom_topic"
+                f"odom_topic: {odom_topic!r} {held}; the pose topics ({' or '.join(POSE_TYPES)}) of {where}: {listed}",
+                parameter="odom_topic",
             )
         name = odom_topic or odometry[0]
         try:

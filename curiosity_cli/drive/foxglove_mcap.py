@@ -8,7 +8,10 @@ or ``foxglove.RawImage`` messages, encoded as protobuf (the schema a
 ``rosbags``' ``AnyReader`` a :class:`~curiosity_cli.drive.bags.BagCamera` uses; each
 message comes out with the fields of its ROS counterpart that
 :func:`~curiosity_cli.drive.bags.decode` reads (``header.stamp``, ``data``, ``format``;
-``encoding``, ``width``, ``height``, ``step``, ``is_bigendian``).
+``encoding``, ``width``, ``height``, ``step``, ``is_bigendian``), and a
+``foxglove.PoseInFrame`` with those of a ``nav_msgs/msg/Odometry`` that
+:func:`~curiosity_cli.drive.odometry.read_odometry` reads (``header.frame_id``,
+``pose.pose.position``, ``pose.pose.orientation``).
 """
 
 from __future__ import annotations
@@ -21,6 +24,8 @@ from types import SimpleNamespace
 
 #: The Foxglove image schemas a replay reads.
 FOXGLOVE_COMPRESSED, FOXGLOVE_RAW = "foxglove.CompressedImage", "foxglove.RawImage"
+#: The Foxglove pose schema whose messages give frames their pose (as a ROS bag's odometry does).
+FOXGLOVE_POSE = "foxglove.PoseInFrame"
 #: Message encodings it decodes.
 ENCODINGS = ("protobuf", "json")
 
@@ -123,6 +128,14 @@ class FoxgloveMcap:
         summary = self._reader.get_summary()
         schema = next(s.data for s in summary.schemas.values() if s.name == msgtype)
         message = self._decoders[msgtype](data, msgtype, schema)
+        if msgtype == FOXGLOVE_POSE:
+            pose = message["pose"]
+            return SimpleNamespace(
+                header=SimpleNamespace(frame_id=message["frame_id"]),
+                pose=SimpleNamespace(pose=SimpleNamespace(
+                    position=SimpleNamespace(**pose["position"]), orientation=SimpleNamespace(**pose["orientation"]),
+                )),
+            )
         sec, nsec = message["timestamp"]
         fields = {
             "header": SimpleNamespace(stamp=SimpleNamespace(sec=int(sec), nanosec=int(nsec)), frame_id=message["frame_id"]),
@@ -142,7 +155,13 @@ class FoxgloveMcap:
 
 
 #: The fields of the Foxglove image schemas a replay reads, besides ``timestamp`` and ``data``.
-_FIELDS = {FOXGLOVE_COMPRESSED: ("frame_id", "format"), FOXGLOVE_RAW: ("frame_id", "encoding", "width", "height", "step")}
+_FIELDS = {
+    FOXGLOVE_COMPRESSED: ("frame_id", "format", "data"), FOXGLOVE_RAW: ("frame_id", "encoding", "width", "height", "step", "data"),
+    FOXGLOVE_POSE: ("frame_id", "pose"),
+}
+#: A pose's parts and their components (a missing one is 0, as protobuf and Foxglove's JSON leave zeros out;
+#: a missing orientation is the identity).
+_POSE = {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}
 
 
 def _decoder(encoding: str):
@@ -153,12 +172,18 @@ def _decoder(encoding: str):
 
 def _from_json(data: bytes, msgtype: str, schema: bytes) -> dict:
     message = json.loads(data)
-    if not isinstance(message, dict) or not isinstance(message.get("data"), str):
-        raise ValueError("not a JSON object with its data in base64")
+    if not isinstance(message, dict):
+        raise ValueError("not a JSON object")
     stamp = message.get("timestamp") or {}
     fields = {name: message.get(name, "" if name in ("frame_id", "format", "encoding") else 0) for name in _FIELDS[msgtype]}
     fields["timestamp"] = (stamp.get("sec", 0), stamp.get("nsec", 0))
-    fields["data"] = base64.b64decode(message["data"], validate=True)
+    if "data" in fields:
+        if not isinstance(fields["data"], str):
+            raise ValueError("its data is not base64 text")
+        fields["data"] = base64.b64decode(fields["data"], validate=True)
+    if "pose" in fields:
+        pose = fields["pose"] if isinstance(fields["pose"], dict) else {}
+        fields["pose"] = {part: {k: float((pose.get(part) or {}).get(k, v)) for k, v in zero.items()} for part, zero in _POSE.items()}
     return fields
 
 
@@ -173,7 +198,17 @@ def _from_protobuf(data: bytes, msgtype: str, schema: bytes) -> dict:
     message = cls.FromString(data)
     fields = {name: getattr(message, name) for name in _FIELDS[msgtype]}
     fields["timestamp"] = (message.timestamp.seconds, message.timestamp.nanos)
-    fields["data"] = bytes(message.data)
+    if "data" in fields:
+        fields["data"] = bytes(fields["data"])
+    if "pose" in fields:
+        pose = fields["pose"]
+        fields["pose"] = {
+            part: {k: float(getattr(getattr(pose, part), k)) for k in zero}
+            # protobuf's default orientation is all zeros: no orientation recorded, the identity
+            for part, zero in _POSE.items()
+        }
+        if not pose.HasField("orientation"):
+            fields["pose"]["orientation"] = dict(_POSE["orientation"])
     return fields
 
 

@@ -1,6 +1,7 @@
 """A recorded mission's odometry, and the pose of each replayed frame: the nearest odometry in time.
 
-A bag's ``nav_msgs/msg/Odometry`` messages are read once, before the first frame (they
+A bag's ``nav_msgs/msg/Odometry`` messages (or a Foxglove recording's ``foxglove.PoseInFrame``)
+are read once, before the first frame (they
 are small: a pose and a twist each), and every frame is given the pose recorded nearest
 its own bag time, with the gap between the two, so surprise can be put on a map of where
 the robot went and a reader can see how far to trust the match.
@@ -14,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 
 ODOMETRY = "nav_msgs/msg/Odometry"
+#: The message types a frame's pose is read from: a ROS bag's odometry, a Foxglove recording's poses.
+POSE_TYPES = (ODOMETRY, "foxglove.PoseInFrame")
 #: Odometry messages a replay reads at most: 10 hours at 100 Hz, about 1 GB of arrays beyond that
 #: would be read before the first frame.
 MAX_ODOMETRY = 3_600_000

@@ -95,20 +95,33 @@ def write_ros2_mission(path: Path, frames: list[np.ndarray], odometry: tuple[str
 
 def write_foxglove_mission(path: Path, frames: list[np.ndarray], encoding: str) -> Path:
     """An MCAP file as the Foxglove SDK records one: ``foxglove.CompressedImage`` (PNG) in protobuf, or
-    ``foxglove.RawImage`` (rgb8) in JSON with its data in base64."""
+    ``foxglove.RawImage`` (rgb8) in JSON with its data in base64; and in the same encoding a
+    ``foxglove.PoseInFrame`` on /pose 7 ms after each frame, 0.1 m further along x each time."""
     import foxglove
-    from foxglove.channels import CompressedImageChannel
-    from foxglove.messages import CompressedImage, Timestamp
+    from foxglove.channels import CompressedImageChannel, PoseInFrameChannel
+    from foxglove.messages import CompressedImage, Pose, PoseInFrame, Quaternion, Timestamp, Vector3
 
     context = foxglove.Context()
     writer = foxglove.open_mcap(path, context=context)
     if encoding == "protobuf":
-        channel = CompressedImageChannel("/cam", context=context)
+        channel, poses = CompressedImageChannel("/cam", context=context), PoseInFrameChannel("/pose", context=context)
     else:
-        schema = foxglove.Schema(name="foxglove.RawImage", encoding="jsonschema", data=b'{"type":"object"}')
-        channel = foxglove.Channel("/cam", schema=schema, message_encoding="json", context=context)
+        def json_channel(topic: str, name: str):
+            schema = foxglove.Schema(name=name, encoding="jsonschema", data=b'{"type":"object"}')
+            return foxglove.Channel(topic, schema=schema, message_encoding="json", context=context)
+
+        channel, poses = json_channel("/cam", "foxglove.RawImage"), json_channel("/pose", "foxglove.PoseInFrame")
     for i, frame in enumerate(frames):
         stamp = START + i * PERIOD
+        at = stamp + ODOMETRY_OFFSET
+        if encoding == "protobuf":
+            poses.log(PoseInFrame(
+                timestamp=Timestamp(sec=at // 10**9, nsec=at % 10**9), frame_id="map",
+                pose=Pose(position=Vector3(x=0.1 * i, y=0.0, z=0.0), orientation=Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)),
+            ), log_time=at)
+        else:
+            poses.log(json.dumps({"timestamp": {"sec": at // 10**9, "nsec": at % 10**9}, "frame_id": "map",
+                                  "pose": {"position": {"x": 0.1 * i}}}).encode(), log_time=at)
         if encoding == "protobuf":
             channel.log(
                 CompressedImage(timestamp=Timestamp(sec=stamp // 10**9, nsec=stamp % 10**9), frame_id="camera",
@@ -260,8 +273,10 @@ def test_odometry_on_several_topics_needs_one_named(tmp_path):
 
 
 @pytest.mark.parametrize("topic, says", [
-    ("/camera/image", "--odom-topic: '/camera/image' holds sensor_msgs/msg/CompressedImage; the nav_msgs/msg/Odometry topics of"),
-    ("/nowhere", "--odom-topic: '/nowhere' is not a topic there; the nav_msgs/msg/Odometry topics of"),
+    ("/camera/image", "--odom-topic: '/camera/image' holds sensor_msgs/msg/CompressedImage; the pose topics "
+                      "(nav_msgs/msg/Odometry or foxglove.PoseInFrame) of"),
+    ("/nowhere", "--odom-topic: '/nowhere' is not a topic there; the pose topics (nav_msgs/msg/Odometry or "
+                 "foxglove.PoseInFrame) of"),
 ])
 def test_an_odom_topic_that_is_no_odometry_is_one_error(tmp_path, topic, says):
     bag = write_ros2_mission(tmp_path / "bag", mission_frames(2))
@@ -283,7 +298,10 @@ def test_an_mcap_of_foxglove_images_replays_as_the_same_frames_in_a_ros_bag(tmp_
     ours, ros = api.open_mission(tmp_path / "out"), api.open_mission(replayed)
     for column in ("time_ns", "header_time_ns", "surprise", "refined", "words", "target_row", "target_col"):
         assert ours[column].tolist() == ros[column].tolist(), column
-    assert ours["pose_source"].isna().all()
+    # its poses as a bag's odometry: the nearest in time (7 ms after), its frame, the identity where none is given
+    assert "wrote timeline.png, mission.mcap, frames.parquet, trajectory.png in" in result.output
+    assert ours["pose_frame"].eq("map").all() and ours["pose_gap_ms"].eq(7.0).all() and ours["yaw"].eq(0.0).all()
+    assert ours["x"].tolist() == pytest.approx([0.1 * i for i in range(12)]) and ours["y"].eq(0.0).all()
 
 
 def test_an_mcap_of_other_messages_names_what_is_read(tmp_path):
