@@ -48,7 +48,7 @@ from __future__ import annotations
 from curiosity_cli.api.configs import init_config, show_config
 from curiosity_cli.api.maps import DatasetRow, Preview, build_vocabularies, list_datasets, show_datasets
 from curiosity_cli.api.pipeline import (
-    Config, animate, evaluate, explore, extract, label, load, plot, reproduce, word_store,
+    Config, animate, evaluate, explore, extract, label, load, plot, reproduce, run_named, word_store,
 )
 from curiosity_cli.api.results import Results, open_experiment, verdict
 from curiosity_cli.api.robot import RobotStart, drive, open_mission, redraw_timeline, simrobot
@@ -58,5 +58,5 @@ __all__ = [
     "Config", "DatasetRow", "Preview", "Progress", "Results", "RobotStart", "animate", "build_vocabularies", "drive", "evaluate",
     "explore", "extract", "init_config", "label", "list_datasets", "load", "open_experiment", "open_mission", "plot",
     "redraw_timeline",
-    "reproduce", "show_config", "show_datasets", "simrobot", "verdict", "word_store",
+    "reproduce", "run_named", "show_config", "show_datasets", "simrobot", "verdict", "word_store",
 ]

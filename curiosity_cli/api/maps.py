@@ -7,7 +7,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
-from curiosity_cli.config import MAX_VOCABULARY  # noqa: F401  (the bound `vocab build` shows)
+from curiosity_cli.config import MAX_VOCABULARY  # the bound `vocab build` takes and its options show
 from curiosity_cli.paths import DEFAULT_RESULTS
 
 if typing.TYPE_CHECKING:
@@ -124,7 +124,6 @@ def build_vocabularies(
     log : callable
         Progress lines, and a line for each file written or kept.
     """
-    from curiosity_cli.config import MAX_VOCABULARY
     from curiosity_cli.errors import ParameterError
     from curiosity_cli.files import display_path
     from curiosity_cli.words.vocab import (

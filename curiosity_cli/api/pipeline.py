@@ -310,6 +310,24 @@ def plot(folder: Path = DEFAULT_EXPERIMENT) -> WrittenFigures:
     return write_figures(folder_argument(folder))
 
 
+def run_named(text: str, parameter: str = "run") -> tuple[str, str, int]:
+    """A run named ``MAP/WALKER/RESTART`` (as ``curiosity plot --animate`` takes it) as (dataset, weight_function,
+    restart).
+
+    Raises
+    ------
+    UsageError
+        Not three parts with a restart number, naming ``parameter``.
+    """
+    parts = text.split("/") if isinstance(text, str) else []
+    if len(parts) != 3 or not parts[2].isdigit():
+        raise UsageError(
+            f"{parameter}: got {text!r}, expected MAP/WALKER/RESTART, e.g. aerial-mosaic/topic-perplexity/0",
+            parameter=parameter,
+        )
+    return parts[0], parts[1], int(parts[2])
+
+
 def animate(
     folder: Path, dataset: str, weight_function: str, restart: int, *, out: Path | None = None,
     cache_dir: Path | None = None,

@@ -38,14 +38,13 @@ class Results:
         ParameterError
             ``name`` is none of the tables ``evaluate`` wrote, naming them.
         """
-        import pandas as pd
-
         from curiosity_cli.errors import ParameterError
+        from curiosity_cli.evaluate.tables import read_table
 
         written = sorted(Path(file).stem for file in self.experiment.check_tables() if Path(file).suffix == ".csv")
         if name not in written:
             raise ParameterError(f"name: got {name!r}, expected one of {', '.join(written)}")
-        return pd.read_csv(self.experiment.folder.table(name))
+        return read_table(self.experiment.folder.table(name))
 
     @property
     def mi(self) -> pd.DataFrame:

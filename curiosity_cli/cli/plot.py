@@ -31,10 +31,7 @@ def plot(
     from curiosity_cli.files import display_path
 
     if animate is not None:
-        parts = animate.split("/")
-        if len(parts) != 3 or not parts[2].isdigit():
-            raise typer.BadParameter(f"got {animate!r}, expected MAP/WALKER/RESTART, e.g. aerial-mosaic/topic-perplexity/0", param_hint="--animate")
-        path = api.animate(folder, parts[0], parts[1], int(parts[2]), out=out, cache_dir=cache_dir)
+        path = api.animate(folder, *api.run_named(animate, "animate"), out=out, cache_dir=cache_dir)
         typer.echo(f"wrote {display_path(path)}")
         return
     if out is not None or cache_dir is not None:

@@ -18,7 +18,9 @@ from typing import TYPE_CHECKING
 
 from curiosity_cli.errors import RERUN
 from curiosity_cli.evaluate.statistics import paired_tests, summarise, summarise_revisits, summarise_steering
-from curiosity_cli.evaluate.tables import EvaluationError, headline, headline_length, paired_effects, with_uncertainty
+from curiosity_cli.evaluate.tables import (
+    EvaluationError, headline, headline_length, paired_effects, read_table, with_uncertainty,
+)
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.experiment.layout import ExperimentFolder
@@ -147,11 +149,4 @@ def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Poo
 
 def _read(path: Path):
     """An evaluation table, or an error naming it and the stage that makes it."""
-    import pandas as pd
-
-    try:
-        return pd.read_csv(path)
-    except (OSError, ValueError) as exc:
-        raise EvaluationError(
-            f"{display_path(path)}: cannot read it ({exc}); {RERUN} makes it", rerun="evaluate", force=False
-        ) from None
+    return read_table(path)

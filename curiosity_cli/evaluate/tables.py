@@ -73,6 +73,7 @@ from __future__ import annotations
 import contextlib
 import json
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -127,6 +128,60 @@ class IncompleteLabelsError(EvaluationError):
             "once their runs are explored, or evaluating with `partial` leaves them out", rerun="label", force=False,
         )
         self.left_out = left_out
+
+
+#: :func:`read_table`'s ``absent`` when a missing table is an error.
+_RAISE = object()
+
+
+def read_table(path: Path, columns: Sequence[str] = (), *, absent=_RAISE, error: type = EvaluationError, **options):
+    """An evaluation table, the one way every reader reads one back.
+
+    Parameters
+    ----------
+    path : Path
+        The CSV file ``evaluate`` wrote.
+    columns : sequence of str
+        Columns it must have (others are kept).
+    absent : optional
+        What a missing file gives; without it, a missing file is an error.
+    error : type
+        The :class:`~curiosity_cli.errors.CuriosityError` to raise (a figure's reader raises its own).
+    **options
+        For :func:`pandas.read_csv` (a table whose empty cells mean "" rather than missing).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Empty, without columns, for a table written without any (no run was labelled twice).
+
+    Raises
+    ------
+    error
+        Missing, unreadable, or without one of ``columns``; naming the file and that ``evaluate``
+        makes it.
+    """
+    import pandas as pd
+
+    path = Path(path)
+    again = {"rerun": "evaluate", "force": False}
+    if not path.is_file():
+        if absent is not _RAISE:
+            return absent
+        raise error(f"{display_path(path)}: not found; {RERUN} makes it", **again)
+    try:
+        table = pd.read_csv(path, **options)
+    except pd.errors.EmptyDataError:
+        table = pd.DataFrame()
+    except (OSError, ValueError) as exc:  # pandas' parser errors are ValueErrors, a bad encoding a UnicodeDecodeError
+        raise error(f"{display_path(path)}: not a readable CSV table ({exc}); {RERUN} makes it again", **again) from None
+    missing = [c for c in columns if c not in table.columns]
+    if missing:
+        raise error(
+            f"{display_path(path)}: no column {missing[0]!r}; expected {', '.join(columns)} ({RERUN} makes it again)",
+            **again,
+        )
+    return table
 
 
 @dataclass(frozen=True)
@@ -718,21 +773,10 @@ def read_evaluation(experiment: Experiment) -> Evaluation:
     EvaluationError
         A table that cannot be read, naming it.
     """
-    import pandas as pd
-
     layout = experiment.folder
 
-    def read(name: str) -> pd.DataFrame:
-        path = layout.table(name)
-        try:
-            return pd.read_csv(path)
-        except pd.errors.EmptyDataError:  # a table without columns (no run was labelled twice) is written empty
-            return pd.DataFrame()
-        except FileNotFoundError:
-            raise EvaluationError(f"{display_path(path)}: not found; {RERUN} makes it", rerun="evaluate", force=False) from None
-        except (OSError, ValueError) as exc:
-            raise EvaluationError(f"{display_path(path)}: cannot read it ({exc}); {RERUN} makes it again",
-                                  rerun="evaluate", force=False) from None
+    def read(name: str):
+        return read_table(layout.table(name))
 
     try:
         skipped = json.loads(layout.skipped.read_text())

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from curiosity_cli.errors import RERUN, CuriosityError
+from curiosity_cli.errors import CuriosityError
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import CorruptFileError, display_path, open_npz
 
@@ -40,43 +40,6 @@ _EXAMPLE_NAME = re.compile(r"^(?P<weight>.+)-restart-(?P<restart>\d+)-(?P<length
 
 class PlotError(CuriosityError):
     """An experiment folder the figures cannot be drawn from."""
-
-
-def read_table(path: Path, columns: tuple[str, ...]):
-    """Read a results CSV of ``evaluate`` and check its columns.
-
-    Parameters
-    ----------
-    path : Path
-    columns : tuple of str
-        Columns it must have (others are kept).
-
-    Returns
-    -------
-    pandas.DataFrame
-
-    Raises
-    ------
-    PlotError
-        Missing, unreadable, or without one of ``columns``; the message names the file.
-    """
-    import pandas as pd
-
-    path = Path(path)
-    again = {"rerun": "evaluate", "force": False}
-    if not path.is_file():
-        raise PlotError(f"{display_path(path)}: not found; {RERUN} makes it", **again)
-    try:
-        table = pd.read_csv(path)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise PlotError(f"{display_path(path)}: not a readable CSV table ({exc}); {RERUN} makes it again", **again) from None
-    missing = [c for c in columns if c not in table.columns]
-    if missing:
-        raise PlotError(
-            f"{display_path(path)}: no column {missing[0]!r}; expected {', '.join(columns)} ({RERUN} makes it again)",
-            **again,
-        )
-    return table
 
 
 def load_maps(config: ExperimentConfig, notes: list[str]) -> dict:

@@ -37,6 +37,7 @@ from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.evaluate.tables import read_table
 from curiosity_cli.plots import missing_glyphs_noted, palette
 from curiosity_cli.plots.experiment_inputs import (
     MI_COLUMNS,
@@ -48,7 +49,6 @@ from curiosity_cli.plots.experiment_inputs import (
     read_label_map,
     read_log_likelihood,
     read_path,
-    read_table,
 )
 from curiosity_cli.plots.preview import shrink_image, shrink_labels
 
@@ -172,7 +172,7 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
     from curiosity_cli.experiment.lock import working_in
 
     with working_in(experiment_dir, "plot"):
-        mi = read_table(layout.table("mi"), MI_COLUMNS)
+        mi = read_table(layout.table("mi"), MI_COLUMNS, error=PlotError)
         if mi.empty:
             raise PlotError(f"{display_path(layout.table('mi'))}: no rows; {RERUN} makes it", rerun="evaluate", force=False)
         experiment = Experiment.open(experiment_dir)
@@ -186,7 +186,7 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
 
         summary_path = layout.table("summary")
         try:
-            summary = read_table(summary_path, SUMMARY_COLUMNS)
+            summary = read_table(summary_path, SUMMARY_COLUMNS, error=PlotError)
             for column in ("path_length", "n", "mean", "std", "ci_low", "ci_high"):
                 summary[column] = pd.to_numeric(summary[column], errors="coerce")  # a stray text cell: NaN, not a crash
             summary = summary.dropna(subset=["path_length"])

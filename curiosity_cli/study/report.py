@@ -46,12 +46,14 @@ def read_headline(folder: Path):
     """
     import pandas as pd
 
-    path = ExperimentFolder(folder).table("headline")
-    if not path.is_file():
-        return pd.DataFrame(columns=list(HEADLINE_COLUMNS))
+    from curiosity_cli.evaluate.tables import read_table
+
     text = {"dataset": str, "next_best": str, "paper_map": str}  # an empty paper_map stays ""
     numbers = {column: [""] for column in HEADLINE_COLUMNS if column not in text}
-    return pd.read_csv(path, dtype=text, keep_default_na=False, na_values=numbers)
+    return read_table(
+        ExperimentFolder(folder).table("headline"), absent=pd.DataFrame(columns=list(HEADLINE_COLUMNS)), dtype=text,
+        keep_default_na=False, na_values=numbers,
+    )
 
 
 def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], record: Path | None = None) -> Path:
@@ -179,10 +181,9 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], 
 
 def _read_revisits(folder: Path):
     """An experiment's ``revisits.csv`` (:func:`~curiosity_cli.evaluate.tables.summarise_revisits`), or None if absent."""
-    import pandas as pd
+    from curiosity_cli.evaluate.tables import read_table
 
-    path = ExperimentFolder(folder).table("revisits")
-    return pd.read_csv(path) if path.is_file() else None
+    return read_table(ExperimentFolder(folder).table("revisits"), absent=None)
 
 
 def _distinct_at_headline(revisits):
