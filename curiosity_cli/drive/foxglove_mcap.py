@@ -18,9 +18,10 @@ from __future__ import annotations
 
 import base64
 import json
-from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
+
+from curiosity_cli.drive.mcap_scan import Connection
 
 #: The Foxglove image schemas a replay reads.
 FOXGLOVE_COMPRESSED, FOXGLOVE_RAW = "foxglove.CompressedImage", "foxglove.RawImage"
@@ -36,17 +37,6 @@ class FoxgloveMcapError(Exception):
 
 class NoImagesError(FoxgloveMcapError):
     """A whole MCAP file that holds no Foxglove image channel this reader decodes."""
-
-
-@dataclass(frozen=True)
-class Connection:
-    """A channel of the file, as ``rosbags`` names its parts."""
-
-    id: int
-    topic: str
-    msgtype: str
-    msgcount: int
-    encoding: str
 
 
 def is_foxglove_image(msgtype: str) -> bool:
@@ -65,7 +55,8 @@ class FoxgloveMcap:
     Attributes
     ----------
     connections : list of Connection
-        Every channel, its schema name as ``msgtype`` and its message count.
+        Every channel (:class:`~curiosity_cli.drive.mcap_scan.Connection`), its schema name as
+        ``msgtype`` and its message count.
 
     Raises
     ------
@@ -91,16 +82,16 @@ class FoxgloveMcap:
             self._file.close()
             raise FoxgloveMcapError("no summary with message counts (a recording cut short?)")
         counts = summary.statistics.channel_message_counts
+        channels = sorted(summary.channels.values(), key=lambda c: c.id)
         self.connections = [
-            Connection(
-                channel.id, channel.topic, summary.schemas[channel.schema_id].name if channel.schema_id else "",
-                counts.get(channel.id, 0), channel.message_encoding,
-            )
-            for channel in sorted(summary.channels.values(), key=lambda c: c.id)
+            Connection(c.id, c.topic, summary.schemas[c.schema_id].name if c.schema_id else "", counts.get(c.id, 0))
+            for c in channels
         ]
-        if not any(is_foxglove_image(c.msgtype) and c.encoding in ENCODINGS for c in self.connections):
+        self._encodings = {c.id: c.message_encoding for c in channels}
+        if not any(is_foxglove_image(c.msgtype) and self._encodings[c.id] in ENCODINGS for c in self.connections):
             self._file.close()
-            found = ", ".join(sorted({f"{c.msgtype or 'no schema'} ({c.encoding})" for c in self.connections})) or "no channels"
+            found = ", ".join(sorted({f"{c.msgtype or 'no schema'} ({self._encodings[c.id]})" for c in self.connections}))
+            found = found or "no channels"
             raise NoImagesError(
                 f"its channels hold {found}; expected ROS 2 images (profile ros2) or Foxglove images "
                 f"({FOXGLOVE_COMPRESSED} or {FOXGLOVE_RAW}, encoded as {' or '.join(ENCODINGS)})"
@@ -111,7 +102,7 @@ class FoxgloveMcap:
         """(connection, log time in ns, serialized data) of each message of ``connections``, in log-time order."""
         wanted = {c.id: c for c in connections}
         for c in wanted.values():
-            self._decoders[c.msgtype] = _decoder(c.encoding)
+            self._decoders[c.msgtype] = _decoder(self._encodings[c.id])
         topics = sorted({c.topic for c in wanted.values()})
         for _, channel, message in self._reader.iter_messages(topics=topics):
             if channel.id in wanted:
