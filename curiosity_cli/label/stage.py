@@ -404,15 +404,7 @@ def label_experiment(
         by_name = {info.name: info for info in stores.values()}
         words = {name: sum(info.word_counts.values()) for name, info in by_name.items()}
         experiment = Experiment(folder, config, {name: info.facts for name, info in by_name.items()})
-        # the runs of the grid the config holds, as they sit: a run folder outside it (a config narrowed since) is not labelled
-        folders = [layout.run(r.dataset, r.weight_function, r.restart) for r in experiment.planned()]
-        runs = [p for p in folders if (p / ExperimentFolder.RUN_META).is_file()]
-        left_out = [unexplored(p, layout) for p in folders if p not in runs]
-        if not runs:
-            raise LabelError(
-                f"{display_path(layout.runs)}: none of the runs of the grid of {display_path(layout.config)} is explored "
-                f"({first_of(left_out)}); {RERUN} makes them", rerun="explore", force=False,
-            )
+        runs, left_out = _explored_runs(experiment)
         finished, problems = _runs_as_configured(experiment, runs)
 
         with computing as workers:
@@ -437,21 +429,8 @@ def label_experiment(
                 write_labels(folder, arrays, examples, {**meta, RECIPE_KEY: plan.recipes[run.folder].record()})
             blocks = _plan_blocks(config, plan.to_label, inputs, words, device, workers.jobs, chains_per_block)
             stale = batches.stale
-            # beside the blocks where every task gets a worker at once, so no block waits for a worker a batch
-            # reference holds (loky only: a Dask worker cannot see the file it waits for); else before them
-            beside = bool(stale) and not workers.ships and len(stale) + len(blocks) <= workers.jobs
-            tasks = []
-            if beside:
-                threads = max(1, (workers.jobs - len(blocks)) // len(stale))  # the job slots the blocks leave
-                tasks = [BatchTask(info, threads) for info in stale]
-            else:
-                profile.mark("setup")
-                problems += compute_batch_references(config, stale, batches.files, batches.recipes, workers, on_stage, on_done)
-                profile.mark("batch references before the blocks")
-                failed_maps = {info.name for info in stale if info.name not in batches.files}
-                for task in [task for task in blocks if task.inputs.name in failed_maps]:
-                    blocks.remove(task)  # its runs are not labelled: counted as failed, named in problems
-            tasks += blocks
+            beside, tasks, batch_problems = _schedule(config, batches, blocks, workers, profile, on_stage, on_done)
+            problems += batch_problems
             shipped = _ship_maps(workers, blocks, config)  # before the stage starts: an unusable cluster is the only message
             if on_stage is not None:
                 what = "labelling runs" + (f" on {device.shown}" if device.announced else "")
@@ -470,15 +449,9 @@ def label_experiment(
                     if info.name in batches.files and batch_is_current(batches.files[info.name], batches.recipes[info.name]):
                         shared.keep_file(BATCH, batches.recipes[info.name].digest, batches.files[info.name])
         shared_counts = {"labels": len(plan.taken), "batches": len(batches.taken), "labelled": labelled}
-        made = todo or stale or batches.taken  # a call that found every label file current made nothing
-        if made:
-            with atomic_path(layout.shared) as tmp:
-                tmp.write_text(json.dumps(shared_counts, indent=1) + "\n")
-            profile.mark("closing")
-            profile.write(layout.label_profile)
-        seconds = time.perf_counter() - started
-        if made:
-            record_stage_seconds(folder, "label", seconds, add=not force)
+        seconds = _record_call(
+            layout, shared_counts, profile, started, made=bool(todo or stale or batches.taken), force=force,
+        )
         if problems or left_out:
             failed = todo - labelled + len(left_out)
             raise LabelError(
@@ -489,6 +462,65 @@ def label_experiment(
             "labelled": labelled, "skipped": plan.skipped, "batch_reused": len(stores) - len(stale), "seconds": seconds,
             "relabelled": plan.relabelled, "shared": {k: shared_counts[k] for k in ("labels", "batches")},
         }
+
+
+def _explored_runs(experiment: Experiment) -> tuple[list[Path], list[str]]:
+    """The run folders of the grid the config holds that are explored, and a line for each that is not.
+
+    A run folder outside the grid (a config narrowed since) is not labelled.
+
+    Raises
+    ------
+    LabelError
+        None of them is explored.
+    """
+    layout = experiment.folder
+    folders = [layout.run(r.dataset, r.weight_function, r.restart) for r in experiment.planned()]
+    runs = [p for p in folders if (p / ExperimentFolder.RUN_META).is_file()]
+    left_out = [unexplored(p, layout) for p in folders if p not in runs]
+    if not runs:
+        raise LabelError(
+            f"{display_path(layout.runs)}: none of the runs of the grid of {display_path(layout.config)} is explored "
+            f"({first_of(left_out)}); {RERUN} makes them", rerun="explore", force=False,
+        )
+    return runs, left_out
+
+
+def _schedule(config, batches, blocks: list, workers, profile, on_stage, on_done) -> tuple[bool, list, list[str]]:
+    """(whether the stale batch references go beside the blocks, the tasks to compute, a line per batch reference
+    that failed).
+
+    Beside the blocks where every task gets a worker at once, so no block waits for a worker a
+    batch reference holds (loky only: a Dask worker cannot see the file it waits for); else
+    they are computed here, before them, and a map whose reference failed loses its blocks
+    (its runs are not labelled: counted as failed, named in the problems).
+    """
+    stale = batches.stale
+    beside = bool(stale) and not workers.ships and len(stale) + len(blocks) <= workers.jobs
+    if beside:
+        threads = max(1, (workers.jobs - len(blocks)) // len(stale))  # the job slots the blocks leave
+        return True, [*(BatchTask(info, threads) for info in stale), *blocks], []
+    profile.mark("setup")
+    problems = compute_batch_references(config, stale, batches.files, batches.recipes, workers, on_stage, on_done)
+    profile.mark("batch references before the blocks")
+    failed_maps = {info.name for info in stale if info.name not in batches.files}
+    for task in [task for task in blocks if task.inputs.name in failed_maps]:
+        blocks.remove(task)
+    return False, list(blocks), problems
+
+
+def _record_call(layout: ExperimentFolder, shared_counts: dict, profile, started: float, *, made: bool, force: bool) -> float:
+    """Write what a call that made anything leaves beside its labels (``shared.json``, its profile, its seconds in
+    the stage's time table); the call's seconds. A call that found every label file current made nothing."""
+    if made:
+        with atomic_path(layout.shared) as tmp:
+            tmp.write_text(json.dumps(shared_counts, indent=1) + "\n")
+        profile.mark("closing")
+        profile.write(layout.label_profile)
+    seconds = time.perf_counter() - started
+    if made:
+        record_stage_seconds(layout.root, "label", seconds, add=not force)
+    return seconds
 
 
 class _Batches(NamedTuple):
