@@ -88,3 +88,20 @@ def test_a_watched_stage_is_one_line_rewritten_in_place():
     text = out.getvalue()
     assert text.count("\n") == 1 and text.endswith(" in 4 s\n")
     assert text.split("\r")[-1].startswith("exploring [########################] 4/4 (100 %), 1.00/s, about 0 s left")
+
+
+def test_in_a_notebook_a_long_function_given_no_callbacks_shows_its_own_progress(monkeypatch):
+    import sys
+    import types
+
+    from curiosity_cli.api.pipeline import _shown
+
+    given = (lambda *_: None, None)
+    with _shown(*given) as shown:
+        assert shown == given  # callbacks given are used as they are, anywhere
+    with _shown(None, None) as shown:
+        assert shown == (None, None)  # outside a notebook nothing is shown unasked
+    monkeypatch.setitem(sys.modules, "ipykernel", types.ModuleType("ipykernel"))
+    with _shown(None, None) as (on_stage, on_done):
+        assert isinstance(on_stage.__self__, Progress) and on_stage.__self__.watched
+        assert on_done.__self__ is on_stage.__self__
