@@ -81,7 +81,7 @@ def map_chains(store: WordStore, model: ModelConfig, device: str = "cpu"):
 
 def label_paths(
     store: WordStore, model: ModelConfig, paths: Sequence[Sequence[np.ndarray]], seeds: Sequence[int], *,
-    sweeps: int, warm_sweeps: int | None, placed: Sequence[bool] | None = None, device: str = "cpu",
+    sweeps: int, warm_sweeps: int | None, placed: Sequence[bool] | None = None, device: str = "cpu", on_sweep=None,
 ) -> Iterator[tuple[int, list[int], np.ndarray]]:
     """Z_p of every word for each checkpoint of several paths, their chains in lock-step.
 
@@ -114,6 +114,9 @@ def label_paths(
     device : str
         Where the chains run, a name in :data:`curiosity_cli.topics.devices.DEVICES`; the
         labels are the same bytes on each.
+    on_sweep : callable, optional
+        ``on_sweep(chains)`` after each sweep of the chains (progress; the labels do not
+        depend on it).
 
     Yields
     ------
@@ -135,10 +138,10 @@ def label_paths(
         phis = [paths[c][j] for c in active]
         if j > 0 and warm_sweeps is not None:
             chains.switch(phis)
-            chains.sweep(warm_sweeps)
+            chains.sweep(warm_sweeps, on_sweep)
         else:
             chains.start(phis, [(seeds[c] + j) % 2**64 for c in active], [placed[c] for c in active])
-            chains.sweep(sweeps)
+            chains.sweep(sweeps, on_sweep)
         yield j, active, chains.ml_topics()
 
 

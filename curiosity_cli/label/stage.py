@@ -52,6 +52,7 @@ from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT, LABEL_FORMAT, 
 from curiosity_cli.experiment.saved_config import record_label_settings
 from curiosity_cli.experiment.stage_seconds import record_stage_seconds
 from curiosity_cli.files import atomic_path, display_path, note, open_npz, remove_leftovers
+from curiosity_cli.label.block_progress import BlockProgress, SweepCounter
 from curiosity_cli.label.batch_references import (
     BatchTask, WrittenBatch, batch_is_current, batch_task, compute_batch_references, write_batch,
 )
@@ -207,14 +208,15 @@ def _map_arrays(inputs: MapInputs, topics: int) -> MapArrays:
 
 def label_block(
     runs: list[RunInputs], inputs: MapInputs, arrays: MapArrays, config: ExperimentConfig, *, device: str = "cpu",
-    clock: dict | None = None,
+    clock: dict | None = None, on_sweep=None,
 ) -> list[tuple]:
     """Z_p of every checkpoint of some runs of one map, as contingency tables; ``(tables, examples, meta)`` per run.
 
     The chains run on ``device``, a name in :data:`~curiosity_cli.topics.devices.DEVICES`
     (the same bytes on each). ``clock``, when given, gets the seconds spent in the chains'
     sweeps (``kernel``) and in the tables and example maps made from their labels
-    (``tables``, with any wait for a Z_b computed beside).
+    (``tables``, with any wait for a Z_b computed beside). ``on_sweep(chains)`` is called
+    after each sweep of the chains (:mod:`~curiosity_cli.label.block_progress`).
 
     ``inputs`` names the map's files, ``arrays`` holds their contents; the runs were made
     from the map's current word store (:func:`label_experiment` checks). Their chains,
@@ -239,7 +241,7 @@ def label_block(
         store, config.model, [phis[index] for index, _ in chains],
         [path_seed(runs[index].meta["seed"], second=bool(prefix)) for index, prefix in chains],
         placed=[bool(prefix) for _, prefix in chains], sweeps=config.label.sweeps, warm_sweeps=config.label.warm_sweeps,
-        device=device,
+        device=device, on_sweep=on_sweep,
     )
     clock = {} if clock is None else clock
     clock.update(kernel=0.0, tables=0.0)
@@ -436,7 +438,7 @@ def label_experiment(
                 what = "labelling runs" + (f" on {device.shown}" if device.announced else "")
                 if beside:
                     what += " beside the batch reference" + ("s of " if len(stale) > 1 else " of ") + ", ".join(i.name for i in stale)
-                on_stage(what, sum(len(task.runs) for task in blocks) + len(stale) * beside)
+                on_stage(what + " (chain sweeps)", stage_sweeps(config, tasks))
             labelled, task_problems = _compute_and_write(
                 workers, tasks, shipped, config=config, folder=folder, plan=plan, batches=batches, words=words,
                 shared=shared, profile=profile, on_done=on_done,
@@ -632,17 +634,23 @@ def _compute_and_write(
     ``(label files written, a line per run or batch reference that failed)``.
 
     The files are written by threads (zlib and SHA-256 let go of the GIL) while results
-    arrive: a GPU's block returns a whole map's runs at once.
+    arrive: a GPU's block returns a whole map's runs at once. ``on_done`` is called once per
+    chain sweep (:func:`stage_sweeps`), as the blocks make them where their workers share
+    this machine's files (:mod:`~curiosity_cli.label.block_progress`), else as they end.
     """
     problems = []
+    planned = {task.key: _task_sweeps(config, task) for task in tasks}
+    progress = BlockProgress(planned, on_done, local=not workers.ships)
     computed = workers.compute(
-        _stage_task, tasks, args=lambda task: (config, shipped.get(task.inputs.name) if isinstance(task, LabelTask) else None),
-        threads=1, key=lambda task: task.key,
+        _stage_task, tasks, threads=1, key=lambda task: task.key,
+        args=lambda task: (
+            config, shipped.get(task.inputs.name) if isinstance(task, LabelTask) else None, progress.path(task.key),
+        ),
     )
     profile.jobs = workers.jobs
     profile.mark("setup")
     labelled = 0
-    with computed as results, ThreadPoolExecutor(WRITERS) as writers:
+    with progress, computed as results, ThreadPoolExecutor(WRITERS) as writers:
         writes, keeps = [], []
         results = profile.waiting(results)
         for task, outcome in results:
@@ -656,11 +664,9 @@ def _compute_and_write(
                 problems += ["{dataset} / {weight_function} / restart {restart}: ".format(**run.meta) + outcome
                              for run in task.runs]
             else:
-                chains = [1 + is_checked(config, run.meta["restart"]) for run in task.runs]
+                chains = sum(1 + is_checked(config, run.meta["restart"]) for run in task.runs)
                 profile.block(
-                    sum(chains), words[task.inputs.name],
-                    sum(c * _sweeps(config, len(run.meta["checkpoints"])) for c, run in zip(chains, task.runs)),
-                    len(task.runs), task.inputs.name, outcome.seconds,
+                    chains, words[task.inputs.name], planned[task.key], len(task.runs), task.inputs.name, outcome.seconds,
                 )
                 writes += [
                     writers.submit(write_labels, folder, arrays, examples, {**meta, RECIPE_KEY: plan.recipes[run.folder].record()})
@@ -671,9 +677,7 @@ def _compute_and_write(
                         writers.submit(shared.keep_labels, plan.keys[run.folder], arrays, examples)
                         for run, (arrays, examples, _) in zip(task.runs, outcome.runs)
                     ]
-            if on_done is not None:
-                for _ in range(1 if isinstance(task, BatchTask) else len(task.runs)):
-                    on_done()
+            progress.ended(task.key)
         profile.mark("handling results")
         for write in writes:
             write.result()  # a file that could not be written stops the stage, as it did
@@ -681,6 +685,21 @@ def _compute_and_write(
         for keep in keeps:
             keep.result()
     return labelled, problems
+
+
+def stage_sweeps(config: ExperimentConfig, tasks: list) -> int:
+    """The units of a label stage's progress: its blocks' chain sweeps, and each batch reference's sweeps (one chain's
+    over the whole map, as a block's chain sweeps are)."""
+    return sum(_task_sweeps(config, task) for task in tasks)
+
+
+def _task_sweeps(config: ExperimentConfig, task) -> int:
+    """A task's chain sweeps: every chain of a block's runs over their checkpoints, or a batch reference's sweeps."""
+    if isinstance(task, BatchTask):
+        return config.label.batch_sweeps
+    return sum(
+        (1 + is_checked(config, run.meta["restart"])) * _sweeps(config, len(run.meta["checkpoints"])) for run in task.runs
+    )
 
 
 def _sweeps(config: ExperimentConfig, checkpoints: int) -> int:
@@ -756,13 +775,16 @@ class LabelTask(NamedTuple):
         return "label-{dataset}/{weight_function}/restart-{restart:03d}".format(**self.runs[0].meta) + f"+{len(self.runs) - 1}"
 
 
-def _stage_task(task: BatchTask | LabelTask, config: ExperimentConfig, shipped=None, *, threads: int = 1):
+def _stage_task(
+    task: BatchTask | LabelTask, config: ExperimentConfig, shipped=None, progress: str | None = None, *, threads: int = 1,
+):
     """A task of the stage in a worker: a batch reference (:func:`~curiosity_cli.label.batch_references.batch_task`)
     or a block of runs (:func:`_label_task`);
-    ``shipped`` is its map's word store (a batch reference) or arrays (a block) on Dask, else None."""
+    ``shipped`` is its map's word store (a batch reference) or arrays (a block) on Dask, else None; ``progress``
+    where a block writes its chain sweeps (:mod:`~curiosity_cli.label.block_progress`), or None."""
     if isinstance(task, BatchTask):
         return batch_task(task, config, shipped)
-    return _label_task(task, config, shipped)
+    return _label_task(task, config, shipped, progress)
 
 
 class LabelledBlock(NamedTuple):
@@ -774,12 +796,17 @@ class LabelledBlock(NamedTuple):
     seconds: dict
 
 
-def _label_task(task: LabelTask, config: ExperimentConfig, arrays: MapArrays | None = None) -> LabelledBlock:
+def _label_task(
+    task: LabelTask, config: ExperimentConfig, arrays: MapArrays | None = None, progress: str | None = None,
+) -> LabelledBlock:
     """Label a block of runs in a worker on its device; ``arrays`` are its map's when shipped (Dask), else made once
-    per worker. One thread: the blocks keep every worker busy."""
+    per worker; ``progress``, where its chain sweeps are written as it makes them. One thread: the blocks keep every
+    worker busy."""
     began, wall_clock = time.perf_counter(), time.time()
     if arrays is None:
         arrays = _map_arrays(task.inputs, config.model.topics)
     seconds = {"began": wall_clock, "reading": time.perf_counter() - began}
-    runs = label_block(task.runs, task.inputs, arrays, config, device=task.device, clock=seconds)
+    runs = label_block(
+        task.runs, task.inputs, arrays, config, device=task.device, clock=seconds, on_sweep=SweepCounter(progress),
+    )
     return LabelledBlock(runs, seconds)

@@ -211,14 +211,17 @@ class FrozenChains:
         self._keys = self._keys[index]
         self._engine.keep(index, self._keys)
 
-    def sweep(self, sweeps: int) -> None:
-        """``sweeps`` Gibbs sweeps of every chain over every word, cells in colour order (:func:`sweep_order`)."""
+    def sweep(self, sweeps: int, on_sweep=None) -> None:
+        """``sweeps`` Gibbs sweeps of every chain over every word, cells in colour order (:func:`sweep_order`);
+        ``on_sweep(chains)`` after each, for a display of progress."""
         self._started("sweep")
         sweeps = check_int("sweeps", sweeps, 0)
         n_cells = self._table.shape[0]
         for _ in range(sweeps):
             self._engine.sweep(np.uint64(n_cells + self._sweeps))
             self._sweeps += 1
+            if on_sweep is not None:
+                on_sweep(self._n)
 
     def topics(self) -> np.ndarray:
         """(N, R) int8: each word's current topic in each chain."""

@@ -22,14 +22,18 @@ def test_a_batch_reference_beside_the_blocks_gives_the_labels_it_gives_before_th
     # 2 runs (4 chains with the checked ones) are one block: with 2 workers it and the batch reference run side by side
     config, folder = small_experiment(own_map, tmp_path / "beside", restarts=1, weight_functions=("random-walk", "lawnmower"))
     shutil.copytree(folder, tmp_path / "before" / "grid")
-    stages = []
-    label_experiment(config, folder, cache_dir=tmp_path / "beside" / "cache", jobs=2, on_stage=lambda *s: stages.append(s))
-    assert stages == [("labelling runs beside the batch reference of own", 3)]
+    stages, done = [], []
+    label_experiment(config, folder, cache_dir=tmp_path / "beside" / "cache", jobs=2, on_stage=lambda *s: stages.append(s),
+                     on_done=lambda: done.append(1))
+    # the block's chain sweeps (its profile's) and the batch reference's own sweeps, each counted once
+    sweeps = sum(b["chain_sweeps"] for b in json.loads((folder / "label_profile.json").read_text())["blocks"])
+    assert stages == [("labelling runs beside the batch reference of own (chain sweeps)", sweeps + config.label.batch_sweeps)]
+    assert len(done) == sweeps + config.label.batch_sweeps
     profile = json.loads((folder / "label_profile.json").read_text())
     assert list(profile["batches"]) == ["own"] and 0 < profile["batches"]["own"]["written"] <= profile["wall"]
     label_experiment(config, tmp_path / "before" / "grid", cache_dir=tmp_path / "beside" / "cache", jobs=1,
                      on_stage=lambda *s: stages.append(s), reuse=False)
-    assert stages[1:] == [("batch reference own", 8), ("labelling runs", 2)]
+    assert stages[1:] == [("batch reference own", 8), ("labelling runs (chain sweeps)", sweeps)]
     assert label_contents(folder) == label_contents(tmp_path / "before" / "grid")
 
 
@@ -59,7 +63,7 @@ def test_reproduce_computes_the_batch_reference_beside_the_exploration_and_it_is
               on_stage=lambda *stage: stages.append(stage[0]))
     folder = tmp_path / "reproduce" / config.name
     # the label stage found it current: computed neither before its blocks nor beside them
-    assert "labelling runs" in stages and not any("batch reference" in stage for stage in stages)
+    assert "labelling runs (chain sweeps)" in stages and not any("batch reference" in stage for stage in stages)
     assert json.loads((folder / "label_profile.json").read_text())["batches"] == {}
     with np.load(labelled / "batch" / "own.npz") as want, np.load(folder / "batch" / "own.npz") as got:
         for name in ("labels", "word_labels", "log_likelihood"):

@@ -30,13 +30,16 @@ def test_a_device_taking_one_block_at_a_time_gets_every_chain_of_a_map_in_one_bl
     stages = []
     label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=2, chains_per_block=1, reuse=False,
                      on_stage=lambda *s: stages.append(s))
-    assert stages == [("batch reference own", 8), ("labelling runs", 2)]  # a block per run: too many to go beside
+    # a block per run: too many to go beside; the labelling counted in the chain sweeps its profile records
+    blocks = json.loads((folder / "label_profile.json").read_text())["blocks"]
+    assert stages == [("batch reference own", 8), ("labelling runs (chain sweeps)", sum(b["chain_sweeps"] for b in blocks))]
     assert len(json.loads((folder / "label_profile.json").read_text())["blocks"]) == 2
 
     one_block_at_a_time(monkeypatch)  # chains_per_block is the CPU's when its blocks run side by side only
     label_experiment(config, tmp_path / "one" / "grid", cache_dir=tmp_path / "cache", jobs=2, chains_per_block=1,
                      reuse=False, on_stage=lambda *s: stages.append(s))
-    assert stages[2:] == [("labelling runs on one block beside the batch reference of own", 3)]
+    sweeps = sum(b["chain_sweeps"] for b in json.loads((tmp_path / "one" / "grid" / "label_profile.json").read_text())["blocks"])
+    assert stages[2:] == [("labelling runs on one block beside the batch reference of own (chain sweeps)", sweeps + 8)]
     assert len(json.loads((tmp_path / "one" / "grid" / "label_profile.json").read_text())["blocks"]) == 1
     assert label_contents(folder) == label_contents(tmp_path / "one" / "grid")
 
@@ -52,4 +55,4 @@ def test_reproduce_on_a_device_that_frees_the_cores_leaves_the_batch_references_
     reproduce(config, results_dir=tmp_path / "reproduce", cache_dir=tmp_path / "cache", jobs=1, reuse=False,
               on_stage=lambda *stage: stages.append(stage[0]))
     # not beside the exploration, where the label stage would have found it current
-    assert "batch reference own" in stages and "labelling runs on one block" in stages
+    assert "batch reference own" in stages and "labelling runs on one block (chain sweeps)" in stages
