@@ -260,6 +260,7 @@ TABLES = ("mi.csv", "summary.csv", "tests.csv", "effects.csv", "headline.csv", "
 @pytest.mark.slow
 def test_a_reproduction_killed_while_labelling_resumes_to_the_tables_of_an_uninterrupted_one(own_map, tmp_path):
     import os
+    import re
     import signal
     import subprocess
     import sys
@@ -274,7 +275,8 @@ def test_a_reproduction_killed_while_labelling_resumes_to_the_tables_of_an_unint
     whole = subprocess.run([*command, "--results-dir", str(tmp_path / "whole")], capture_output=True, text=True)
     assert whole.returncode == 0, whole.stderr
     # output to a pipe, as nohup or CI take it: a line per stage and its end, and the verdict last
-    assert "labelling runs: 0/40\n" in whole.stderr and "labelling runs: 40/40 in " in whole.stderr
+    (sweeps,) = re.findall(r"labelling runs \(chain sweeps\): 0/(\d+)\n", whole.stderr)
+    assert f"labelling runs (chain sweeps): {sweeps}/{sweeps} in " in whole.stderr
     assert whole.stdout.splitlines()[-1].startswith("  own: topic perplexity ")
 
     killed = tmp_path / "killed" / "grid"
