@@ -84,7 +84,12 @@ class UsageError(ParameterError):
 
     def detail(self, options: dict[str, str]) -> str:
         """The message after ``parameter: ``, each `` `name` `` written ``options[name]`` where it has one."""
-        import re
+        return with_options(self.render()[len(self.parameter) + 2 :], options)
 
-        text = self.render()[len(self.parameter) + 2 :]
-        return re.sub(r"`([a-z_]+)`", lambda m: options.get(m.group(1), m.group(0)), text)
+
+def with_options(text: str, options: dict[str, str]) -> str:
+    """``text`` with each argument it names in backquotes (`` `name` ``) written ``options[name]`` where it has one:
+    a library message in a front end's words."""
+    import re
+
+    return re.sub(r"`([a-z_]+)`", lambda m: options.get(m.group(1), m.group(0)), text)

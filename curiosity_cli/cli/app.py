@@ -7,14 +7,13 @@ from __future__ import annotations
 
 import functools
 import inspect
-import re
 from pathlib import Path
 
 import typer
 from typer.core import TyperGroup
 
 from curiosity_cli import __version__
-from curiosity_cli.errors import CuriosityError, UsageError
+from curiosity_cli.errors import CuriosityError, UsageError, with_options
 
 
 class _ErrorMappingGroup(TyperGroup):
@@ -56,7 +55,7 @@ def _command_line_message(exc: CuriosityError, command) -> str:
     option = flags.get(exc.parameter) if exc.parameter is not None else None
     remedy = f"`curiosity {exc.rerun}{' --force' if exc.force else ''}`" if exc.rerun else None
     # another argument the message names in backquotes, as the command line spells it
-    return re.sub(r"`([a-z_]+)`", lambda m: flags.get(m.group(1), m.group(0)), exc.render(option=option, rerun=remedy))
+    return with_options(exc.render(option=option, rerun=remedy), flags)
 
 
 def _options(command):

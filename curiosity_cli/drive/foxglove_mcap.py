@@ -96,13 +96,14 @@ class FoxgloveMcap:
                 f"its channels hold {found}; expected ROS 2 images (profile ros2) or Foxglove images "
                 f"({FOXGLOVE_COMPRESSED} or {FOXGLOVE_RAW}, encoded as {' or '.join(ENCODINGS)})"
             )
-        self._decoders: dict[str, object] = {}
+        self._decoders: dict[str, tuple] = {}  # schema name -> (its channel's decoder, its schema data)
 
     def messages(self, connections):
         """(connection, log time in ns, serialized data) of each message of ``connections``, in log-time order."""
         wanted = {c.id: c for c in connections}
+        schemas = {s.name: s.data for s in self._reader.get_summary().schemas.values()}
         for c in wanted.values():
-            self._decoders[c.msgtype] = _decoder(self._encodings[c.id])
+            self._decoders[c.msgtype] = (_decoder(self._encodings[c.id]), schemas.get(c.msgtype, b""))
         topics = sorted({c.topic for c in wanted.values()})
         for _, channel, message in self._reader.iter_messages(topics=topics):
             if channel.id in wanted:
@@ -116,9 +117,8 @@ class FoxgloveMcap:
         ValueError
             Bytes that do not decode as ``msgtype`` in its channel's encoding.
         """
-        summary = self._reader.get_summary()
-        schema = next(s.data for s in summary.schemas.values() if s.name == msgtype)
-        message = self._decoders[msgtype](data, msgtype, schema)
+        decode, schema = self._decoders[msgtype]
+        message = decode(data, msgtype, schema)
         if msgtype == FOXGLOVE_POSE:
             pose = message["pose"]
             return SimpleNamespace(

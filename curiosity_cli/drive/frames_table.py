@@ -61,17 +61,10 @@ def frames_table(log: Path):
     """
     import pandas as pd
 
-    from curiosity_cli.drive.jsonlines import read_records
-    from curiosity_cli.errors import CuriosityError
-    from curiosity_cli.files import display_path
+    from curiosity_cli.drive.jsonlines import frame_records
 
     rows = []
-    for record in read_records(Path(log)):
-        if record.get("event") != "frame":
-            continue
-        missing = [k for k in ("frame", "time_ns", "perplexity", "scores", "words", "target", "command") if k not in record]
-        if missing:
-            raise CuriosityError(f"{display_path(Path(log))}: line {record['_line']}: a frame record without {missing[0]!r}")
+    for record in frame_records(Path(log), ("frame", "time_ns", "perplexity", "scores", "words", "target", "command")):
         pose = record.get("pose") or {}
         command = record["command"]
         rows.append({

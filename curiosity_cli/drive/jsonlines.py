@@ -67,3 +67,23 @@ def read_records(log: Path) -> list[dict]:
             raise CuriosityError(f"{display_path(log)}: line {number}: expected a JSON object, got {type(record).__name__}")
         records.append({**record, "_line": number})
     return records
+
+
+def frame_records(log: Path, fields: tuple[str, ...], keep=lambda record: True) -> list[dict]:
+    """The ``frame`` records of a drive's log that ``keep`` takes, each checked to hold ``fields``
+    (:func:`read_records`).
+
+    Raises
+    ------
+    CuriosityError
+        As :func:`read_records`; a frame record without one of ``fields``, naming its line and the field.
+    """
+    from curiosity_cli.errors import CuriosityError
+    from curiosity_cli.files import display_path
+
+    records = [r for r in read_records(Path(log)) if r.get("event") == "frame" and keep(r)]
+    for record in records:
+        missing = [k for k in fields if k not in record]
+        if missing:
+            raise CuriosityError(f"{display_path(Path(log))}: line {record['_line']}: a frame record without {missing[0]!r}")
+    return records

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.drive.jsonlines import read_records
+from curiosity_cli.drive.jsonlines import frame_records
 from curiosity_cli.files import atomic_path
 
 #: Thumbnails on the timeline: at most this many surprising frames, the highest, at least a share of the mission apart.
@@ -63,11 +63,7 @@ def surprise_series(log: Path, clock: str = "bag") -> dict:
     from curiosity_cli.errors import CuriosityError
     from curiosity_cli.files import display_path
 
-    records = [r for r in read_records(Path(log)) if r.get("event") == "frame" and "bag_time" in r]
-    for r in records:
-        missing = [k for k in ("frame", "perplexity", "scores", "words") if k not in r]
-        if missing:
-            raise CuriosityError(f"{display_path(Path(log))}: line {r['_line']}: a frame record without {missing[0]!r}")
+    records = frame_records(Path(log), ("frame", "perplexity", "scores", "words"), keep=lambda r: "bag_time" in r)
     headers = all(CLOCKS["header"] in r for r in records)
     if clock == "header" and not headers:
         raise CuriosityError(f"{display_path(Path(log))}: its frames have no header stamps; use the bag's clock")

@@ -117,15 +117,15 @@ def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Poo
 
     tables, steering, mechanism = [], [], []
     for folder in folders:
-        mi = _read(ExperimentFolder(folder).table("mi"))
+        mi = read_table(ExperimentFolder(folder).table("mi"))
         if "replicate" not in mi or mi["replicate"].nunique() != 1:
             raise EvaluationError(
                 f"{display_path(ExperimentFolder(folder).table('mi'))}: replicate: expected one seed per experiment; "
                 f"{RERUN} makes the table again", rerun="evaluate", force=False,
             )
         tables.append(mi)
-        steering.append(_read(ExperimentFolder(folder).table("steering")))
-        mechanism.append(_read(ExperimentFolder(folder).table("mechanism")))
+        steering.append(read_table(ExperimentFolder(folder).table("steering")))
+        mechanism.append(read_table(ExperimentFolder(folder).table("mechanism")))
     seeds = [int(mi["replicate"].iloc[0]) for mi in tables]
     if len(set(seeds)) != len(seeds):
         raise EvaluationError(f"seeds {seeds}: two experiments of the same seed cannot be pooled as replicates")
@@ -145,8 +145,3 @@ def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Poo
         top, batch, effects, summarise_revisits(mi), tuple(sorted(seeds)), summarise_steering(steering),
         summarise_mechanism(mechanism),
     )
-
-
-def _read(path: Path):
-    """An evaluation table, or an error naming it and the stage that makes it."""
-    return read_table(path)
