@@ -13,6 +13,7 @@ from test_sweep import sweep, tiny_yaml
 
 from curiosity_cli.config import CONFIG_DIR
 from curiosity_cli.evaluate.comparisons import next_best_interval, next_best_null, ratio_interval
+from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm
 from curiosity_cli.study.specifications import declared_specifications
 from curiosity_cli.study.sweep import declared_sweeps, parse_sweeps, plan_sweep
 from curiosity_cli.study.types import Specification
@@ -114,6 +115,11 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
         assert (row["null_median"], row["null_low"], row["null_high"], row["null_p"]) == pytest.approx(
             (null.median, null.low, null.high, null.p_value)
         )
+        strict = next_best_null(ours, rest, exchangeable=pairs.columns.drop("topic-perplexity") != "random-walk")
+        assert (row["null_no_rw_median"], row["null_no_rw_p"]) == pytest.approx((strict.median, strict.p_value))
+        # the lead's p: the largest Wilcoxon p against each walker, 1 where a walker's mean is not below
+        p_each = max(stats.wilcoxon(ours, pairs[w]).pvalue for w in others.index)
+        assert row["p_each"] == pytest.approx(p_each if (means["topic-perplexity"] > others).all() else 1.0)
         assert row["paper_ratio"] == 1.51 and row["paper_inside"] == (low <= 1.51 <= high)
         for walker in ("random-walk", "stochastic-coverage"):  # each walker compared alone, by its own pairs
             assert row[f"ratio_{walker}"] == pytest.approx(means["topic-perplexity"] / means[walker])
@@ -138,12 +144,19 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
         assert (
             f"| `{row['specification']}` | own | {row['ratio_random-walk']:.2f} [" in report
             and f"| {row['ratio']:.2f} [{row['ratio_ci_low']:.2f}, {row['ratio_ci_high']:.2f}] ({next_best}) | "
-            f"{row['null_median']:.2f} [" in report
+            f"{row['null_no_rw_median']:.2f} [" in report
         )
+    # corrected over the curve's two points
+    assert table["p_each_holm"].to_numpy() == pytest.approx(holm(table["p_each"].to_numpy()))
+    assert table["null_no_rw_p_bh"].to_numpy() == pytest.approx(benjamini_hochberg(table["null_no_rw_p"].to_numpy()))
+    # the study ran no word perplexity: no point has every paper walker, so no joint test
+    assert table["p_each_wy"].isna().all()
+    assert "No point has every walker's runs: no joint test." in report
     inside = int(table["paper_inside"].sum())
-    assert "leads every other walker at p < 0.05" in report and "in 0 of 2 on own: 0 of 2 specification-map pairs" in report
-    assert f"the paper's ratio lies inside the 95 % interval in {inside} of 2 on own (Montreal1: 1.51)" in report
-    assert "Against its null reference (the walkers' labels permuted within each restart), the ratio to the next best has p" in report
+    assert "leads every other walker (a higher mean MI at 80 steps" in report and "in **0 of 2** points" in report
+    assert "Uncorrected, which is exploratory, in 0 of 2 (0 of 2 on own)" in report
+    assert f"The paper's ratio lies inside the 95 % interval in {inside} of 2 on own (Montreal1: 1.51)" in report
+    assert "Against its null reference (topic perplexity exchangeable with the walkers that could equal it)" in report
     assert report.index("## Does surprise point at what is new?") < report.index("### Against Z_b")
     assert (folder / "mechanism.png").stat().st_size > 1000
 

@@ -25,8 +25,10 @@ about 0.95-0.98 and it is below 1 in about three draws out of four. So it comes 
   observed one. Permuting every walker tests "no walker differs"; when one walker is
   somewhat worse than the others and topic perplexity equals the best, that p is a
   little small (``scripts/null_reference.py``, 10 pairs: below 0.05 in 9.0 % of draws
-  with one walker 10 % worse, 6.5 % with 20 %, 1.6 % with 50 %); the per-walker tests,
-  not this p, decide a lead.
+  with one walker 10 % worse, 6.5 % with 20 %, 1.6 % with 50 %). So the reports read it
+  with the random walk, far below the others on every map, left out of the permuted
+  walkers (``exchangeable``): "topic perplexity does not differ from the walkers that could
+  equal it". The per-walker tests, not this p, decide a lead.
 
 The interval of a ratio of paired means is a studentized (bootstrap-t) interval of its
 logarithm: with 10 pairs of equal walkers the percentile bootstrap covered the true
@@ -181,13 +183,16 @@ class NullReference:
 
 def next_best_null(
     ours, others, permutations: int = PERMUTATIONS, confidence: float = CONFIDENCE, seed: int = 0,
+    exchangeable=None,
 ) -> NullReference:
     """The null reference of :func:`next_best_ratio`: the walkers' labels permuted within each restart.
 
-    In each permutation every restart's values (topic perplexity's and the others')
-    are shuffled among the walkers independently, topic perplexity takes the first,
-    and the ratio to the next best of the rest is computed again, the next best chosen
-    anew, as on the data.
+    In each permutation every restart's values (topic perplexity's and the exchangeable
+    others') are shuffled among those walkers independently, topic perplexity takes the
+    first, and the ratio to the next best of the rest is computed again, the next best
+    chosen anew, as on the data. A walker left out of the exchangeable set keeps its
+    values (and may still be the next best): the null is then "topic perplexity does not
+    differ from the walkers in the set", not "no walker differs".
 
     Parameters
     ----------
@@ -196,6 +201,8 @@ def next_best_null(
         As :func:`next_best_ratio`.
     permutations : int
         Random permutations, drawn from ``seed``.
+    exchangeable : (m,) bool array_like, optional
+        Which of ``others``' columns are permuted with topic perplexity; default all.
 
     Returns
     -------
@@ -206,7 +213,11 @@ def next_best_null(
     observed = next_best_ratio(ours, others)
     if ours.size < 2 or not np.isfinite(observed):
         return NullReference(np.nan, np.nan, np.nan, np.nan)
-    values = np.column_stack([ours, others])  # (n, m + 1)
+    mask = np.ones(others.shape[1], bool) if exchangeable is None else np.asarray(exchangeable, bool)
+    if mask.shape != (others.shape[1],):
+        raise ValueError(f"exchangeable: got shape {mask.shape}, expected ({others.shape[1]},), a flag per other walker")
+    values = np.column_stack([ours, others[:, mask]])  # (n, e + 1): the exchangeable walkers
+    fixed = others[:, ~mask]
     rng = np.random.default_rng(seed)
     ratios = np.empty(permutations)
     chunk = max(1, 2_000_000 // values.size)  # permutations per batch: bounded memory
@@ -214,7 +225,8 @@ def next_best_null(
         count = min(chunk, permutations - start)
         order = np.argsort(rng.random((count, *values.shape)), axis=-1)
         shuffled = np.take_along_axis(np.broadcast_to(values, order.shape), order, axis=-1)
-        ratios[start:start + count] = _next_best_ratios(shuffled[..., 0], shuffled[..., 1:])
+        rest = np.concatenate([shuffled[..., 1:], np.broadcast_to(fixed, (count, *fixed.shape))], axis=-1)
+        ratios[start:start + count] = _next_best_ratios(shuffled[..., 0], rest)
     ratios = ratios[np.isfinite(ratios)]
     if not ratios.size:
         return NullReference(np.nan, np.nan, np.nan, np.nan)

@@ -17,9 +17,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from curiosity_cli.errors import RERUN
-from curiosity_cli.evaluate.statistics import paired_tests, summarise, summarise_revisits, summarise_steering
+from curiosity_cli.evaluate.statistics import paired_blocks, paired_tests, summarise, summarise_revisits, summarise_steering
 from curiosity_cli.evaluate.tables import (
-    EvaluationError, headline, headline_length, paired_effects, read_table, with_uncertainty,
+    EvaluationError, headline, headline_length, paired_effects, read_table, with_adjusted, with_uncertainty,
 )
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.explore.weights import CEILINGS
@@ -53,6 +53,11 @@ class Pooled:
         :func:`~curiosity_cli.evaluate.tables.summarise_steering` over every run's ``steering.csv``.
     mechanism : pandas.DataFrame
         :func:`~curiosity_cli.evaluate.mechanism.summarise_mechanism` over every run's ``mechanism.csv``.
+    blocks : dict
+        The pooled MI itself, for tests that redraw it (a study's joint null,
+        :mod:`~curiosity_cli.evaluate.joint_null`): per (against, dataset, path length), a
+        row per (``replicate``, ``restart``) and a column per walker
+        (:func:`~curiosity_cli.evaluate.statistics.paired_blocks`).
     """
 
     headline: pd.DataFrame
@@ -62,6 +67,7 @@ class Pooled:
     seeds: tuple[int, ...]
     steering: pd.DataFrame
     mechanism: pd.DataFrame
+    blocks: dict
 
     def versus(self, dataset: str, against: str) -> pd.DataFrame:
         """Topic perplexity against each other walker on ``dataset`` at the headline's length
@@ -139,9 +145,11 @@ def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Poo
     tests = paired_tests(mi)
     paper_maps = Experiment.open(folders[0]).paper_maps()
     summary, effects = summarise(mi), paired_effects(mi, tests)
-    top = with_uncertainty(headline(summary, tests, paper_maps, effects), mi)
-    batch = with_uncertainty(headline(summary, tests, paper_maps, effects, against="batch"), mi)
+    top = with_adjusted(with_uncertainty(headline(summary, tests, paper_maps, effects), mi))
+    batch = with_adjusted(with_uncertainty(headline(summary, tests, paper_maps, effects, against="batch"), mi))
     return Pooled(
         top, batch, effects, summarise_revisits(mi), tuple(sorted(seeds)), summarise_steering(steering),
         summarise_mechanism(mechanism),
+        {(against, dataset, length): block.droplevel(["dataset", "path_length"])
+         for against, dataset, length, block in paired_blocks(mi)},
     )

@@ -58,8 +58,10 @@ Written under ``results/<experiment>/``:
   ceiling's MI, and the paper's ratio for the map the dataset stands in for (1.51, 1.20
   and 1.05); then how sure the ratio is (:func:`with_uncertainty`): its bootstrap
   interval with the next best chosen in every resample, its null reference (median,
-  interval and p with the walkers exchangeable, :mod:`~curiosity_cli.evaluate.comparisons`),
-  the smallest ratio detectable at 80 % power and the pairs a 10 % lead would need.
+  interval and p with the walkers exchangeable, and with the random walk left out of them,
+  :mod:`~curiosity_cli.evaluate.comparisons`), the smallest ratio detectable at 80 % power
+  and the pairs a 10 % lead would need; and the p of the lead and of the null reference
+  adjusted for the number of maps (:func:`with_adjusted`).
 - ``tables.json``: each table's size and SHA-256 and those of every file and map fact the
   tables were made from (:meth:`~curiosity_cli.experiment.experiment.Experiment.record_tables`),
   written last with the others: ``plot`` and the report draw only a set whose record holds.
@@ -88,6 +90,7 @@ from curiosity_cli.evaluate.statistics import (
     ALPHA, KEYS, label_convergence, paired_blocks, paired_difference, paired_tests, summarise, summarise_classes,
     summarise_revisits, wilcoxon_p,
 )
+from curiosity_cli.evaluate.multiplicity import intersection_union_p
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.files import CorruptFileError, atomic_path, display_path, open_npz
 
@@ -502,13 +505,22 @@ EFFECT_COLUMNS = [
 ]
 HEADLINE_COLUMNS = [
     "dataset", "path_length", "against", "topic_perplexity", "next_best", "next_best_mi", "ratio", "mean_difference", "ci_low",
-    "ci_high", "p_value", "pairs", "beats_all", "not_beaten", "best_ceiling", "ceiling_mi", "ceiling_share",
+    "ci_high", "p_value", "pairs", "beats_all", "not_beaten", "p_each", "best_ceiling", "ceiling_mi", "ceiling_share",
     "paper_map", "paper_ratio",
 ]
 #: The columns :func:`with_uncertainty` adds to the headline.
 UNCERTAINTY_COLUMNS = [
-    "ratio_ci_low", "ratio_ci_high", "null_median", "null_low", "null_high", "null_p", "detectable_ratio", "pairs_for_lead",
+    "ratio_ci_low", "ratio_ci_high", "null_median", "null_low", "null_high", "null_p", "null_no_rw_median",
+    "null_no_rw_low", "null_no_rw_high", "null_no_rw_p", "detectable_ratio", "pairs_for_lead",
 ]
+#: The p-values :func:`with_adjusted` corrects for the family of maps (and a study's curve for its points), and the
+#: columns it adds: each one Holm- and Benjamini-Hochberg-adjusted.
+ADJUSTED_P = ("p_each", "null_no_rw_p", "null_p")
+ADJUSTED_COLUMNS = [f"{p}_{method}" for p in ADJUSTED_P for method in ("holm", "bh")]
+#: The walker left out of the stricter null reference's exchangeable set (``null_no_rw_*``): the random walk
+#: ignores eq. 8's coverage and sees about half the cells the others see in 80 steps, so no reading makes it
+#: exchangeable with topic perplexity, and permuting it in puts the null ratios too low (the null p too small).
+NOT_EXCHANGEABLE = "random-walk"
 
 
 def headline(summary, tests, stands_in_for: dict[str, str], effects=None, against: str | None = None):
@@ -523,7 +535,9 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None, agains
     difference to it and its 95 % CI (from ``effects``, NaN without); ``beats_all``:
     topic perplexity's mean is above every other walker's with a paired Wilcoxon p below
     :data:`~curiosity_cli.evaluate.statistics.ALPHA` against each, and ``not_beaten``: the walkers (``;``-separated) for
-    which that fails; the better ceiling, its MI and topic perplexity's share of it (no
+    which that fails; ``p_each``, the p of that lead
+    (:func:`~curiosity_cli.evaluate.multiplicity.intersection_union_p`: ``beats_all`` is ``p_each`` below the level,
+    for one map alone; :func:`with_adjusted` corrects it for the family of maps); the better ceiling, its MI and topic perplexity's share of it (no
     ceiling runs: empty and NaN); and the paper's ratio for the map the dataset stands
     in for (``stands_in_for``: dataset name to paper map name; datasets without one get
     no paper ratio). Ceilings are never the next best.
@@ -549,6 +563,7 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None, agains
         next_best = others.index[0]
         p_values = {o: wilcoxon_p(tests, dataset, length, read, HEADLINE_WEIGHT, o) for o in others.index}
         not_beaten = [o for o in others.index if not (ours > others[o] and p_values[o][0] < ALPHA)]
+        p_each = intersection_union_p(ours, others.to_numpy(), [p_values[o][0] for o in others.index])
         effect = None
         if effects is not None:
             match = effects[
@@ -566,7 +581,7 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None, agains
             "ci_low": effect["ci_low"] if effect is not None else np.nan,
             "ci_high": effect["ci_high"] if effect is not None else np.nan,
             "p_value": p_values[next_best][0], "pairs": p_values[next_best][1],
-            "beats_all": not not_beaten, "not_beaten": ";".join(not_beaten),
+            "beats_all": not not_beaten, "not_beaten": ";".join(not_beaten), "p_each": p_each,
             "best_ceiling": best_ceiling, "ceiling_mi": ceiling_mi,
             "ceiling_share": ours / ceiling_mi if best_ceiling and ceiling_mi > 0 else np.nan,
             "paper_map": paper.name if paper else "", "paper_ratio": paper.headline_ratio if paper else np.nan,
@@ -587,6 +602,10 @@ def with_uncertainty(top, mi):
       reference, the walkers' labels permuted within each restart
       (:func:`~curiosity_cli.evaluate.comparisons.next_best_null`): its median and 95 %
       interval, and the share of permutations at least as high as the observed ratio;
+    - ``null_no_rw_median``, ``null_no_rw_low``, ``null_no_rw_high``, ``null_no_rw_p``: the
+      same with the random walk left out of the permuted walkers
+      (:data:`NOT_EXCHANGEABLE`): "topic perplexity does not differ from the walkers that
+      could equal it", the null the verdicts read;
     - ``detectable_ratio``: the smallest ratio the experiment could have detected at 80 %
       power against the observed next best, and ``pairs_for_lead``: the pairs a 10 % lead
       would need (NaN beyond a million) (:mod:`~curiosity_cli.evaluate.power`).
@@ -602,6 +621,7 @@ def with_uncertainty(top, mi):
         ours, others = complete[HEADLINE_WEIGHT].to_numpy(), complete.drop(columns=HEADLINE_WEIGHT).to_numpy()
         low, high = next_best_interval(ours, others)
         null = next_best_null(ours, others)
+        strict = next_best_null(ours, others, exchangeable=complete.columns.drop(HEADLINE_WEIGHT) != NOT_EXCHANGEABLE)
         pair = block[[HEADLINE_WEIGHT, row.next_best]].dropna().to_numpy()
         ours_nb, theirs = pair[:, 0], pair[:, 1]
         sd = float(np.std(ours_nb - theirs, ddof=1)) if len(pair) > 1 else np.nan
@@ -609,13 +629,35 @@ def with_uncertainty(top, mi):
         needed = pairs_needed(TARGET_LEAD * baseline, sd)
         values = {
             "ratio_ci_low": low, "ratio_ci_high": high, "null_median": null.median, "null_low": null.low,
-            "null_high": null.high, "null_p": null.p_value,
+            "null_high": null.high, "null_p": null.p_value, "null_no_rw_median": strict.median,
+            "null_no_rw_low": strict.low, "null_no_rw_high": strict.high, "null_no_rw_p": strict.p_value,
             "detectable_ratio": 1 + detectable_difference(sd, len(pair)) / baseline if baseline > 0 else np.nan,
             "pairs_for_lead": np.nan if needed is None else needed,
         }
         for name in UNCERTAINTY_COLUMNS:
             columns[name].append(values[name])
     return top.assign(**columns)
+
+
+def with_adjusted(top):
+    """``top`` (:func:`with_uncertainty`) with :data:`ADJUSTED_P` corrected for its family of maps.
+
+    Each of ``p_each``, ``null_no_rw_p`` and ``null_p`` gains its Holm (``_holm``) and
+    Benjamini-Hochberg (``_bh``) adjusted value over the rows measured against the same
+    labels (:mod:`~curiosity_cli.evaluate.multiplicity`): an experiment on five maps asks
+    five questions, and "leads on one of them" needs the adjusted p.
+    """
+    from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm
+
+    top = top.copy()
+    for column in ADJUSTED_COLUMNS:
+        top[column] = np.nan
+    for _, rows in top.groupby("against", sort=False):
+        for p in ADJUSTED_P:
+            values = rows[p].to_numpy(float)
+            top.loc[rows.index, f"{p}_holm"] = holm(values)
+            top.loc[rows.index, f"{p}_bh"] = benjamini_hochberg(values)
+    return top
 
 
 def read_class_names(config: ExperimentConfig) -> dict[str, dict[int, str]]:
@@ -730,7 +772,7 @@ def evaluate_experiment(folder: Path, *, partial: bool = False, cache_dir: Path 
         tests = paired_tests(mi)
         effects = paired_effects(mi, tests)
         maps = read_maps(folder)
-        top = with_uncertainty(headline(summary, tests, experiment.paper_maps(), effects), mi)
+        top = with_adjusted(with_uncertainty(headline(summary, tests, experiment.paper_maps(), effects), mi))
         revisits = summarise_revisits(mi)
         convergence = label_convergence(mi)
         tables = {
@@ -784,7 +826,8 @@ def read_evaluation(experiment: Experiment) -> Evaluation:
         raise EvaluationError(f"{display_path(layout.skipped)}: cannot read it ({exc}); {RERUN} makes it again",
                               rerun="evaluate", force=False) from None
     return Evaluation(
-        read("mi"), read("summary"), read("tests"), read("headline"), skipped, read_maps(layout.root), read("effects"),
+        read("mi"), read("summary"), read("tests"),
+        read_table(layout.table("headline"), [*HEADLINE_COLUMNS, *UNCERTAINTY_COLUMNS, *ADJUSTED_COLUMNS]), skipped, read_maps(layout.root), read("effects"),
         read("classes"), read("classes_summary"), read("convergence"), read("revisits"), read("steering"),
         read("mechanism"),
     )

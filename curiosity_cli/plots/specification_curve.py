@@ -4,8 +4,10 @@ Top: one point per specification and map, topic perplexity's ratio at 80 steps t
 next best walker with its 95 % interval, sorted by ratio
 (:func:`curiosity_cli.evaluate.specification_curve.curve_table`), coloured by map; behind
 each, in grey, its null reference: the 95 % band and the median (a dash) of the ratio
-when the walkers are exchangeable, where "no difference" lies; a filled point where
-topic perplexity leads every other walker at p < 0.05 (each compared alone), a hollow
+when topic perplexity is exchangeable with the walkers that could equal it (the random
+walk left out), where "no difference" lies; a filled point where topic perplexity leads
+every other walker (each compared alone) after correcting for every point of the curve
+(Holm), a tinted one where it does only uncorrected (p < 0.05 against each), a hollow
 one elsewhere; the paper's ratio of each paper map our maps stand in for as a dashed
 line named by it, and 1 in grey. Below, aligned with the points, a panel of dots: a
 row per map and per value of each varied key, a dot where the point's specification used it.
@@ -16,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+from curiosity_cli.evaluate.statistics import ALPHA
 from curiosity_cli.plots.figures import figure_style, save_figure
 
 #: Points up to which the specifications are named under the dot panel.
@@ -33,7 +36,7 @@ def specification_curve_figure(
     table : pandas.DataFrame
         :func:`~curiosity_cli.evaluate.specification_curve.curve_table`, in its order (its
         ``dataset``, ``ratio``, ``ratio_ci_low``, ``ratio_ci_high``, ``null_median``,
-        ``null_low``, ``null_high``, ``beats_all``, ``paper_map`` and ``paper_ratio``), with a column ``label`` naming each row's
+        ``null_no_rw_low``, ``null_no_rw_high``, ``null_no_rw_median``, ``beats_all``, ``p_each_holm``, ``paper_map`` and ``paper_ratio``), with a column ``label`` naming each row's
         specification.
     choices : mapping of str to mapping of str to str
         Per specification (as ``label`` names it): each varied key and the value it used,
@@ -76,24 +79,34 @@ def specification_curve_figure(
             f"{paper.paper_map} (paper): {paper.paper_ratio:.2f}", (0, paper.paper_ratio), xycoords=("axes fraction", "data"),
             xytext=(4, 2), textcoords="offset points", fontsize=8, color="0.25",
         )
-    null_low, null_high = table["null_low"].to_numpy(float), table["null_high"].to_numpy(float)
+    null_low, null_high = table["null_no_rw_low"].to_numpy(float), table["null_no_rw_high"].to_numpy(float)
     top.bar(x, null_high - null_low, bottom=null_low, width=0.7, color="0.88", zorder=0)
-    top.scatter(x, table["null_median"].to_numpy(float), marker="_", s=60, color="0.45", zorder=1)
+    top.scatter(x, table["null_no_rw_median"].to_numpy(float), marker="_", s=60, color="0.45", zorder=1)
     for dataset in datasets:
         at = (table["dataset"] == dataset).to_numpy()
         ratio = table.loc[at, "ratio"].to_numpy(float)
         low, high = table.loc[at, "ratio_ci_low"].to_numpy(float), table.loc[at, "ratio_ci_high"].to_numpy(float)
         top.errorbar(x[at], ratio, yerr=[ratio - low, high - ratio], fmt="none", ecolor=colours[dataset], elinewidth=1)
-        leads = table.loc[at, "beats_all"].astype(bool).to_numpy()
+        leads = (table.loc[at, "p_each_holm"].to_numpy(float) < ALPHA)
+        uncorrected = table.loc[at, "beats_all"].astype(bool).to_numpy() & ~leads
+        neither = ~(leads | uncorrected)
         top.scatter(x[at][leads], ratio[leads], color=colours[dataset], s=26, zorder=3)
-        top.scatter(x[at][~leads], ratio[~leads], facecolor="white", edgecolor=colours[dataset], s=26, zorder=3)
+        top.scatter(
+            x[at][uncorrected], ratio[uncorrected], facecolor=(*colours[dataset][:3], 0.3), edgecolor=colours[dataset],
+            s=26, zorder=3,
+        )
+        top.scatter(x[at][neither], ratio[neither], facecolor="white", edgecolor=colours[dataset], s=26, zorder=3)
     top.set_ylabel(f"MI ratio at 80 steps ({against}):\ntopic perplexity / next best")
     top.grid(True, axis="y", color="0.92")
     handles = [Line2D([], [], color=colours[d], marker="o", linestyle="", label=d) for d in datasets]
     handles += [
-        Patch(color="0.88", label="no difference: the ratio's 95 % null band, median dashed"),
+        Patch(color="0.88", label="no difference (random walk left out): 95 % null band, median dashed"),
         Line2D([], [], color="0.25", linestyle="--", label="the paper's ratio of the map ours stand in for"),
-        Line2D([], [], color="0.3", marker="o", linestyle="", label="leads each walker, p < 0.05"),
+        Line2D([], [], color="0.3", marker="o", linestyle="", label="leads each walker, Holm p < 0.05 over the curve"),
+        Line2D(
+            [], [], markeredgecolor="0.3", markerfacecolor=(0.3, 0.3, 0.3, 0.3), marker="o", linestyle="",
+            label="leads each walker uncorrected only",
+        ),
         Line2D([], [], markeredgecolor="0.3", markerfacecolor="white", marker="o", linestyle="", label="does not"),
     ]
     fig.legend(handles=handles, loc="outside lower center", fontsize=8, frameon=False, ncols=min(len(handles), 3))

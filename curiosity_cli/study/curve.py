@@ -28,9 +28,12 @@ if TYPE_CHECKING:
     from curiosity_cli.config import ExperimentConfig
 
 
-#: The table and the figure of a study's curve, in its sweep folder: MI against human labels, and against Z_b.
-TABLE, FIGURE = "specifications.csv", "specification-curve"
-BATCH_TABLE, BATCH_FIGURE = "specifications-batch.csv", "specification-curve-batch"
+#: The table, the joint tests and the figure of a study's curve, in its sweep folder: MI against human labels,
+#: and against Z_b.
+TABLE, JOINT_TABLE, FIGURE = "specifications.csv", "specifications-joint.csv", "specification-curve"
+BATCH_TABLE, BATCH_JOINT_TABLE, BATCH_FIGURE = (
+    "specifications-batch.csv", "specifications-joint-batch.csv", "specification-curve-batch",
+)
 
 
 #: The mechanism's figure (SWEEP.md's "Does surprise point at what is new?").
@@ -56,7 +59,7 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
     list of str
         Markdown lines.
     """
-    from curiosity_cli.evaluate.specification_curve import VERSUS, curve_sentence, curve_table
+    from curiosity_cli.evaluate.specification_curve import VERSUS, curve_sentence, curve_table, joint_lines
     from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
     from curiosity_cli.plots.specification_curve import write_specification_curve
 
@@ -75,22 +78,33 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
         f"restart of the same seed), MI at {HEADLINE_LENGTH} steps. **The decision** compares topic perplexity with "
         f"each of the paper's other walkers ({versus}), named before anything ran: the ratio of mean MI with its "
         "95 % studentized bootstrap interval and the paired Wilcoxon p against each; it *leads* only where its "
-        "mean is higher and p < 0.05 against every one. **The curve** shows a summary: the ratio to the next best "
+        "mean is higher and p < 0.05 against every one (its p, `p_each`, is the largest of the three), and a point "
+        "*leads* only where that p stays below 0.05 after correcting for every point of the curve (Holm; "
+        "uncorrected leads are exploratory). **The curve** shows a summary: the ratio to the next best "
         "of them, chosen after seeing the data and so biased toward \"no lead\", with its 95 % bootstrap interval "
         "(the next best chosen again in each resample) and, in grey behind each point, its **null reference**: "
-        "where the ratio lies when the walkers do not differ (their labels permuted within each restart; band: "
-        "95 %, dash: median), with the share of permutations at least as high as the observed ratio (`null p`). "
-        "Dashed, the paper's ratio for the map each stands in for; filled, the points that lead. Below the curve, "
-        "the value of each varied key each specification used (Simonsohn, Simmons & Nelson's specification-curve "
-        f"analysis). The tables are `{TABLE}` (human labels) and `{BATCH_TABLE}` (Z_b).",
+        "where the ratio lies when topic perplexity does not differ from the walkers that could equal it (their "
+        "labels permuted within each restart, the random walk left out: it sees about half the cells, so no "
+        "reading makes it exchangeable, and permuting it in puts the null too low; band: 95 %, dash: median), with "
+        "the share of permutations at least as high as the observed ratio (`null p`). Dashed, the paper's ratio "
+        "for the map each stands in for; filled, the points that lead after correction; tinted, those that lead "
+        "uncorrected only. Below the curve, the value of each varied key each specification used (Simonsohn, "
+        "Simmons & Nelson's specification-curve analysis). **The joint test** asks whether the curve as a whole "
+        "shows more than no difference gives: its points' counts and median against their distribution when each "
+        "restart's walkers are permuted once for every specification, so that runs the specifications share stay "
+        f"shared. The tables are `{TABLE}` and `{JOINT_TABLE}` (human labels), `{BATCH_TABLE}` and "
+        f"`{BATCH_JOINT_TABLE}` (Z_b).",
         "",
     ]
-    for against, table_name, figure, words in (
-        ("human", TABLE, FIGURE, "human labels"), ("batch", BATCH_TABLE, BATCH_FIGURE, "Z_b"),
+    for against, table_name, joint_name, figure, words in (
+        ("human", TABLE, JOINT_TABLE, FIGURE, "human labels"),
+        ("batch", BATCH_TABLE, BATCH_JOINT_TABLE, BATCH_FIGURE, "Z_b"),
     ):
-        table = curve_table([(t.values, t.pooled) for t in pooled], against=against)
+        table, joint = curve_table([(t.values, t.pooled) for t in pooled], against=against)
         with atomic_path(folder / table_name) as tmp:
             table.to_csv(tmp, index=False)
+        with atomic_path(folder / joint_name) as tmp:
+            joint.to_csv(tmp, index=False)
         if against == "batch":
             lines += [
                 "### Against Z_b", "",
@@ -100,7 +114,7 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
             table = table.assign(label=[", ".join(map(str, v)) for v in table[names].itertuples(index=False)])
             write_specification_curve(table, choices, folder / figure, label="label", datasets=datasets, against=words)
             lines += [f"![specification curve, MI against {words}]({figure}.png)", ""]
-        lines += _curve_rows(table, names) + ["", curve_sentence(table), ""]
+        lines += _curve_rows(table, names) + ["", curve_sentence(table), ""] + joint_lines(joint)
         if against == "human":
             lines += _mechanism_section(table, names, folder, datasets)
     lines += [f"- `{', '.join(t.values.values())}`: not pooled: {t.error}" for t in treatments if t.pooled is None]
@@ -151,7 +165,7 @@ def _mechanism_section(table, names: list[str], folder: Path, datasets: list[str
 
 def _curve_rows(table, names: list[str]) -> list[str]:
     """The curve's points as a Markdown table: each walker compared alone, then the next-best summary."""
-    from curiosity_cli.evaluate.specification_curve import STEERING_WALKER, VERSUS
+    from curiosity_cli.evaluate.specification_curve import STEERING_WALKER, VERSUS, lead_word
     from curiosity_cli.evaluate.report import number, p_text
 
     def versus(r: dict, walker: str) -> str:
@@ -160,7 +174,8 @@ def _curve_rows(table, names: list[str]) -> list[str]:
 
     lines = [
         "| # | " + " | ".join(names) + " | map | " + " | ".join(f"vs {w}" for w in VERSUS)
-        + " | leads each | next best: ratio [95 % CI] | null: median [95 %], p | paper's ratio | pairs "
+        + " | leads each: p; Holm, BH, Westfall-Young over the curve | next best: ratio [95 % CI] "
+        "| null (random walk left out): median [95 %], p; Holm, Westfall-Young | paper's ratio | pairs "
         f"| detectable lead | distinct cells: topic perplexity / stochastic coverage | steering: {STEERING_WALKER} |",
         "|---|" + "---|" * len(names) + "---|" * (len(VERSUS) + 9),
     ]
@@ -168,9 +183,11 @@ def _curve_rows(table, names: list[str]) -> list[str]:
         lead = r["detectable_ratio"] - 1
         lines.append("| " + " | ".join([
             str(i), *(f"`{r[k]}`" for k in names), r["dataset"], *(versus(r, w) for w in VERSUS),
-            "yes" if r["beats_all"] else "no",
+            f"{lead_word(r)}: {p_text(r['p_each'])}; {p_text(r['p_each_holm'])}, {p_text(r['p_each_bh'])}, "
+            f"{p_text(r['p_each_wy'])}",
             f"{number(r['ratio'])} [{number(r['ratio_ci_low'])}, {number(r['ratio_ci_high'])}] ({r['next_best']})",
-            f"{number(r['null_median'])} [{number(r['null_low'])}, {number(r['null_high'])}], {p_text(r['null_p'])}",
+            f"{number(r['null_no_rw_median'])} [{number(r['null_no_rw_low'])}, {number(r['null_no_rw_high'])}], "
+            f"{p_text(r['null_no_rw_p'])}; {p_text(r['null_no_rw_p_holm'])}, {p_text(r['null_no_rw_p_wy'])}",
             number(r["paper_ratio"]), str(r["pairs"]), f"{number(100 * lead, 0)} %" if lead == lead else "",
             f"{number(r[f'distinct_{STEERING_WALKER}'], 1)} / {number(r['distinct_stochastic-coverage'], 1)}",
             number(r[f"steering_{STEERING_WALKER}"], 3),

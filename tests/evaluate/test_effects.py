@@ -12,7 +12,7 @@ from scipy import stats
 from curiosity_cli.config import CONFIG_DIR, load_config
 from curiosity_cli.evaluate.report import verdict, write_report
 from curiosity_cli.evaluate.statistics import paired_difference, paired_tests, summarise, summarise_classes
-from curiosity_cli.evaluate.tables import Evaluation, headline, paired_effects, with_uncertainty
+from curiosity_cli.evaluate.tables import Evaluation, headline, paired_effects, with_adjusted, with_uncertainty
 from curiosity_cli.explore.weights import CEILINGS
 
 WALKERS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity", "lawnmower")
@@ -85,7 +85,7 @@ def tables():
     summary, tests = summarise(mi), paired_tests(mi)
     effects = paired_effects(mi, tests)
     top = headline(summary, tests, {"win": "Montreal1", "loss": "SouthBellairs", "unlabelled": "Montreal2"}, effects)
-    return mi, summary, tests, effects, with_uncertainty(top, mi)
+    return mi, summary, tests, effects, with_adjusted(with_uncertainty(top, mi))
 
 
 def test_effects_are_topic_perplexity_minus_each_walker_paired_by_restart_and_leave_ceilings_out():
@@ -123,17 +123,24 @@ def test_the_verdict_of_a_clear_win():
     assert row["ratio_ci_low"] < row["ratio"] < row["ratio_ci_high"] and 1 < row["detectable_ratio"] < row["ratio"]
     # the walkers that do not differ, permuted: the observed ratio is above their median and their p is small
     assert row["null_low"] < row["null_median"] < row["ratio"] and row["null_p"] < 0.05
+    assert row["null_no_rw_low"] < row["null_no_rw_median"] < row["ratio"] and row["null_no_rw_p"] < 0.05
+    # the lead's p over the experiment's two maps with human labels: win's and loss's (1: its mean is not the highest)
+    assert row["p_each"] == pytest.approx(each_p := max(effects.query(
+        "dataset == 'win' and path_length == 80 and against == 'human'")["p_value"]))
+    assert row["p_each_holm"] == pytest.approx(min(1.0, 2 * each_p))
     each = effects[(effects.dataset == "win") & (effects.path_length == 80) & (effects.against == "human")]
     alone = ", ".join(
         f"{r.other} {r.ratio:.2f} (95 % CI {r.ratio_ci_low:.2f} to {r.ratio_ci_high:.2f}), p = {r.p_value:.3f}"
         for r in each.itertuples()
     )
     assert verdict(row, effects) == (
-        f"win: topic perplexity beats every other walker at 80 steps; against each alone, MI ratio {alone}: 0.10 bits "
+        f"win: topic perplexity beats every other walker at 80 steps (p = {each_p:.3f} against each, Holm p = "
+        f"{2 * each_p:.3f} over the experiment's maps); against each alone, MI ratio {alone}: 0.10 bits "
         f"above stochastic-coverage, the next "
         f"best (95 % CI +{low:.2f} to +{high:.2f}), p = 0.002; ratio {row['ratio']:.2f} (95 % CI "
-        f"{row['ratio_ci_low']:.2f} to {row['ratio_ci_high']:.2f}; walkers that do not differ give "
-        f"{row['null_median']:.2f}, 95 % {row['null_low']:.2f} to {row['null_high']:.2f}: null p = {row['null_p']:.2f}) "
+        f"{row['ratio_ci_low']:.2f} to {row['ratio_ci_high']:.2f}; walkers that do not differ (the random walk left "
+        f"out) give {row['null_no_rw_median']:.2f}, 95 % {row['null_no_rw_low']:.2f} to {row['null_no_rw_high']:.2f}: "
+        f"null p = {row['null_no_rw_p']:.2f}) "
         f"against the paper's 1.51 on "
         f"Montreal1. It reaches {100 * row['ceiling_share']:.0f} % of the better ceiling's MI ({CEILINGS[0]}, "
         f"{row['ceiling_mi']:.2f} bits). With 10 pairs it could detect a lead of "
@@ -179,8 +186,10 @@ def test_the_verdict_of_a_map_without_human_labels():
     text = verdict(row)
     assert text.startswith(
         "unlabelled (MI against Z_b: the map has no human labels): topic perplexity beats every other walker at 80 "
-        "steps: 0.10 bits above stochastic-coverage, the next best (95 % CI +"
+        f"steps (p = {row['p_each']:.3f} against each, Holm p = {row['p_each_holm']:.3f} over the experiment's maps): "
+        "0.10 bits above stochastic-coverage, the next best (95 % CI +"
     )
+    assert row["p_each_holm"] == row["p_each"], "the only map measured against Z_b: a family of one"
     assert f"ratio {row['ratio']:.2f} (95 % CI " in text
     assert "against the paper's 1.20 on Montreal2 (against human labels there)." in text
 
@@ -204,7 +213,7 @@ def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
     mi = pd.concat([mi, synthetic_mi().query("dataset == 'loss' and path_length == 40")])
     summary, tests = summarise(mi), paired_tests(mi)
     effects = paired_effects(mi, tests)
-    top = headline(summary, tests, {"win": "Montreal1"}, effects)
+    top = with_adjusted(with_uncertainty(headline(summary, tests, {"win": "Montreal1"}, effects), mi))
     evaluation = Evaluation(mi, summary, tests, top, ["a note"], None, effects, None, summarise_classes(mi))
     config = load_config(CONFIG_DIR / "quick.yaml")
     config = dataclasses.replace(

@@ -16,10 +16,11 @@ def test_points_follow_the_table_and_the_dots_mark_each_rows_map_and_values():
         "ratio": [0.9, 1.0, 1.1, 1.3],
         "ratio_ci_low": [0.8, 0.9, 1.0, 1.2],
         "ratio_ci_high": [1.0, 1.1, 1.2, 1.4],
-        "null_median": [0.96, 0.97, 0.95, 0.96],
-        "null_low": [0.85, 0.88, 0.84, 0.86],
-        "null_high": [1.05, 1.06, 1.04, 1.07],
-        "beats_all": [False, False, False, True],
+        "null_no_rw_median": [0.96, 0.97, 0.95, 0.96],
+        "null_no_rw_low": [0.85, 0.88, 0.84, 0.86],
+        "null_no_rw_high": [1.05, 1.06, 1.04, 1.07],
+        "beats_all": [False, False, True, True],
+        "p_each_holm": [1.0, 1.0, 0.2, 0.01],
         "paper_map": ["Montreal1", "Montreal1", "Montreal2", "Montreal2"],
         "paper_ratio": [1.51, 1.51, 1.20, 1.20],
     })
@@ -40,7 +41,12 @@ def test_points_follow_the_table_and_the_dots_mark_each_rows_map_and_values():
     scatters = [c for c in top.collections if isinstance(c, PathCollection)]
     nulls, points = scatters[0], np.concatenate([c.get_offsets() for c in scatters[1:]])
     assert sorted(map(tuple, points.tolist())) == [(0, 0.9), (1, 1.0), (2, 1.1), (3, 1.3)]
-    # behind each point its null reference: a band from null_low to null_high, the median marked
+    # filled where the lead holds after Holm's correction, tinted where only uncorrected, hollow elsewhere
+    faces = {tuple(xy): tuple(np.round(c.get_facecolor()[0], 2)) for c in scatters[1:] for xy in c.get_offsets().tolist()}
+    assert faces[(3, 1.3)][3] == 1.0 and faces[(3, 1.3)][:3] != (1.0, 1.0, 1.0)
+    assert faces[(2, 1.1)][3] == 0.3
+    assert faces[(0, 0.9)] == faces[(1, 1.0)] == (1.0, 1.0, 1.0, 1.0)
+    # behind each point its null reference (the random walk left out): a band from low to high, the median marked
     assert nulls.get_offsets().tolist() == [[0, 0.96], [1, 0.97], [2, 0.95], [3, 0.96]]
     bands = [(round(b.get_x() + b.get_width() / 2, 6), round(b.get_y(), 6), round(b.get_y() + b.get_height(), 6))
              for b in top.patches]
