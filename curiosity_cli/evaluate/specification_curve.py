@@ -195,7 +195,7 @@ def lead_word(row: Mapping) -> str:
 
 def _points(block) -> str:
     """The rows of a curve table as "specification on map" phrases."""
-    names = [c for c in block.columns if c not in CURVE_COLUMNS]
+    names = list(block.columns[:block.columns.get_loc("dataset")])  # the naming columns come first
     return ", ".join(f"`{', '.join(str(r[n]) for n in names)}` on {r['dataset']}" for r in block.to_dict("records"))
 
 
