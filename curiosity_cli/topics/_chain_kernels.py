@@ -33,6 +33,13 @@ colour 0 in index order, then colour 1, ...). Cells of one colour are never neig
 none of them reads a count another one changes: the GPU kernels
 (``_chain_kernels_cuda.py``) resample all cells of a colour at once and give these
 kernels' bytes.
+
+The sweep keeps every count as an integer and relies on ``ng[c] = ncz[c] + the sum of
+ncz over c's neighbours`` holding between cells (the start kernel makes it so, and every
+cell's pass keeps it): while a cell is resampled only its own words change its
+neighbourhood sum, so the change of ``ng[c]`` over the pass is its own counts' change.
+``scripts/bench_chain_kernel.py`` times the sweep against an earlier commit's, on the
+same inputs, and checks that the two leave the same bytes.
 """
 
 from __future__ import annotations
@@ -40,8 +47,11 @@ from __future__ import annotations
 import numpy as np
 
 from curiosity_cli._numba import njit
-from curiosity_cli.topics._intrinsics import stack_array
+from curiosity_cli.topics._intrinsics import stack_array, stack_table
 from curiosity_cli.topics._rng import below, next_state, stream_start, unit32
+
+#: The most topics :func:`sweep_chains_kernel` holds (its stack tables' rows; ``FrozenChains`` allows K <= 127).
+MAX_TOPICS = 128
 
 
 @njit
@@ -82,11 +92,12 @@ def _count(cell, k, r, ncz, ng, table):
 
 
 @njit
-def _last_positive(phiw, ng, cell, w, r, alpha):
-    """The last topic whose weight is positive in chain ``r`` (the word not in ``ng[cell]``):
-    the draw when rounding left the target at or past the total."""
+def _last_positive(phiw, w, r, counts, alpha):
+    """The last topic whose weight ``phiw[w, k, r] * (float32(counts[k, r]) + alpha)`` is positive in chain ``r``
+    (``counts``: (K, R) neighbourhood sums, the word left out): the draw when rounding left the target at or past
+    the total."""
     k = phiw.shape[1] - 1
-    while k > 0 and phiw[w, k, r] * (np.float32(ng[cell, k, r]) + alpha) <= 0:
+    while k > 0 and phiw[w, k, r] * (np.float32(counts[k, r]) + alpha) <= 0:
         k -= 1
     return k
 
@@ -118,7 +129,7 @@ def start_chain_kernel(r, placed, cells, cell_first, cell_count, words, topics, 
                 while k < n_topics and running[k] <= target:
                     k += 1
                 if k == n_topics:
-                    k = _last_positive(phiw, ng, cell, w, r, alpha)
+                    k = _last_positive(phiw, w, r, ng[cell], alpha)
             else:
                 k = below(bits, n_topics)
             topics[i, r] = k
@@ -130,75 +141,117 @@ def sweep_chains_kernel(cells, cell_first, cell_count, words, topics, phiw, ncz,
     """One Gibbs sweep of every chain over ``cells`` in order, each chain's cell ``c`` from stream ``(counter, c)``.
 
     :class:`~curiosity_cli.topics.chains.FrozenChains` passes the cells colour by colour
-    (module docstring).
+    (module docstring). ``phiw.shape[1]`` (K) must be at most :data:`MAX_TOPICS`.
 
     ``keys`` is a tuple, so the number of chains is known when compiling: the loops over
     chains become vector code, and the per-chain sums live in registers (stack arrays).
-    Each word is taken out of ``ng[cell]`` before its weights and counted at its new
-    topic after the draw (exact leave-one-out); the cell's own counts and its
-    neighbours' sums are brought up to date once, after the cell. The weights are
-    computed twice, once for the total and once for the search, which costs less than
-    keeping them: a stored weight table makes the compiler guard every load against it.
+    A cell's pass works on its own copy of the cell's neighbourhood sums ``ng[cell]``
+    (the only counts it reads: its neighbours are of other colours) in stack tables
+    (:func:`~curiosity_cli.topics._intrinsics.stack_table`): the integers, and beside
+    them each one's factor ``float32(n) + alpha``, brought up to date with each count
+    change, so that a weight is one product of two loads. Each word is taken out of the
+    counts before its weights and counted at its new topic after the draw (exact
+    leave-one-out). One pass over the topics makes the running sums and keeps them;
+    the draw counts, per chain, the sums at or below its target, eight topics at a time,
+    and stops once every chain's sum has passed its target (the sums never decrease).
+    After the cell, :func:`_settle` writes its counts back.
     """
     n_topics = phiw.shape[1]
     n_chains = len(keys)
+    if n_topics > MAX_TOPICS:
+        raise ValueError("more topics than the stack tables hold")
     states = stack_array(keys, np.uint64)
-    old = stack_array(keys, np.int32)
     total = stack_array(keys, np.float32)
     targets = stack_array(keys, np.float32)
-    running = stack_array(keys, np.float32)
     chosen = stack_array(keys, np.int32)
+    counts = stack_table(MAX_TOPICS, keys, np.int32)  # ng[cell], the word being drawn left out
+    factors = stack_table(MAX_TOPICS, keys, np.float32)  # float32(counts) + alpha
+    running = stack_table(MAX_TOPICS, keys, np.float32)  # the running sums of the weights
     for j in range(cells.shape[0]):
         cell = cells[j]
+        for k in range(n_topics):
+            for r in range(n_chains):
+                n = ng[cell, k, r]
+                counts[k, r] = n
+                factors[k, r] = np.float32(n) + alpha
         for r in range(n_chains):
             states[r] = stream_start(keys[r], counter, cell)
         for i in range(cell_first[cell], cell_first[cell] + cell_count[cell]):
             w = words[i]
             for r in range(n_chains):
-                old[r] = topics[i, r]
-                ng[cell, old[r], r] -= 1
+                old = topics[i, r]
+                n = counts[old, r] - 1
+                counts[old, r] = n
+                factors[old, r] = np.float32(n) + alpha
                 total[r] = 0
             for k in range(n_topics):
                 for r in range(n_chains):
-                    total[r] += phiw[w, k, r] * (np.float32(ng[cell, k, r]) + alpha)
+                    total[r] += phiw[w, k, r] * factors[k, r]
+                    running[k, r] = total[r]
             for r in range(n_chains):
                 states[r], bits = next_state(states[r])
                 targets[r] = unit32(bits) * total[r]
-                running[r] = 0
                 chosen[r] = 0
-            # the number of running sums at or below the target is the first topic whose sum exceeds it
-            for k in range(n_topics):
+            _count_at_or_below(running, targets, chosen, n_topics, n_chains)
+            past = 0
+            for r in range(n_chains):
+                past |= np.int32(chosen[r] == n_topics)
+            if past:  # rounding left some target at or past its total
                 for r in range(n_chains):
-                    running[r] += phiw[w, k, r] * (np.float32(ng[cell, k, r]) + alpha)
-                    chosen[r] += np.int32(running[r] <= targets[r])
+                    if chosen[r] == n_topics:
+                        chosen[r] = _last_positive(phiw, w, r, counts, alpha)
+            for r in range(n_chains):
+                topics[i, r] = chosen[r]
             for r in range(n_chains):
                 new = chosen[r]
-                if new == n_topics:  # rounding left the target at or past the total
-                    new = _last_positive(phiw, ng, cell, w, r, alpha)
-                topics[i, r] = new
-                ng[cell, new, r] += 1
-        _settle(cell, ncz, ng, table)
+                n = counts[new, r] + 1
+                counts[new, r] = n
+                factors[new, r] = np.float32(n) + alpha
+        _settle(cell, counts, ncz, ng, table, n_topics, n_chains)
 
 
 @njit(inline="always")
-def _settle(cell, ncz, ng, table):
-    """After a pass over ``cell`` that kept only ``ng[cell]`` current: its own counts are
-    its neighbourhood sum less its neighbours' own counts, and the change goes to every
-    neighbour's sum."""
-    width = table.shape[1]
-    for k in range(ng.shape[1]):
-        for r in range(ng.shape[2]):
-            now = ng[cell, k, r]
-            for j in range(width):
-                d = table[cell, j]
-                if d >= 0:
-                    now -= ncz[d, k, r]
-            change = now - ncz[cell, k, r]
-            ncz[cell, k, r] = now
-            for j in range(width):
-                d = table[cell, j]
-                if d >= 0:
-                    ng[d, k, r] += change
+def _count_at_or_below(running, targets, chosen, n_topics, n_chains):
+    """Add to ``chosen[r]`` the number of ``running[:n_topics, r]`` at or below ``targets[r]``: the first topic
+    whose running sum exceeds the target. Eight topics at a time, stopping once no chain's sum is still at or
+    below its target (the sums never decrease, so none after is); the check also keeps the compiler from
+    turning the loop over topics, instead of the one over chains, into vector code."""
+    below_any = 1
+    k = 0
+    while k + 8 <= n_topics:
+        below_any = 0
+        for q in range(8):
+            for r in range(n_chains):
+                below = np.int32(running[k + q, r] <= targets[r])
+                chosen[r] += below
+                if q == 7:
+                    below_any |= below
+        k += 8
+        if below_any == 0:
+            return
+    while k < n_topics:
+        for r in range(n_chains):
+            chosen[r] += np.int32(running[k, r] <= targets[r])
+        k += 1
+
+
+@njit(inline="always")
+def _settle(cell, counts, ncz, ng, table, n_topics, n_chains):
+    """After a pass over ``cell`` that kept only its copy ``counts`` of ``ng[cell]`` current: the change is the
+    cell's own words' (its neighbours are of other colours, unchanged meanwhile), so it goes to ``ng[cell]``,
+    to the cell's own counts ``ncz[cell]`` and to every neighbour's sum. ``counts`` is left holding the change."""
+    for k in range(n_topics):
+        for r in range(n_chains):
+            change = counts[k, r] - ng[cell, k, r]
+            counts[k, r] = change
+            ng[cell, k, r] += change
+            ncz[cell, k, r] += change
+    for j in range(table.shape[1]):
+        d = table[cell, j]
+        if d >= 0:
+            for k in range(n_topics):
+                for r in range(n_chains):
+                    ng[d, k, r] += counts[k, r]
 
 
 @njit

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from naive import (
-    NaiveModel, count_topics, ml_topics_naive, neighbour_colouring_naive, start_chain_naive, sweep_chain_naive,
+    NaiveModel, count_topics, ml_topics_naive, neighbour_colouring_naive, neighbourhood, start_chain_naive,
+    sweep_chain_naive,
 )
 
 from curiosity_cli.maps.cell_grid import SquareGrid
@@ -27,19 +28,28 @@ def small_map(rows=3, cols=4, seed=0):
     return rng.integers(0, V, cells.size), cells, table
 
 
-def chains_of(words, cells, table, alpha=0.1, beta=0.1) -> FrozenChains:
-    return FrozenChains(words, cells, table, n_topics=K, vocabulary_size=V, alpha=alpha, beta=beta)
+def chains_of(words, cells, table, alpha=0.1, beta=0.1, n_topics=K) -> FrozenChains:
+    return FrozenChains(words, cells, table, n_topics=n_topics, vocabulary_size=V, alpha=alpha, beta=beta)
 
 
 def twin_of(words, cells, table, phi) -> NaiveModel:
     """A frozen twin holding every cell of the table (empty ones too), as the chains do."""
     n_cells = table.shape[0]
     return NaiveModel(
-        n_topics=K, vocabulary_size=V, table=np.asarray(table), alpha=0.1, beta=0.1, key=0, counter=0,
+        n_topics=np.shape(phi)[1], vocabulary_size=V, table=np.asarray(table), alpha=0.1, beta=0.1, key=0, counter=0,
         words={c: words[cells == c].astype(np.int64) for c in range(n_cells)},
         topics={c: np.zeros(np.count_nonzero(cells == c), np.int64) for c in range(n_cells)},
         order=list(range(n_cells)), times=list(range(n_cells)), frozen=np.asarray(phi, np.int64),
     )
+
+
+def twin_swept(words, cells, table, phi, seed, placed, sweeps) -> NaiveModel:
+    """One chain's naive twin after its start and ``sweeps`` sweeps (the chains' streams)."""
+    twin = twin_of(words, cells, table, phi)
+    start_chain_naive(twin, seed, placed)
+    for s in range(sweeps):
+        sweep_chain_naive(twin, table.shape[0] + s)
+    return twin
 
 
 def twin_topics(twin: NaiveModel) -> np.ndarray:
@@ -57,16 +67,31 @@ def test_every_chain_of_a_block_is_its_naive_twin_draw_for_draw():
     chains.sweep(2)
     chains.switch(later)
     chains.sweep(1)
-    n_cells = table.shape[0]
     for r in range(3):
-        twin = twin_of(words, cells, table, phis[r])
-        start_chain_naive(twin, seeds[r], placed[r])
-        sweep_chain_naive(twin, n_cells)
-        sweep_chain_naive(twin, n_cells + 1)
+        twin = twin_swept(words, cells, table, phis[r], seeds[r], placed[r], 2)
         twin.frozen = later[r]
-        sweep_chain_naive(twin, n_cells + 2)
+        sweep_chain_naive(twin, table.shape[0] + 2)
         np.testing.assert_array_equal(chains.topics()[:, r], twin_topics(twin))
         np.testing.assert_array_equal(chains.ml_topics()[:, r], ml_topics_naive(twin, sorted(twin.topics)))
+
+
+@pytest.mark.parametrize("n_topics", [8, 13, 24, 127])
+def test_the_draw_over_many_topics_is_the_twins(n_topics):
+    """The sweep searches the running sums eight topics at a time and stops once every chain is past its
+    target: K a multiple of 8 and not, up to the most the kernel holds, each chain its naive twin's."""
+    words, cells, table = small_map(rows=4, cols=4, seed=n_topics)
+    rng = np.random.default_rng(n_topics)
+    # a few heavy topics per word and many light ones, so that the chains' draws fall far apart
+    phis = [rng.integers(0, 3, (V, n_topics)) * rng.integers(0, 2, (V, n_topics)) ** 3 * 40 for _ in range(9)]
+    seeds, placed = list(range(40, 49)), [r % 3 == 0 for r in range(9)]
+    chains = chains_of(words, cells, table, n_topics=n_topics)
+    chains.start(phis, seeds, placed)
+    chains.sweep(2)
+    for r in range(9):
+        twin = twin_swept(words, cells, table, phis[r], seeds[r], placed[r], 2)
+        np.testing.assert_array_equal(chains.topics()[:, r], twin_topics(twin))
+        _, _, ncz = count_topics(twin)
+        np.testing.assert_array_equal(chains.counts()[0][:, :, r], ncz)
 
 
 @pytest.mark.parametrize(
@@ -111,6 +136,8 @@ def test_the_counts_follow_the_topics():
             at += n
         _, _, ncz = count_topics(twin)
         np.testing.assert_array_equal(chains.counts()[0][:, :, r], ncz)
+        around = np.array([neighbourhood(twin, ncz, c) for c in range(table.shape[0])])
+        np.testing.assert_array_equal(chains.counts()[1][:, :, r], around)
 
 
 def test_the_uniform_start_is_the_models_restart():
