@@ -5,9 +5,10 @@ differently (another sampler, schedule or version), prints per map, path length 
 target (Z_h, Z_b) the mean MI of each, the mean paired difference (B minus A) with its
 standard error over the runs both have, and whether the difference is within the noise
 of the labelling chains by the rule of the convergence check (within 0.01 bits or twice
-the standard error, :func:`~curiosity_cli.evaluate.tables.within_noise`).
+the standard error, :func:`~curiosity_cli.evaluate.statistics.within_noise`).
 
     python scripts/compare_mi.py results/paper-grid-before results/paper-grid
+    python scripts/compare_mi.py --smoke    # two recorded experiments of studies/multiverse: seconds
 
 Prints and never asserts.
 """
@@ -23,14 +24,22 @@ from curiosity_cli.evaluate.statistics import CONVERGENCE_TOLERANCE, within_nois
 from curiosity_cli.experiment.layout import ExperimentFolder
 
 RUN = ["dataset", "weight_function", "restart", "path_length"]
+#: --smoke's folders: two specifications of a study's record (its tables, as an experiment folder holds them).
+SMOKE = [Path(__file__).resolve().parents[1] / "studies/multiverse/seed-0" / n for n in ("default", "labels-argmax")]
 TARGETS = {"mi_human": "Z_h", "mi_batch": "Z_b"}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("a", type=Path, help="experiment folder A (e.g. the labels before)")
-    parser.add_argument("b", type=Path, help="experiment folder B (e.g. the labels after)")
+    parser.add_argument("a", type=Path, nargs="?", help="experiment folder A (e.g. the labels before)")
+    parser.add_argument("b", type=Path, nargs="?", help="experiment folder B (e.g. the labels after)")
+    parser.add_argument("--smoke", action="store_true",
+                        help="compare two recorded experiments, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.a, args.b = SMOKE
+    elif args.b is None:
+        parser.error("expected two experiment folders, A and B")
     a, b = (pd.read_csv(ExperimentFolder(folder).table("mi")).set_index(RUN) for folder in (args.a, args.b))
     both = a.merge(b, left_index=True, right_index=True, suffixes=("_a", "_b"))
     print(f"{len(both)} run-lengths in both; MI in bits, B minus A: mean ± standard error over runs, "

@@ -22,7 +22,7 @@ from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
 
 if typing.TYPE_CHECKING:
     from curiosity_cli.config import ExperimentConfig
-    from curiosity_cli.evaluate.tables import Evaluation
+    from curiosity_cli.evaluate.stage import Evaluation
     from curiosity_cli.explore.grid import GridSummary
     from curiosity_cli.plots.figures import WrittenFigures
     from curiosity_cli.words.extract import Extraction
@@ -294,8 +294,8 @@ def label(
 def evaluate(folder: Path = DEFAULT_EXPERIMENT, *, partial: bool = False, cache_dir: Path = DEFAULT_CACHE) -> Evaluation:
     """``curiosity evaluate``: MI, statistics and tables of a labelled experiment; ``partial`` leaves out (and
     lists) the runs without usable labels; ``cache_dir`` holds the word stores (the mechanism table reads
-    each cell's words). As :func:`~curiosity_cli.evaluate.tables.evaluate_experiment`."""
-    from curiosity_cli.evaluate.tables import evaluate_experiment
+    each cell's words). As :func:`~curiosity_cli.evaluate.stage.evaluate_experiment`."""
+    from curiosity_cli.evaluate.stage import evaluate_experiment
 
     return evaluate_experiment(
         folder_argument(folder), partial=boolean(partial, "partial"), cache_dir=folder_argument(cache_dir, "cache_dir"),

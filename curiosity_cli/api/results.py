@@ -11,7 +11,7 @@ from curiosity_cli.paths import DEFAULT_RESULTS, experiment_root
 if typing.TYPE_CHECKING:
     import pandas as pd
 
-    from curiosity_cli.evaluate.tables import Evaluation
+    from curiosity_cli.evaluate.stage import Evaluation
     from curiosity_cli.experiment.experiment import Experiment
     from curiosity_cli.explore.runs import Run
 
@@ -136,7 +136,7 @@ def verdict(source: Evaluation | Path | str) -> list[str]:
     from curiosity_cli.errors import CuriosityError
     from curiosity_cli.evaluate.report import read_verdict
     from curiosity_cli.evaluate.report import verdict as map_verdict
-    from curiosity_cli.evaluate.tables import Evaluation
+    from curiosity_cli.evaluate.stage import Evaluation
     from curiosity_cli.files import display_path
 
     if isinstance(source, Evaluation):

@@ -26,7 +26,7 @@ per-point correction):
   of permutations in which the smallest p over the whole curve is at most the point's.
 
 Which walkers are exchangeable is the null's choice: all of them ("no walker differs"),
-or all but :data:`~curiosity_cli.evaluate.tables.NOT_EXCHANGEABLE` ("topic perplexity
+or all but :data:`~curiosity_cli.evaluate.headline.NOT_EXCHANGEABLE` ("topic perplexity
 does not differ from the walkers that could equal it"), whose runs then keep their
 walker. Both are computed; the report reads the second.
 """

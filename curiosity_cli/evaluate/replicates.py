@@ -17,10 +17,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from curiosity_cli.errors import RERUN
+from curiosity_cli.evaluate.headline import headline, headline_length, paired_effects, with_adjusted, with_uncertainty
 from curiosity_cli.evaluate.statistics import paired_blocks, paired_tests, summarise, summarise_revisits, summarise_steering
-from curiosity_cli.evaluate.tables import (
-    EvaluationError, headline, headline_length, paired_effects, read_table, with_adjusted, with_uncertainty,
-)
+from curiosity_cli.evaluate.tables import EvaluationError, read_table
 from curiosity_cli.experiment.experiment import Experiment
 from curiosity_cli.explore.weights import CEILINGS
 from curiosity_cli.experiment.layout import ExperimentFolder
@@ -37,20 +36,20 @@ class Pooled:
     Attributes
     ----------
     headline : pandas.DataFrame
-        :func:`~curiosity_cli.evaluate.tables.headline` with
-        :func:`~curiosity_cli.evaluate.tables.with_uncertainty`'s columns, over every pair:
+        :func:`~curiosity_cli.evaluate.headline.headline` with
+        :func:`~curiosity_cli.evaluate.headline.with_uncertainty`'s columns, over every pair:
         against human labels (against Z_b on a map without them).
     batch_headline : pandas.DataFrame
         The same against Z_b, on every map.
     effects : pandas.DataFrame
-        :func:`~curiosity_cli.evaluate.tables.paired_effects` over every pair: topic
+        :func:`~curiosity_cli.evaluate.headline.paired_effects` over every pair: topic
         perplexity against each other walker.
     revisits : pandas.DataFrame
-        :func:`~curiosity_cli.evaluate.tables.summarise_revisits` over every run.
+        :func:`~curiosity_cli.evaluate.statistics.summarise_revisits` over every run.
     seeds : tuple of int
         The replicates pooled.
     steering : pandas.DataFrame
-        :func:`~curiosity_cli.evaluate.tables.summarise_steering` over every run's ``steering.csv``.
+        :func:`~curiosity_cli.evaluate.statistics.summarise_steering` over every run's ``steering.csv``.
     mechanism : pandas.DataFrame
         :func:`~curiosity_cli.evaluate.mechanism.summarise_mechanism` over every run's ``mechanism.csv``.
     blocks : dict

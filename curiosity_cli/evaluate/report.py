@@ -18,9 +18,10 @@ import numpy as np
 
 from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.config_yaml import to_yaml
+from curiosity_cli.evaluate.headline import HEADLINE_LENGTH, HEADLINE_WEIGHT, headline_length
 from curiosity_cli.evaluate.power import POWER, TARGET_LEAD
 from curiosity_cli.evaluate.statistics import ALPHA, CONFIDENCE, CONVERGENCE_TOLERANCE, smallest_wilcoxon_p
-from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT, Evaluation, headline_length
+from curiosity_cli.evaluate.stage import Evaluation
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT
 from curiosity_cli.explore.weights import CEILINGS, WEIGHT_FUNCTIONS
@@ -79,9 +80,9 @@ def verdict(row: Mapping, effects=None) -> str:
     next best, word-perplexity: 0.02 bits below (95 % CI −0.05 to +0.01), p = 0.48; ratio
     0.95 (...; walkers that do not differ give 0.96, 95 % 0.90 to 1.02: null p = 0.58)
     against the paper's 1.51 on Montreal1.`` "Beats" is
-    :func:`~curiosity_cli.evaluate.tables.headline`'s ``beats_all``: a higher mean than
+    :func:`~curiosity_cli.evaluate.headline.headline`'s ``beats_all``: a higher mean than
     every other walker and a paired Wilcoxon p below 0.05 against each, the walkers
-    compared one by one (``effects``: the rows of :func:`~curiosity_cli.evaluate.tables.paired_effects`;
+    compared one by one (``effects``: the rows of :func:`~curiosity_cli.evaluate.headline.paired_effects`;
     without them, only the next best's numbers are given); the next best's ratio is a
     summary, read against its null reference (:mod:`~curiosity_cli.evaluate.comparisons`).
     """
@@ -284,7 +285,7 @@ def _labelling_note(config: ExperimentConfig) -> list[str]:
 
 
 def _convergence_section(convergence, config: ExperimentConfig) -> list[str]:
-    """The two-start check of Z_p on this experiment's maps (:func:`~curiosity_cli.evaluate.tables.label_convergence`)."""
+    """The two-start check of Z_p on this experiment's maps (:func:`~curiosity_cli.evaluate.statistics.label_convergence`)."""
     lines = ["## Label convergence", ""]
     checked = config.label.check_restarts
     if convergence is None or convergence.empty:
@@ -364,7 +365,7 @@ def _classes_cell(row) -> str:
 
 
 def _class_length(classes_summary) -> int | None:
-    """The length the class tables show: the headline's (:func:`~curiosity_cli.evaluate.tables.headline_length`), else the shortest."""
+    """The length the class tables show: the headline's (:func:`~curiosity_cli.evaluate.headline.headline_length`), else the shortest."""
     if classes_summary is None or classes_summary.empty:
         return None
     present = set(classes_summary["path_length"])

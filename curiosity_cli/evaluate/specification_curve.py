@@ -34,7 +34,7 @@ against human labels (or, as a second curve, against Z_b):
   such a candidate, M3 the chance it put on them beyond stochastic coverage, M5 the share
   of candidates with infinite perplexity (``auc``, ``opportunity``, ``gain``,
   ``infinite_share``; means over the pooled runs). Every number is the pooled headline's
-(:func:`~curiosity_cli.evaluate.tables.headline`, :func:`~curiosity_cli.evaluate.tables.with_power`);
+(:func:`~curiosity_cli.evaluate.headline.headline`, :func:`~curiosity_cli.evaluate.headline.with_uncertainty`);
 this module only puts them in rows, sorted by ratio, and counts.
 """
 
@@ -48,7 +48,7 @@ import numpy as np
 from curiosity_cli.config import PAPER_WALKERS
 from curiosity_cli.evaluate.statistics import ALPHA, CONFIDENCE
 from curiosity_cli.evaluate.joint_null import CurvePoint, joint_null
-from curiosity_cli.evaluate.tables import (
+from curiosity_cli.evaluate.headline import (
     ADJUSTED_COLUMNS, HEADLINE_LENGTH, HEADLINE_WEIGHT, NOT_EXCHANGEABLE, with_adjusted,
 )
 
@@ -72,7 +72,7 @@ def _versus_names(walker: str) -> tuple[str, str, str, str]:
 
 
 #: The p-values of a curve corrected over all its points: Holm and Benjamini-Hochberg
-#: (:data:`~curiosity_cli.evaluate.tables.ADJUSTED_COLUMNS`), and Westfall-Young min-P from the joint null
+#: (:data:`~curiosity_cli.evaluate.headline.ADJUSTED_COLUMNS`), and Westfall-Young min-P from the joint null
 #: (:mod:`~curiosity_cli.evaluate.joint_null`): ``p_each_wy`` and ``null_no_rw_p_wy`` with the random walk left
 #: out of the permuted walkers, the one the curve's verdict reads; ``p_each_wy_all`` and ``null_p_wy`` with all.
 WY_COLUMNS = ("p_each_wy", "null_no_rw_p_wy", "p_each_wy_all", "null_p_wy")
@@ -96,7 +96,7 @@ CURVE_COLUMNS = (
 def curve_table(specifications: Sequence[tuple[Mapping[str, str], Pooled]], against: str = "human"):
     """A row per specification and map, sorted by ratio (module docstring), and the curve's joint tests.
 
-    The adjusted p-values (:data:`~curiosity_cli.evaluate.tables.ADJUSTED_COLUMNS`,
+    The adjusted p-values (:data:`~curiosity_cli.evaluate.headline.ADJUSTED_COLUMNS`,
     :data:`WY_COLUMNS`) are over every point of the curve: its family is the study, not
     one specification's maps.
 

@@ -249,7 +249,8 @@ def _write_report(experiment: Experiment, figures: WrittenFigures) -> Path | Non
     """``REPORT.md`` of the experiment, from its tables, these figures and the seconds its stages took; None,
     with a note among the figures' ``skipped``, where a table of ``evaluate`` is missing."""
     from curiosity_cli.evaluate.report import write_report
-    from curiosity_cli.evaluate.tables import EvaluationError, read_evaluation
+    from curiosity_cli.evaluate.stage import read_evaluation
+    from curiosity_cli.evaluate.tables import EvaluationError
     from curiosity_cli.experiment.stage_seconds import read_stage_seconds
     from curiosity_cli.yamlfile import read_yaml
 

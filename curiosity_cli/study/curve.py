@@ -60,7 +60,7 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
         Markdown lines.
     """
     from curiosity_cli.evaluate.specification_curve import VERSUS, curve_sentence, curve_table, joint_lines
-    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
+    from curiosity_cli.evaluate.headline import HEADLINE_LENGTH
     from curiosity_cli.plots.specification_curve import write_specification_curve
 
     folder = Path(folder)

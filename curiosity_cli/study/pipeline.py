@@ -39,7 +39,7 @@ def reproduce(
     (:func:`~curiosity_cli.label.batch_references.beside_exploration`), not in the label
     stage: the same files, off its critical path.
     """
-    from curiosity_cli.evaluate.tables import evaluate_experiment
+    from curiosity_cli.evaluate.stage import evaluate_experiment
     from curiosity_cli.explore.grid import run_grid
     from curiosity_cli.label.batch_references import beside_exploration
     from curiosity_cli.label.shared_items import SharedItems

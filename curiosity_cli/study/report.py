@@ -24,7 +24,7 @@ from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.study.types import REPLICATE_KEY, Outcome, Sweep, Treatment, count
 
-#: The headline columns, as ``headline.csv`` has them (:func:`curiosity_cli.evaluate.tables.headline`).
+#: The headline columns, as ``headline.csv`` has them (:func:`curiosity_cli.evaluate.headline.headline`).
 HEADLINE_COLUMNS = (
     "dataset", "topic_perplexity", "next_best", "next_best_mi", "ratio", "p_value", "pairs", "paper_map", "paper_ratio",
     "ratio_ci_low", "ratio_ci_high", "detectable_ratio", "pairs_for_lead",
@@ -82,7 +82,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], 
     """
     import pandas as pd
 
-    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH, HEADLINE_WEIGHT
+    from curiosity_cli.evaluate.headline import HEADLINE_LENGTH, HEADLINE_WEIGHT
     from curiosity_cli.study.curve import specification_lead
     from curiosity_cli.study.specifications import study_size
 
@@ -180,7 +180,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], 
 
 
 def _read_revisits(folder: Path):
-    """An experiment's ``revisits.csv`` (:func:`~curiosity_cli.evaluate.tables.summarise_revisits`), or None if absent."""
+    """An experiment's ``revisits.csv`` (:func:`~curiosity_cli.evaluate.statistics.summarise_revisits`), or None if absent."""
     from curiosity_cli.evaluate.tables import read_table
 
     return read_table(ExperimentFolder(folder).table("revisits"), absent=None)
@@ -188,14 +188,14 @@ def _read_revisits(folder: Path):
 
 def _distinct_at_headline(revisits):
     """The rows of ``revisits.csv`` for distinct cells at the headline length."""
-    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
+    from curiosity_cli.evaluate.headline import HEADLINE_LENGTH
 
     return revisits[(revisits["measure"] == "distinct_cells") & (revisits["path_length"] == HEADLINE_LENGTH)]
 
 
 def _distinct_table(revisits) -> list[str]:
     """Mean distinct cells per walker at the headline length, a row per dataset."""
-    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
+    from curiosity_cli.evaluate.headline import HEADLINE_LENGTH
 
     if revisits is None:
         return ["(no revisits.csv: evaluate the experiments again for distinct cells)", ""]
@@ -253,7 +253,7 @@ def _sensitivity(sweep: Sweep, treatments: Sequence[Treatment]) -> tuple[list[st
     values but the seed) and dataset, the headline over every seed's pairs pooled
     (:func:`pool_treatments`), its interval and power, and the distinct cells of
     :data:`DISTINCT_WALKERS`."""
-    from curiosity_cli.evaluate.tables import HEADLINE_LENGTH
+    from curiosity_cli.evaluate.headline import HEADLINE_LENGTH
 
     keys = [key for key in sweep.keys if key != REPLICATE_KEY]
     pooled = REPLICATE_KEY in sweep.keys

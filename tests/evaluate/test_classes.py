@@ -13,7 +13,7 @@ from curiosity_cli.errors import ParameterError
 from curiosity_cli.evaluate.information import classes_found, matched_recall, mean_recall
 from curiosity_cli.label.classes import cell_class_pixels, classes_present, first_steps
 from curiosity_cli.label.label_files import NOT_LABELLED, label_changes, write_labels
-from curiosity_cli.evaluate.tables import run_rows
+from curiosity_cli.evaluate.rows import run_rows
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT, Recipe, label_recipe
 

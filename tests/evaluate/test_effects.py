@@ -10,9 +10,10 @@ import pytest
 from scipy import stats
 
 from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.evaluate.headline import headline, paired_effects, with_adjusted, with_uncertainty
 from curiosity_cli.evaluate.report import verdict, write_report
+from curiosity_cli.evaluate.stage import Evaluation
 from curiosity_cli.evaluate.statistics import paired_difference, paired_tests, summarise, summarise_classes
-from curiosity_cli.evaluate.tables import Evaluation, headline, paired_effects, with_adjusted, with_uncertainty
 from curiosity_cli.explore.weights import CEILINGS
 
 WALKERS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity", "lawnmower")
@@ -88,6 +89,7 @@ def tables():
     return mi, summary, tests, effects, with_adjusted(with_uncertainty(top, mi))
 
 
+@pytest.mark.slow
 def test_effects_are_topic_perplexity_minus_each_walker_paired_by_restart_and_leave_ceilings_out():
     mi, _, tests, effects, _ = tables()
     assert not effects["other"].isin(CEILINGS).any() and not tests[["a", "b"]].isin(CEILINGS).any().any()
@@ -103,6 +105,7 @@ def test_effects_are_topic_perplexity_minus_each_walker_paired_by_restart_and_le
     assert row["p_value"] == pytest.approx(2 / 2**10)
 
 
+@pytest.mark.slow
 def test_the_headline_compares_walkers_only_and_falls_back_to_batch_labels():
     *_, top = tables()
     top = top.set_index("dataset")
@@ -149,6 +152,7 @@ def test_the_verdict_of_a_clear_win():
     )
 
 
+@pytest.mark.slow
 def test_the_verdict_of_a_clear_loss():
     row = {
         "dataset": "zurich-zh17", "path_length": 80, "against": "human", "topic_perplexity": 0.38, "next_best": "word-perplexity",
@@ -180,6 +184,7 @@ def test_the_verdict_of_a_map_that_no_walker_can_gather_mi_on_says_why_the_ratio
     assert "; ratio undefined: random-walk's MI is 0 bits (a map whose human labels hold one class, or whose words " in text
 
 
+@pytest.mark.slow
 def test_the_verdict_of_a_map_without_human_labels():
     *_, top = tables()
     row = top.set_index("dataset").loc["unlabelled"].to_dict() | {"dataset": "unlabelled"}
@@ -207,6 +212,7 @@ def test_a_lead_that_is_not_significant_is_not_a_win():
     )
 
 
+@pytest.mark.slow
 def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
     mi, summary, tests, effects, top = tables()
     mi = mi[mi.dataset != "loss"]  # so that one map's verdict is read at its longest path below 80 steps
@@ -270,7 +276,7 @@ def test_too_few_pairs_for_any_test_to_reach_p_005_are_said_plainly():
 
 def test_a_map_whose_paths_are_all_longer_than_80_steps_has_no_verdict():
     from curiosity_cli.evaluate.report import _no_verdict
-    from curiosity_cli.evaluate.tables import headline_length
+    from curiosity_cli.evaluate.headline import headline_length
 
     assert headline_length([10, 40, 160]) == 40 and headline_length([80, 160]) == 80 and headline_length([160]) is None
     mi = synthetic_mi().query("dataset == 'win' and path_length == 80").assign(path_length=160)

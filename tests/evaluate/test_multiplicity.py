@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm, intersection_union_p
-from curiosity_cli.evaluate.tables import ADJUSTED_COLUMNS, with_adjusted
+from curiosity_cli.evaluate.headline import ADJUSTED_COLUMNS, with_adjusted
 
 
 def test_holm_steps_down_and_keeps_the_order_of_its_input():

@@ -14,7 +14,8 @@ from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
 from curiosity_cli.label.stage import LabelError, label_experiment
-from curiosity_cli.evaluate.tables import EvaluationError, evaluate_experiment
+from curiosity_cli.evaluate.stage import evaluate_experiment
+from curiosity_cli.evaluate.tables import EvaluationError
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import Recipe
 from curiosity_cli.explore.grid import run_grid
@@ -24,6 +25,7 @@ from curiosity_cli.words.store import load_store
 runner = CliRunner()
 
 
+@pytest.mark.slow
 def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     done = label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
@@ -75,6 +77,7 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     assert len(effects) == 2 * 2 * 3 and (effects["ci_low"] <= effects["mean_difference"]).all()
 
 
+@pytest.mark.slow
 def test_the_second_chain_of_a_checked_run_leaves_its_labels_as_they_were(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
@@ -97,6 +100,7 @@ def test_the_second_chain_of_a_checked_run_leaves_its_labels_as_they_were(own_ma
     assert not np.array_equal(checked["placed_batch"], checked["batch"])
 
 
+@pytest.mark.slow
 def test_labels_record_the_classes_each_path_found(own_map, tmp_path):
     # own_map: class 0 ("sand") in the left 4 of the 8 cell columns, class 1 ("rock") in the right 4
     config, folder = small_experiment(own_map, tmp_path)
@@ -122,6 +126,7 @@ def test_labels_record_the_classes_each_path_found(own_map, tmp_path):
     assert set(summary["measure"]) == {"classes_found", "mean_recall"} and (summary["classes"] == 2).all()
 
 
+@pytest.mark.slow
 def test_a_corrupt_label_file_is_reported_and_left_out(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     label_experiment(config, tmp_path / config.name, cache_dir=tmp_path / "cache", jobs=1)
@@ -132,6 +137,7 @@ def test_a_corrupt_label_file_is_reported_and_left_out(own_map, tmp_path):
     assert json.loads((folder / "skipped.json").read_text()) == evaluation.skipped
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("table", ["batch", "placed_batch"])
 def test_a_label_file_with_a_table_short_of_its_lengths_is_reported_and_left_out(own_map, tmp_path, table):
     config, folder = small_experiment(own_map, tmp_path)
@@ -180,7 +186,7 @@ def test_a_corrupt_checkpoint_is_named_and_the_other_runs_are_labelled(own_map, 
 
 def test_the_headline_is_the_ratio_to_the_next_best_with_its_paired_p():
     from curiosity_cli.evaluate.statistics import paired_tests, summarise
-    from curiosity_cli.evaluate.tables import headline
+    from curiosity_cli.evaluate.headline import headline
 
     rng = np.random.default_rng(3)
     rows = []
@@ -211,6 +217,7 @@ def test_nothing_to_label_or_evaluate_says_which_command_comes_first(own_map, tm
         evaluate_experiment(tmp_path / "grid")
 
 
+@pytest.mark.slow
 def test_the_commands_through_the_cli(own_map, tmp_path):
     config = grid_yaml(own_map, tmp_path)
     common = ["--jobs", "1", "--cache-dir", str(tmp_path / "cache")]
@@ -311,6 +318,7 @@ def test_a_grid_narrowed_after_labelling_is_evaluated_on_its_own_runs(own_map, t
     assert any(note.startswith("6 label files of runs outside the grid of") for note in evaluation.skipped)
 
 
+@pytest.mark.slow
 def test_a_failure_while_writing_the_tables_leaves_the_old_set_whole(own_map, tmp_path, monkeypatch):
     config, folder = small_experiment(own_map, tmp_path)
     label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
@@ -329,6 +337,7 @@ def test_a_failure_while_writing_the_tables_leaves_the_old_set_whole(own_map, tm
     assert not [p for p in folder.iterdir() if ".tmp" in p.name]
 
 
+@pytest.mark.slow
 def test_an_unreadable_stage_seconds_file_is_named_and_what_was_lost_said(own_map, tmp_path):
     config, folder = small_experiment(own_map, tmp_path)
     label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
@@ -348,6 +357,7 @@ def test_an_unreadable_stage_seconds_file_is_named_and_what_was_lost_said(own_ma
         assert set(json.loads(path.read_text())) == {"evaluate"}
 
 
+@pytest.mark.slow
 def test_a_label_file_whose_tables_were_replaced_is_named_never_counted_and_labelled_again(own_map, tmp_path):
     # the hostile case of issue 44: the human tables rewritten with np.savez, the meta untouched
     config, folder = small_experiment(own_map, tmp_path)
@@ -371,6 +381,7 @@ def test_a_label_file_whose_tables_were_replaced_is_named_never_counted_and_labe
     pd.testing.assert_frame_equal(evaluate_experiment(folder).mi, honest)
 
 
+@pytest.mark.slow
 def test_an_edited_maps_table_is_named_and_explore_writes_it_again(own_map, tmp_path):
     # issue 44: maps.csv edited (its cells) went into the report unnoticed
     config, folder = small_experiment(own_map, tmp_path)

@@ -11,7 +11,7 @@ from small_maps import grid_config
 
 from curiosity_cli.label.stage import label_experiment
 from curiosity_cli.evaluate.revisits import revisit_counts
-from curiosity_cli.evaluate.tables import evaluate_experiment
+from curiosity_cli.evaluate.stage import evaluate_experiment
 from curiosity_cli.explore.grid import run_grid
 
 
@@ -27,6 +27,7 @@ def test_counts_by_hand_on_a_short_path():
         revisit_counts(path, boxed, 6)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("coverage", ["literal", "clamp"])
 def test_mi_csv_counts_agree_with_every_runs_path_csv(own_map, tmp_path, coverage):
     # 40 steps on 48 cells: walkers revisit, and the literal reading gets boxed in

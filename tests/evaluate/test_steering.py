@@ -12,7 +12,7 @@ from small_maps import grid_config
 
 from curiosity_cli.label.stage import label_experiment
 from curiosity_cli.evaluate.steering import STEERING_COLUMNS, step_distances, steering_at, steering_rows
-from curiosity_cli.evaluate.tables import evaluate_experiment
+from curiosity_cli.evaluate.stage import evaluate_experiment
 from curiosity_cli.explore.grid import run_grid
 
 INF = float("inf")
@@ -77,6 +77,7 @@ def test_stochastic_coverages_own_moves_and_a_plan_that_scores_nothing():
     assert distances.tolist() == [0.0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("coverage", ["literal", "others"])
 def test_steering_csv_agrees_with_every_runs_candidates_csv(own_map, tmp_path, coverage):
     walkers = ("random-walk", "stochastic-coverage", "topic-perplexity", "lawnmower")

@@ -32,7 +32,7 @@ from cli_cases import (
 
 from curiosity_cli.config import load_config
 from curiosity_cli.evaluate.report import write_report
-from curiosity_cli.evaluate.tables import evaluate_experiment
+from curiosity_cli.evaluate.stage import evaluate_experiment
 from curiosity_cli.files import atomic_path, display_path, os_error_message
 
 RUN = f"{EXPERIMENT}/runs/own/random-walk/restart-000"
@@ -178,6 +178,7 @@ ERRORS = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ERRORS, ids=[case.id for case in ERRORS])
 def test_a_broken_file_or_folder_is_one_error_line(work: Path, case: ErrorCase):
     case.breaks(work)
@@ -189,6 +190,7 @@ def test_a_broken_file_or_folder_is_one_error_line(work: Path, case: ErrorCase):
     assert not [p for p in after - before if ".tmp" in p.name], "a half-written file was left behind"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(os.geteuid() == 0, reason="root writes into a read-only folder")
 def test_a_read_only_results_folder_is_one_error_line(work: Path):
     (work / "locked").mkdir(mode=0o500)
@@ -293,6 +295,7 @@ REDOS = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", REDOS, ids=[case.id for case in REDOS])
 def test_a_broken_piece_is_redone_or_left_out_in_one_line(work: Path, case: RedoCase):
     case.breaks(work)
@@ -308,6 +311,7 @@ def test_a_broken_piece_is_redone_or_left_out_in_one_line(work: Path, case: Redo
     assert_written_only_inside(before, files_under(work), work / "results")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", [case for case in REDOS if case.args == PARTIAL], ids=lambda case: case.id)
 def test_a_run_left_out_is_an_error_unless_partial(work: Path, case: RedoCase):
     case.breaks(work)
@@ -318,6 +322,7 @@ def test_a_run_left_out_is_an_error_unless_partial(work: Path, case: RedoCase):
     assert (work / EXPERIMENT / "mi.csv").read_text() == tables  # the old set stays
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args", [["extract", "DATASET"], EXPLORE], ids=["extract", "explore"])
 def test_a_truncated_word_store_is_extracted_again(work: Path, args: list[str]):
     (store,) = (work / "results" / "cache" / "stores").glob("own-*.npz")
@@ -330,6 +335,7 @@ def test_a_truncated_word_store_is_extracted_again(work: Path, args: list[str]):
     _loads(store)
 
 
+@pytest.mark.slow
 def test_the_report_says_how_many_runs_a_mean_is_over(work: Path):
     (work / LABEL_FILE).unlink()
     folder = work / EXPERIMENT
