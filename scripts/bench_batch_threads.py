@@ -12,6 +12,7 @@ the approximate parallel sweep of issue 42 (its answer: ``scripts/study_batch_sa
 
     git archive REF | tar -x -C /tmp/ref      # the reference's source, once
     python scripts/bench_batch_threads.py --reference /tmp/ref --maps reef-mosaic --threads 1 2 --repeats 3
+    python scripts/bench_batch_threads.py --smoke    # one sweep of the smallest map, both versions: seconds
 
 Prints and never asserts: timings depend on the machine.
 """
@@ -68,8 +69,11 @@ def main() -> None:
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--colours", action="store_true", help="also counts synchronised once per colour")
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     parser.add_argument("--worker", nargs=3, metavar=("MAP", "SWEEPS", "THREADS"), help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.smoke:
+        args.maps, args.sweeps, args.threads, args.repeats, args.colours = ["rare-patches"], 1, [1], 1, True
     if args.worker:
         worker(args.worker[0], int(args.worker[1]), int(args.worker[2]), args.colours)
         return

@@ -19,6 +19,7 @@ never asserts: the numbers depend on the machine.
 
     python scripts/bench_drive.py                 # 300 frames per scenario, about 2 minutes
     python scripts/bench_drive.py --frames 100    # quicker
+    python scripts/bench_drive.py --smoke         # 3 frames of the first scenario: seconds
 """
 
 from __future__ import annotations
@@ -90,7 +91,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=300, help="frames measured per scenario")
     parser.add_argument("--skip", type=int, default=10, help="first frames left out")
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.frames, args.skip = 3, 1
+    scenarios = SCENARIOS[:1] if args.smoke else SCENARIOS  # the others differ only in their cores and pace
 
     print(f"640 x 480 frames from the simulated camera, reef-mosaic, {args.frames} frames per scenario, "
           f"first {args.skip} skipped; {len(os.sched_getaffinity(0))} cores available\n")
@@ -99,7 +104,7 @@ def main() -> None:
     print(header)
     print(f"{'':<18} {'median':>8} {'p95':>8} {'median':>6} {'median':>6} {'median':>6} {'median':>6} {'p95':>6}")
     print("-" * len(header))
-    for label, cores, interval in SCENARIOS:
+    for label, cores, interval in scenarios:
         with tempfile.TemporaryDirectory() as folder:
             r = run_scenario(Path(folder), args.frames, cores, interval, args.skip)
         print(

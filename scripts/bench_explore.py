@@ -13,6 +13,7 @@ protocol (200 ms per step) would need 240 runs x 320 steps x 0.2 s = 4.3 hours.
 
     python scripts/bench_explore.py                      # part 1, ~1 minute
     python scripts/bench_explore.py --full-grid --jobs 2  # and part 2, ~7 minutes on 2 cores
+    python scripts/bench_explore.py --smoke               # part 1 on the smallest map, 3 steps: seconds
 
 Prints and never asserts: timings depend on the machine.
 """
@@ -60,7 +61,10 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--full-grid", action="store_true", help="also time the whole grid of --config")
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.map, args.steps, args.repeats = "rare-patches", 3, 1
 
     config = load_config(args.config)
     settings = dataclasses.replace(config.explore, path_length=args.steps, checkpoints=(args.steps,))

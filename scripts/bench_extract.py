@@ -11,6 +11,7 @@ Side by side, in the same run, the references the kernels replace:
 Targets from issue #3: a 1024 x 1024 map <= 10 s in total, the 2500 x 2500 reef <= 30 s.
 
     python scripts/bench_extract.py [--repeats 3] [--maps aerial-mosaic ...]
+    python scripts/bench_extract.py --smoke    # the smallest map, once: seconds
 """
 
 from __future__ import annotations
@@ -68,14 +69,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--maps", nargs="+", default=dataset_names())
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.maps, args.repeats = ["rare-patches"], 1
     cv2.setNumThreads(1)
 
     words = load_words_config(CONFIG_DIR / "paper.yaml")
     orb_vocab = load_vocabulary(words.vocabulary_dir, "orb", words.orb_vocabulary).centres
     texton_vocab = load_vocabulary(words.vocabulary_dir, "texton", words.texton_vocabulary).centres
     # compile the kernels (or load them from numba's cache) outside the timings
-    extract_words(load_map("aerial-mosaic"), words, cache_dir=Path(tempfile.mkdtemp()))
+    extract_words(load_map(args.maps[0]), words, cache_dir=Path(tempfile.mkdtemp()))
 
     print(f"one core, median of {args.repeats} runs, seconds")
     header = (

@@ -15,6 +15,7 @@ nanoseconds per word-sample per chain, median of --repeats, and the ratio of the
 reference to each.
 
     python scripts/bench_label.py                      # zurich-zh17 and aerial-mosaic, a few minutes
+    python scripts/bench_label.py --smoke              # the smallest map, 3 steps, one sweep: seconds
 
 Prints and never asserts: timings depend on the machine.
 """
@@ -51,26 +52,26 @@ def setup(name: str, runs: int, steps: int):
     return config, store, phis
 
 
-def time_variants(name: str, runs: int, steps: int, sweeps: int, repeats: int) -> dict:
+def time_variants(name: str, runs: int, steps: int, sweeps: int, repeats: int, chains: tuple[int, ...]) -> dict:
     """Seconds per word-sample per chain of each variant, one list per variant (one process)."""
     config, store, phis = setup(name, runs, steps)
     n = store.words.size
     reference = whole_map_model(store, config.model, 0, frozen_counts=phis[0])
     reference.refine_batch(1)
     blocks = {}
-    for r in CHAINS:
-        chains = map_chains(store, config.model)
-        chains.start([phis[i % len(phis)] for i in range(r)], list(range(r)))
-        chains.sweep(1)
-        blocks[r] = chains
-    times = {"single chain": [], **{f"lock-step R = {r}": [] for r in CHAINS}}
+    for r in chains:
+        block = map_chains(store, config.model)
+        block.start([phis[i % len(phis)] for i in range(r)], list(range(r)))
+        block.sweep(1)
+        blocks[r] = block
+    times = {"single chain": [], **{f"lock-step R = {r}": [] for r in chains}}
     for _ in range(repeats):
         began = time.perf_counter()
         reference.refine_batch(sweeps)
         times["single chain"].append((time.perf_counter() - began) / (sweeps * n))
-        for r, chains in blocks.items():
+        for r, block in blocks.items():
             began = time.perf_counter()
-            chains.sweep(sweeps)
+            block.sweep(sweeps)
             times[f"lock-step R = {r}"].append((time.perf_counter() - began) / (sweeps * n * r))
     return times
 
@@ -82,14 +83,19 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=80)
     parser.add_argument("--sweeps", type=int, default=2, help="sweeps per timing")
     parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--chains", type=int, nargs="+", default=list(CHAINS), help="lock-step chains R to time")
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.maps, args.runs, args.steps, args.sweeps, args.repeats, args.chains = ["rare-patches"], 1, 3, 1, 1, [1, 2]
 
     for name in args.maps:
         rows = {}
         for threads in (1, 2):
             with ProcessPoolExecutor(threads) as pool:
                 results = list(pool.map(
-                    time_variants, *zip(*[(name, args.runs, args.steps, args.sweeps, args.repeats)] * threads)
+                    time_variants,
+                    *zip(*[(name, args.runs, args.steps, args.sweeps, args.repeats, tuple(args.chains))] * threads),
                 ))
             for variant in results[0]:
                 rows.setdefault(variant, {})[threads] = statistics.median(np.concatenate([r[variant] for r in results]))

@@ -13,6 +13,7 @@ Without numba-cuda or a GPU the CUDA column says why and only the CPU is timed.
 
     python scripts/bench_label_devices.py                   # zurich-zh17, R = 16, 64, 256
     python scripts/bench_label_devices.py --json out.json   # the table as JSON too
+    python scripts/bench_label_devices.py --smoke           # the smallest map, R = 2, one sweep: seconds
 
 Prints and never asserts: timings depend on the machine.
 """
@@ -60,7 +61,10 @@ def main() -> None:
     parser.add_argument("--sweeps", type=int, default=1, help="sweeps per timing")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--json", help="also write the table to this file")
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.map, args.chains, args.runs, args.steps, args.repeats = "rare-patches", [2], 1, 3, 1
 
     missing = cuda_missing()
     devices = ["cpu"] if missing else ["cpu", "cuda"]

@@ -9,6 +9,7 @@ stage's wall time that ``work x rate / jobs`` explains (the rate: the median blo
 
     python scripts/bench_label_profile.py [--config quick] [--set datasets=[aerial-mosaic]] [--jobs N]
     python scripts/bench_label_profile.py --folder results/paper-grid   # an experiment already labelled
+    python scripts/bench_label_profile.py --smoke   # one restart of 10 steps on the smallest map, one sweep: seconds
 """
 
 from __future__ import annotations
@@ -39,7 +40,13 @@ def main() -> None:
     parser.add_argument("--set", dest="overrides", action="append", default=None)
     parser.add_argument("--jobs", type=int, default=os.cpu_count())
     parser.add_argument("--folder", type=Path, help="read this experiment's label_profile.json instead")
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.jobs, args.overrides = 1, [
+            "datasets=[rare-patches]", "explore.restarts=1", "explore.path_length=10", "explore.checkpoints=[5, 10]",
+            "label.sweeps=1", "label.warm_sweeps=1", "label.batch_sweeps=1",
+        ]
     print(f"logical CPUs {os.cpu_count()}, physical cores {physical_cores()}")
     if args.folder:
         summarise(json.loads((args.folder / "label_profile.json").read_text()))

@@ -21,6 +21,7 @@ The script prints and never asserts: the numbers depend on the machine.
 
     python scripts/bench_long_mission.py                          # an hour of frames, then a 3000-frame replay
     python scripts/bench_long_mission.py --frames 6000 --replay 0 # the model only, 10 minutes of frames
+    python scripts/bench_long_mission.py --smoke                  # 20 frames of 2 views, a 3-frame replay: seconds
 """
 
 from __future__ import annotations
@@ -179,8 +180,11 @@ def main() -> None:
     parser.add_argument("--views", type=int, default=600, help="distinct views along the path (default 600)")
     parser.add_argument("--replay", type=int, default=3000, help="frames of the replayed bag; 0: no replay")
     parser.add_argument("--keep", type=Path, help="keep the bag and the replays' folders here")
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     parser.add_argument("--child", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.smoke:
+        args.frames, args.views, args.replay = 20, 2, 3
     if args.child:
         memory = None if args.memory == "None" else int(args.memory)
         checkpoints = sorted({c for c in (args.frames // 10, args.frames // 4, args.frames // 2, args.frames) if c > 1})

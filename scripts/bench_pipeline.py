@@ -23,6 +23,7 @@ run, and the grids: ``--set label.device=cuda``); the label files are the same b
     python scripts/bench_pipeline.py --full-grid                       # and both grids
     python scripts/bench_pipeline.py --full-grid --grid-only --grids paper
     python scripts/bench_pipeline.py --full-grid --grid-only --grids paper --jobs 16 --device cuda
+    python scripts/bench_pipeline.py --smoke    # part 1 on the smallest map, 10 steps, one sweep: seconds
 
 Prints and never asserts: timings depend on the machine.
 """
@@ -51,6 +52,9 @@ from curiosity_cli.words.extract import extract_words
 BEFORE = {"explore": 4.9, "label": 28.9, "all": 34.2}
 #: The weight functions of the paper's own grid (its section 5.1).
 PAPER_WEIGHT_FUNCTIONS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity")
+#: --smoke's config: part 1 on the smallest map, a short path, one sweep of each kind.
+SMOKE = ["datasets=[rare-patches]", "explore.path_length=10", "explore.checkpoints=[5, 10]", "label.sweeps=1",
+         "label.warm_sweeps=1", "label.batch_sweeps=1"]
 
 
 def main() -> None:
@@ -66,9 +70,12 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--results-dir", type=Path, default=None)
     parser.add_argument("--device", choices=LABEL_DEVICES, default="cpu", help="label.device: where Z_p's chains run")
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.map, args.repeats, args.threads, args.full_grid, args.grid_only = "rare-patches", 1, 1, False, False
 
-    config = load_config(args.config)
+    config = load_config(args.config, SMOKE if args.smoke else ())
     if not (args.full_grid and args.grid_only):
         part_one(config, args)
 

@@ -1,6 +1,6 @@
 """Benchmark the grid and its labelling on loky and on a Dask cluster of this machine: runs per minute, overhead per task.
 
-A small grid (one map, 4 weight functions x --restarts, --steps steps) is run whole
+A small grid (one map, the quick config's weight functions x --restarts, --steps steps) is run whole
 (``run_grid(..., force=True)`` into a temporary folder, the map's word store cached),
 --repeats times on each of:
 
@@ -22,6 +22,7 @@ way, in a second table. The overhead per task is measured apart, with --noop tas
 ``client.submit`` + ``as_completed`` on the running cluster).
 
     python scripts/bench_scaleout.py [--restarts 4] [--steps 80] [--repeats 3] [--workers 2] [--batch-sweeps 20]
+    python scripts/bench_scaleout.py --smoke    # one restart of 5 steps on the smallest map, 1 worker: seconds
 
 Prints and never asserts: timings depend on the machine. Needs the distributed extra (pip install -e '.[distributed]').
 """
@@ -113,15 +114,23 @@ def main() -> None:
     parser.add_argument("--noop", type=int, default=500, help="no-op tasks for the overhead per task")
     parser.add_argument("--batch-sweeps", type=int, default=20,
                         help="of the batch reference, computed once and untimed (it does not change the labelling's speed)")
+    parser.add_argument("--label-sweeps", type=int, help="label.sweeps and label.warm_sweeps (default: quick's)")
     parser.add_argument("--cache-dir", type=Path, default=DEFAULT_CACHE)
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.map, args.restarts, args.steps, args.repeats, args.workers, args.noop = "rare-patches", 1, 5, 1, 1, 5
+        args.batch_sweeps = args.label_sweeps = 1
 
     base = load_config(CONFIG_DIR / "quick.yaml")
     config = dataclasses.replace(
         base, name="bench", datasets=(args.map,),
         explore=dataclasses.replace(base.explore, restarts=args.restarts, path_length=args.steps,
                                     checkpoints=tuple(c for c in base.explore.checkpoints if c < args.steps) + (args.steps,)),
-        label=dataclasses.replace(base.label, batch_sweeps=args.batch_sweeps),
+        label=dataclasses.replace(
+            base.label, batch_sweeps=args.batch_sweeps, sweeps=args.label_sweeps or base.label.sweeps,
+            warm_sweeps=args.label_sweeps or base.label.warm_sweeps,
+        ),
     )
     w = args.workers
     with tempfile.TemporaryDirectory() as tmp, LocalCluster(
@@ -143,7 +152,8 @@ def main() -> None:
         noop_loky = [loky_noop_seconds(args.noop, w) for _ in range(args.repeats)]
         noop_dask = [dask_noop_seconds(client, args.noop) for _ in range(args.repeats)]
 
-    print(f"{args.map}: {runs} runs of {args.steps} steps (4 weight functions x {args.restarts} restarts), "
+    print(f"{args.map}: {runs} runs of {args.steps} steps ({len(config.explore.weight_functions)} weight functions x "
+          f"{args.restarts} restarts), "
           f"{w} workers of 1 thread, median of {args.repeats}")
     print_table(times, runs)
     print(f"\nlabelling the same {runs} runs (label.sweeps {config.label.sweeps}, label.warm_sweeps "

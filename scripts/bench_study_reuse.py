@@ -10,6 +10,7 @@ stage's seconds summed over the experiments and the items taken, then the median
 their ratio.
 
     python scripts/bench_study_reuse.py [--map aerial-mosaic] [--restarts 4] [--repeats 2] [--jobs 2]
+    python scripts/bench_study_reuse.py --smoke   # one specification, paths of 10 steps on the smallest map: seconds
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ def study(folder: Path, args) -> Path:
     return path
 
 
-def run(config: Path, folder: Path, reuse: bool, jobs: int) -> tuple[float, float, dict]:
+def run(config: Path, folder: Path, reuse: bool, jobs: int, overrides: list[str]) -> tuple[float, float, dict]:
     """Seconds of one reproduction, its label stages' seconds, and the items its experiments took."""
     cache = folder / "cache"
     cache.mkdir(parents=True)
@@ -53,6 +54,7 @@ def run(config: Path, folder: Path, reuse: bool, jobs: int) -> tuple[float, floa
         (cache / store.name).symlink_to(store)
     command = [sys.executable, "-m", "curiosity_cli", "reproduce", str(config), "--jobs", str(jobs),
                "--results-dir", str(folder / "results"), "--cache-dir", str(cache), "--reuse" if reuse else "--no-reuse"]
+    command += [option for override in overrides for option in ("--set", override)]
     began = time.perf_counter()
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     seconds = time.perf_counter() - began
@@ -71,13 +73,19 @@ def main() -> None:
     parser.add_argument("--specifications", nargs="+", default=SHARING)
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--jobs", type=int, default=os.cpu_count())
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="a config override of every run, as --set of curiosity")
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.map, args.restarts, args.specifications, args.repeats, args.jobs = "rare-patches", 1, ["default"], 1, 1
+        args.set = ["explore.path_length=10", "explore.checkpoints=[10]", "label.sweeps=1", "label.batch_sweeps=1"]
     times = {True: [], False: []}
     with tempfile.TemporaryDirectory() as tmp:
         config = study(Path(tmp), args)
         for repeat in range(args.repeats):
             for reuse in ((True, False) if repeat % 2 == 0 else (False, True)):
-                seconds, label, taken = run(config, Path(tempfile.mkdtemp(dir=tmp)), reuse, args.jobs)
+                seconds, label, taken = run(config, Path(tempfile.mkdtemp(dir=tmp)), reuse, args.jobs, args.set)
                 times[reuse].append(seconds)
                 print(f"{'--reuse' if reuse else '--no-reuse':<11} {seconds:6.1f} s   label stages {label:6.1f} s   taken: "
                       f"{taken['labels']} of {taken['labelled']} label files, {taken['batches']} batch references", flush=True)

@@ -23,6 +23,7 @@ exits 1 when a ratio of the share is above the target.
 
     python scripts/check_drive_surprise.py                     # 400 frames, seeds 0..9: under a minute on 2 cores
     python scripts/check_drive_surprise.py --frames 100 --seeds 3 --jobs 1
+    python scripts/check_drive_surprise.py --smoke                 # 12 frames, one seed: seconds
 """
 
 from __future__ import annotations
@@ -112,7 +113,10 @@ def main() -> int:
     parser.add_argument("--config", default="quick", help="the config whose model, words and drive settings run (default quick)")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a config override, as --set of curiosity")
     parser.add_argument("--jobs", type=int, default=2, help="seeds run side by side (default 2)")
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.frames, args.seeds, args.jobs = WINDOW + 2, 1, 1
     if args.frames <= WINDOW:
         parser.error(f"--frames: expected more than {WINDOW}")
 

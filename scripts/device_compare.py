@@ -16,6 +16,7 @@
 
     python scripts/device_compare.py --out /tmp/compare                 # a few minutes on a GPU machine
     python scripts/device_compare.py --out /tmp/compare --diagnose     # step 3 even if the files agree
+    python scripts/device_compare.py --smoke     # the CPU against itself, tiny, in a temporary folder: seconds
 
 Exits 0 when every file is the same bytes, 1 when some differ, 2 when there is no GPU.
 """
@@ -26,6 +27,7 @@ import argparse
 import json
 import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -187,7 +189,7 @@ def _explain(store, config, cpu, phis, sweep, topics_before, before_cpu, before_
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--out", type=Path, help="the experiment and its two labelled copies go here (required)")
     parser.add_argument("--map", default="aerial-mosaic")
     parser.add_argument("--restarts", type=int, default=3)
     parser.add_argument("--steps", type=int, default=40)
@@ -199,12 +201,28 @@ def main() -> None:
     parser.add_argument("--diagnose-chains", type=int, default=8)
     parser.add_argument("--diagnose-sweeps", type=int, default=3)
     parser.add_argument("--devices", nargs=2, default=["cpu", "cuda"], help="the two devices (cpu cpu: a check of this script)")
+    parser.add_argument("--smoke", action="store_true",
+                        help="the CPU against itself on tiny inputs with step 3, in a temporary folder, seconds "
+                        "(what tests/test_scripts.py runs)")
     args = parser.parse_args()
-
+    if args.smoke:
+        args.devices, args.map, args.restarts, args.steps, args.jobs = ["cpu", "cpu"], "rare-patches", 1, 10, 1
+        args.diagnose = True
+        args.sweeps = args.warm_sweeps = args.batch_sweeps = args.diagnose_chains = args.diagnose_sweeps = 1
+        with tempfile.TemporaryDirectory() as tmp:
+            args.out = Path(tmp)
+            sys.exit(compare(args))
+    if args.out is None:
+        parser.error("the following argument is required: --out")
     missing = cuda_missing() if "cuda" in args.devices else None
     if missing:
         print(f"device_compare: no GPU to compare with: {missing}")
         sys.exit(2)
+    sys.exit(compare(args))
+
+
+def compare(args) -> int:
+    """Steps 1 to 3 (module docstring) into ``args.out``; the exit code."""
     began = time.perf_counter()
     folder = explore(args.out / "results", args)
     print(f"explored {folder} in {time.perf_counter() - began:.0f} s", flush=True)
@@ -228,7 +246,7 @@ def main() -> None:
     if lines or args.diagnose:
         print("where the devices part:", flush=True)
         diagnose(on[0], args)
-    sys.exit(1 if lines else 0)
+    return 1 if lines else 0
 
 
 if __name__ == "__main__":

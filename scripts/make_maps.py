@@ -37,6 +37,7 @@ Regenerate all maps, one map, or verify the committed ones::
     python scripts/make_maps.py
     python scripts/make_maps.py --only reef-mosaic
     python scripts/make_maps.py --check
+    python scripts/make_maps.py --smoke     # --check of the smallest map, rare-patches: seconds
 """
 
 from __future__ import annotations
@@ -82,7 +83,15 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         action="store_true",
         help="regenerate into a temporary folder and compare with the maps in --out; exit 1 if any differs",
     )
-    return parser.parse_args(argv)
+    parser.add_argument(
+        "--smoke",
+        action="store_true",
+        help="--check of rare-patches alone, seconds (what tests/test_scripts.py runs)",
+    )
+    args = parser.parse_args(argv)
+    if args.smoke:
+        args.check, args.only = True, ["rare-patches"]
+    return args
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -13,6 +13,7 @@ the first standing for topic perplexity. Prints, over ``--draws`` draws:
   and a percentile bootstrap beside it.
 
     python scripts/null_reference.py [--draws 2000] [--pairs 10]
+    python scripts/null_reference.py --smoke    # 2 draws: a second
 """
 
 from __future__ import annotations
@@ -43,7 +44,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--draws", type=int, default=2000)
     parser.add_argument("--pairs", type=int, default=10)
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, a second (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.draws = 2
     rng = np.random.default_rng(41)
     ratios, rejected, studentized, percentile = [], 0, 0, 0
     for i in range(args.draws):

@@ -8,6 +8,7 @@ tables, ``config.yaml``, ``provenance.yaml``, ``maps.csv`` and ``record.yaml`` g
 whose tables are not a current set (unfinished, or edited) is named and skipped.
 
     python scripts/record_study.py results/multiverse-sweep studies/multiverse
+    python scripts/record_study.py --smoke     # a tiny study made in a temporary folder, recorded there: seconds
 """
 
 from __future__ import annotations
@@ -15,25 +16,28 @@ from __future__ import annotations
 import argparse
 import re
 import sys
+import tempfile
 from pathlib import Path
 
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.study.record import keep_experiment
 
 COMBINATION = re.compile(r"^specification-(?P<specification>.+)_seed-(?P<seed>\d+)$")
+#: --smoke's study: one combination, two walkers of two restarts of 10 steps on the smallest map, one sweep.
+SMOKE = [
+    "datasets=[rare-patches]", "explore.weight_functions=[random-walk, topic-perplexity]", "explore.restarts=2",
+    "explore.path_length=10", "explore.checkpoints=[10]", "label.sweeps=1", "label.batch_sweeps=1",
+]
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("results", type=Path, help="a study's results folder, e.g. results/multiverse-sweep")
-    parser.add_argument("record", type=Path, help="where to keep its tables, e.g. studies/multiverse")
-    args = parser.parse_args()
+def record_study(results: Path, record: Path) -> int:
+    """Record every finished combination of ``results`` in ``record`` (module docstring); return the exit code."""
     recorded, kept, skipped = 0, 0, []
-    for folder in sorted(p for p in args.results.iterdir() if p.is_dir()):
+    for folder in sorted(p for p in results.iterdir() if p.is_dir()):
         match = COMBINATION.match(folder.name)
         if match is None:
             continue
-        target = args.record / f"seed-{match['seed']}" / match["specification"]
+        target = record / f"seed-{match['seed']}" / match["specification"]
         if target.is_dir():
             kept += 1
             continue
@@ -43,10 +47,38 @@ def main() -> int:
             skipped.append(f"{folder.name}: {exc}")
             continue
         recorded += 1
-    print(f"recorded {recorded} combinations in {args.record} ({kept} were recorded already)")
+    print(f"recorded {recorded} combinations in {record} ({kept} were recorded already)")
     for line in skipped:
         print(f"skipped {line}", file=sys.stderr)
     return 0
+
+
+def smoke_study(folder: Path) -> Path:
+    """A study's results folder in ``folder``: one combination explored, labelled and evaluated (:data:`SMOKE`)."""
+    from curiosity_cli import api
+
+    results = folder / "smoke-sweep"
+    experiment = api.explore(
+        "quick", overrides=[*SMOKE, "name=specification-default_seed-0"], results_dir=results, jobs=1
+    ).folder
+    api.label(experiment, jobs=1)
+    api.evaluate(experiment)
+    return results
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("results", type=Path, nargs="?", help="a study's results folder, e.g. results/multiverse-sweep")
+    parser.add_argument("record", type=Path, nargs="?", help="where to keep its tables, e.g. studies/multiverse")
+    parser.add_argument("--smoke", action="store_true", help="a tiny study recorded in a temporary folder, seconds "
+                        "(what tests/test_scripts.py runs)")
+    args = parser.parse_args()
+    if args.smoke:
+        with tempfile.TemporaryDirectory() as tmp:
+            return record_study(smoke_study(Path(tmp)), Path(tmp) / "record")
+    if args.record is None:
+        parser.error("expected a study's results folder and where to keep its tables")
+    return record_study(args.results, args.record)
 
 
 if __name__ == "__main__":

@@ -30,6 +30,7 @@ one run). Per map it prints:
   deviations). Two samplers that draw from the same distribution pass both.
 
     python scripts/study_batch_sampler.py --maps aerial-mosaic sentinel-coast reef-mosaic --seeds 5 --jobs 2 --threads 1
+    python scripts/study_batch_sampler.py --smoke     # the smallest map, 2 seeds, one sweep: seconds
 
 Prints and never asserts: the answer is read from the table.
 """
@@ -143,7 +144,10 @@ def main() -> None:
     parser.add_argument("--sweeps", type=int, help="batch sweeps; default the config's label.batch_sweeps")
     parser.add_argument("--threads", type=int, default=2, help="threads of each batch_labels")
     parser.add_argument("--jobs", type=int, default=1, help="processes computing (map, sampler, seed) tasks at once")
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.maps, args.seeds, args.sweeps, args.threads, args.jobs = ["rare-patches"], 2, 1, 1, 1
 
     from curiosity_cli.config import load_config
     from curiosity_cli.experiment.maps import prepare_stores

@@ -9,6 +9,7 @@ the random bits), the per-topic part the weights loop and the draw's sums. Media
 --repeats, each --sweeps sweeps after 2 untimed ones.
 
     python scripts/study_frozen_cost.py                 # about a minute
+    python scripts/study_frozen_cost.py --smoke         # the smallest map, one sweep per K: seconds
 
 Prints and never asserts: timings depend on the machine.
 """
@@ -35,7 +36,10 @@ def main() -> None:
     parser.add_argument("--map", default="aerial-mosaic")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--sweeps", type=int, default=8)
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.map, args.repeats, args.sweeps = "rare-patches", 1, 1
 
     config = load_config(CONFIG_DIR / "paper.yaml", [f"datasets=[{args.map}]", "name=study", "seed=0"])
     store = extract_words(load_map(args.map), config.words).store

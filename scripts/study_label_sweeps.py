@@ -26,12 +26,14 @@ twice the standard error over runs (the chains' own noise):
   two-start check comes first.
 
     python scripts/study_label_sweeps.py results/paper-grid --restarts 1 --max-sweeps 256 --first 256 --warm 8 16 32
+    python scripts/study_label_sweeps.py --smoke   # a tiny experiment made in a temporary folder, 2 sweeps: seconds
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import tempfile
 import time
 from pathlib import Path
 
@@ -51,6 +53,12 @@ from curiosity_cli.words.store import load_store
 
 #: What pairs one labelling with another of the same checkpoint.
 RUN_KEYS = ["dataset", "weight_function", "restart", "path_length"]
+#: --smoke's experiment: two walkers, one restart of 10 steps on the smallest map, labelled with one sweep.
+SMOKE = [
+    "datasets=[rare-patches]", "explore.weight_functions=[random-walk, topic-perplexity]", "explore.restarts=1",
+    "explore.path_length=10", "explore.checkpoints=[5, 10]", "label.sweeps=1", "label.warm_sweeps=1",
+    "label.batch_sweeps=1", "name=smoke",
+]
 
 
 def mi_pair(store, words, shape, human, n_classes, batch, k):
@@ -137,7 +145,7 @@ def smallest_converged(table: pd.DataFrame, tolerance: float):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("experiment", type=Path)
+    parser.add_argument("experiment", type=Path, nargs="?", help="an explored and labelled experiment folder")
     parser.add_argument("--config", type=Path, default=CONFIG_DIR / "paper-grid.yaml",
                         help="K, α, β and weight functions (the experiment's own); its datasets entries name the maps")
     parser.add_argument("--maps", nargs="*", help="datasets to study; default all of the experiment's")
@@ -151,8 +159,33 @@ def main() -> None:
     parser.add_argument("--tolerance", type=float, default=CONVERGENCE_TOLERANCE)
     parser.add_argument("--cache-dir", type=Path, default=DEFAULT_CACHE)
     parser.add_argument("--out", type=Path, help="CSV of every labelling (default EXPERIMENT/label-sweeps.csv)")
+    parser.add_argument("--smoke", action="store_true", help="a tiny experiment made and studied in a temporary "
+                        "folder, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        with tempfile.TemporaryDirectory() as tmp:
+            args.experiment = smoke_experiment(Path(tmp))
+            args.config, args.restarts, args.max_sweeps, args.first, args.warm = (
+                args.experiment / "config.yaml", 1, 2, 1, [1]
+            )
+            study(args)
+    elif args.experiment is None:
+        parser.error("expected an experiment folder")
+    else:
+        study(args)
 
+
+def smoke_experiment(folder: Path) -> Path:
+    """An experiment in ``folder``, explored and labelled (:data:`SMOKE`)."""
+    from curiosity_cli import api
+
+    experiment = api.explore("quick", overrides=SMOKE, results_dir=folder, jobs=1).folder
+    api.label(experiment, jobs=1)
+    return experiment
+
+
+def study(args) -> None:
+    """Label the sample of runs, write the CSV and print the tables (module docstring)."""
     config = load_config(args.config)
     maps = pd.read_csv(args.experiment / "maps.csv")
     entries = dict(zip([load_map(e).config.name for e in config.datasets], config.datasets))

@@ -13,6 +13,7 @@ authors' readings together: configs/rost.yaml), explore ``--restarts`` topic-per
 - seconds per run.
 
 Usage: python scripts/study_screening.py [--maps M ...] [--restarts 4] [--length 80]
+       python scripts/study_screening.py --smoke    # two readings, one path of 5 steps on the smallest map: seconds
 """
 
 from __future__ import annotations
@@ -60,7 +61,10 @@ def main() -> None:
     parser.add_argument("--readings", nargs="+", default=list(READINGS))
     parser.add_argument("--restarts", type=int, default=4)
     parser.add_argument("--length", type=int, default=80)
+    parser.add_argument("--smoke", action="store_true", help="tiny inputs, seconds (what tests/test_scripts.py runs)")
     args = parser.parse_args()
+    if args.smoke:
+        args.maps, args.readings, args.restarts, args.length = ["rare-patches"], ["default", "rost"], 1, 5
 
     from curiosity_cli.api import load, word_store
     from curiosity_cli.explore.walker import explore

@@ -134,6 +134,7 @@ def test_build_vocabularies_refuses_a_size_out_of_range_before_any_work(tmp_path
 # --------------------------------------------------------------------------- the experiment
 
 
+@pytest.mark.slow
 def test_explore_label_evaluate_plot_and_animate_from_python(own_map, tmp_path):
     config = tiny_yaml(own_map, tmp_path)
     results = tmp_path / "results"
@@ -181,6 +182,7 @@ def test_explore_refuses_arguments_that_do_not_fit_as_usage_errors(own_map, tmp_
     assert not (tmp_path / "tiny").exists()
 
 
+@pytest.mark.slow
 def test_reproduce_runs_a_declared_sweep_as_the_command_does(own_map, tmp_path):
     config = tiny_yaml(own_map, tmp_path)
     text = yaml.safe_load(config.read_text())
@@ -266,6 +268,7 @@ def evaluated(tmp_path_factory):
     return api.open_experiment(experiment)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("call, parameter", [
     (lambda r: r.table("nope"), "name"),
     (lambda r: r.table("../provenance"), "name"),
@@ -282,6 +285,7 @@ def test_misused_results_name_the_argument(evaluated, call, parameter):
     assert evaluated.run("aerial-mosaic", "topic-perplexity", 1).phi(20).sum() > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("run, message", [
     (("aerial-mosaic", "topic-perplexity", 7), r"^restart: got 7, expected a restart of .*config\.yaml: 0 to 1$"),
     (("nomap", "topic-perplexity", 0), r"^dataset: got 'nomap', expected a map of .*config\.yaml: aerial-mosaic$"),

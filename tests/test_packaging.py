@@ -59,6 +59,7 @@ def installed(tmp_path_factory) -> tuple[Path, Path]:
     return wheel, site
 
 
+@pytest.mark.slow
 def test_the_installed_wheel_runs_from_any_folder_and_writes_only_there_and_in_the_cache(installed, tmp_path):
     wheel, site = installed
     work, cache = tmp_path / "work", tmp_path / "cache"

@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 #: The repository this test checks.
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
 README = (PROJECT_ROOT / "README.md").read_text()
@@ -55,6 +57,7 @@ def test_the_guide_links_to_files_and_headings_that_exist():
     assert readme_anchors and all(a in anchors for a in readme_anchors), readme_anchors
 
 
+@pytest.mark.slow
 def test_the_python_example_runs_as_written(tmp_path, monkeypatch):
     (example,) = re.findall(r"```python\n(.+?)\n```", README, re.S)
     monkeypatch.chdir(tmp_path)  # results/ of the current folder, as a notebook's

@@ -70,6 +70,7 @@ def _pooled(folder: Path, specification: str) -> tuple[pd.DataFrame, pd.DataFram
     return mi[mi["path_length"] == 80], steering[steering["path_length"] == 80]
 
 
+@pytest.mark.slow
 def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give_and_resumes(own_map, tmp_path):
     config = study_yaml(own_map, tmp_path)
     results = tmp_path / "results"

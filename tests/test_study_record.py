@@ -25,6 +25,7 @@ def _recorded(record: Path) -> list[str]:
     return sorted(str(p.relative_to(record)) for p in record.glob("seed-*/*") if p.is_dir())
 
 
+@pytest.mark.slow
 def test_a_study_keeps_its_seeds_takes_them_later_and_they_are_the_bytes_computing_them_again_gives(own_map, tmp_path):
     config = study_yaml(own_map, tmp_path, ONE)
     record = tmp_path / "studies" / "tiny"
@@ -61,6 +62,7 @@ def test_a_study_keeps_its_seeds_takes_them_later_and_they_are_the_bytes_computi
         assert (folder / name).read_bytes() == (computed / name).read_bytes(), f"{name}: the pooled curve"
 
 
+@pytest.mark.slow
 def test_a_record_made_otherwise_or_edited_is_refused_naming_the_difference_before_anything_runs(own_map, tmp_path):
     config = study_yaml(own_map, tmp_path, ONE)
     record = tmp_path / "record"

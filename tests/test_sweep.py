@@ -133,6 +133,7 @@ def test_a_bad_value_anywhere_fails_before_any_folder_is_written(own_map, tmp_pa
     assert not results.exists()
 
 
+@pytest.mark.slow
 def test_a_sweep_writes_a_folder_per_combination_and_one_report_and_resumes(own_map, tmp_path):
     config = tiny_yaml(own_map, tmp_path)
     results = tmp_path / "results"
@@ -200,6 +201,7 @@ def test_a_failing_combination_does_not_stop_the_others(own_map, tmp_path):
     assert pd.read_csv(folder / "sweep.csv")["explore.restarts"].tolist() == [2]
 
 
+@pytest.mark.slow
 def test_a_readings_sweep_declared_in_its_config_pools_the_seeds_into_the_sensitivity_table_and_resumes(own_map, tmp_path):
     config = tiny_yaml(own_map, tmp_path)
     text = yaml.safe_load(config.read_text())

@@ -102,6 +102,7 @@ def frame_records(out: Path) -> list[dict]:
     return [r for r in map(json.loads, (out / "log.jsonl").read_text().splitlines()) if "frame" in r and "words" in r]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind, name", [("ros1", "mission.bag"), ("sqlite3", "mission"), ("mcap", "mission")])
 def test_a_bag_replays_one_record_per_message_with_its_bag_time(tmp_path, frames, kind, name):
     bag = write_bag(tmp_path / name, kind, {"/camera/image_raw": "rgb8"}, frames)
@@ -122,6 +123,7 @@ def test_a_bare_mcap_file_is_a_bag(tmp_path, frames):
     camera.close()
 
 
+@pytest.mark.slow
 def test_compressed_bgr_and_mono16_frames_decode_to_what_they_were_made_from(tmp_path, frames):
     encodings = {"/raw": "rgb8", "/png": "png", "/bgr": "bgr8", "/mono8": "mono8", "/mono16": "mono16"}
     bag = write_bag(tmp_path / "mission", "sqlite3", encodings, frames)
@@ -218,6 +220,7 @@ def test_a_topic_needs_a_bag():
     assert info.value.parameter == "topic"  # hostile-user F12: the command line names it --topic
 
 
+@pytest.mark.slow
 def test_a_replay_shows_its_progress_and_the_same_seed_gives_the_same_log(tmp_path, frames):
     bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
     first, second = replay(bag, tmp_path / "one"), replay(bag, tmp_path / "two")
@@ -230,6 +233,7 @@ def test_a_replay_shows_its_progress_and_the_same_seed_gives_the_same_log(tmp_pa
     assert numbers(tmp_path / "one") == numbers(tmp_path / "two") and len(numbers(tmp_path / "one")) == FRAMES
 
 
+@pytest.mark.slow
 def test_a_replay_draws_its_surprise_timeline_with_the_frames_that_stand_out(tmp_path, frames, standout):
     from curiosity_cli.drive.timeline import surprise_series, timeline_figure
 
@@ -268,6 +272,7 @@ def test_the_most_surprising_frames_are_peaks_apart():
 
 
 # no refinement at all; one sample a frame, the newest frame's share rounding to none (the first frame, alone, takes it)
+@pytest.mark.slow
 @pytest.mark.parametrize("budget", [0, 1])
 def test_frames_no_refinement_picked_are_logged_marked_and_never_the_most_surprising(tmp_path, frames, budget):
     from curiosity_cli.drive.timeline import surprise_series
@@ -294,6 +299,7 @@ def test_without_rosbags_the_error_names_the_extra(tmp_path, frames, monkeypatch
         BagCamera(str(bag))
 
 
+@pytest.mark.slow
 def test_a_replay_into_a_folder_in_use_is_refused_and_force_replaces_only_an_earlier_run(tmp_path, frames):
     bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
     run = tmp_path / "run"
@@ -386,6 +392,7 @@ def _a_folder_where_the_timeline_goes(run: Path, tmp_path: Path) -> Path:
     return run / "timeline.pdf"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "users",
     [_users_frame_in_frames, _users_notes_in_surprising, _frames_linked_to_the_users_photos, _a_folder_where_the_timeline_goes],
@@ -409,6 +416,7 @@ def test_force_refuses_a_path_of_the_users_among_a_runs_files_and_deletes_nothin
     assert not photos or _contents(tmp_path / "photos") == photos
 
 
+@pytest.mark.slow
 def test_force_replaces_the_frames_a_run_wrote_and_removes_their_folder_left_empty(tmp_path, earlier_run):
     import shutil
 
@@ -454,6 +462,7 @@ DAMAGES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", list(DAMAGES))
 def test_a_damaged_message_is_skipped_logged_and_counted(tmp_path, standout, case):
     encoding, damage, says = DAMAGES[case]
@@ -475,6 +484,7 @@ def test_a_damaged_message_is_skipped_logged_and_counted(tmp_path, standout, cas
     np.testing.assert_array_equal(cv2.imread(str(thumbnail))[:, :, ::-1], standout[3])
 
 
+@pytest.mark.slow
 def test_strict_stops_at_a_damaged_message_and_still_draws_what_it_replayed(tmp_path, frames):
     encoding, damage, says = DAMAGES["zero-by-zero"]
     bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": encoding}, frames, {2: damage})
@@ -514,6 +524,7 @@ def test_yuv_422_frames_decode(encoding, order):
         decode(odd, "sensor_msgs/msg/Image", "here")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind, storage", [("mcap", ".mcap"), ("sqlite3", ".db3")])
 def test_a_bag_folder_without_its_metadata_is_read_through_its_storage_file(tmp_path, frames, kind, storage):
     bag = write_bag(tmp_path / "mission", kind, {"/camera/image_raw": "rgb8"}, frames)
@@ -536,6 +547,7 @@ def test_an_empty_folder_and_a_tiny_file_are_named_as_what_they_are(tmp_path):
     assert "tiny.mcap: not a readable bag (" in line and "ord()" not in line and "expected a character" not in line
 
 
+@pytest.mark.slow
 def test_a_timeline_is_drawn_again_from_a_run_folder(tmp_path, frames):
     bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
     assert replay(bag, tmp_path / "run").exit_code == 0
@@ -547,6 +559,7 @@ def test_a_timeline_is_drawn_again_from_a_run_folder(tmp_path, frames):
     assert missing.exit_code == 1 and "log.jsonl: not found; give a run folder of `curiosity drive`" in missing.stderr
 
 
+@pytest.mark.slow
 def test_a_timeline_is_refused_when_the_bag_was_replaced_by_another_recording(tmp_path, frames):
     """Issue 44: the frames were read from whatever file stood at the bag's path, exit 0."""
     bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)
@@ -566,6 +579,7 @@ def test_a_timeline_is_refused_when_the_bag_was_replaced_by_another_recording(tm
     assert runner.invoke(app, ["drive", "--timeline", str(tmp_path / "run")]).exit_code == 0
 
 
+@pytest.mark.slow
 def test_header_stamps_are_logged_and_a_bag_of_equal_record_times_falls_back_to_them(tmp_path, frames):
     from curiosity_cli.drive.timeline import surprise_series
 
@@ -586,6 +600,7 @@ def test_header_stamps_are_logged_and_a_bag_of_equal_record_times_falls_back_to_
     assert result.exit_code == 0 and "every frame has the same bag time" in result.stderr
 
 
+@pytest.mark.slow
 def test_a_log_cut_short_or_damaged_is_named_not_a_traceback(tmp_path, frames):
     """Issue 44: a log.jsonl cut mid-line, holding a line that is not an object, or only its start record."""
     bag = write_bag(tmp_path / "mission.bag", "ros1", {"/camera/image_raw": "rgb8"}, frames)

@@ -37,6 +37,7 @@ def write_mcap(folder, views, zstd: bool):
     return next(folder.glob("*.mcap"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cut", [0.3, 0.5, 0.71, 0.9])
 def test_an_uncompressed_mcap_cut_anywhere_replays_every_whole_message(tmp_path, views, cut):
     mcap = write_mcap(tmp_path / "mission", views, zstd=False)
@@ -54,6 +55,7 @@ def test_an_uncompressed_mcap_cut_anywhere_replays_every_whole_message(tmp_path,
     assert f"(a recording cut short?): replaying its {whole} whole messages; its last " in said
 
 
+@pytest.mark.slow
 def test_a_zstd_mcap_cut_inside_a_chunk_replays_the_chunks_before_and_what_it_can_of_that_one(tmp_path, views):
     mcap = write_mcap(tmp_path / "mission", views, zstd=True)
     data = mcap.read_bytes()

@@ -7,12 +7,16 @@ import subprocess
 
 import cv2
 import numpy as np
+import pytest
 from drive_processes import RUN_SECONDS, drive_command, frame_rows, read_log, wait_for_frames
 from pty_robot import PtyRobot
 
 from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.drive.protocol import Ack, Hello, Stop
 from curiosity_cli.drive.simrobot import DECOY_POSITION
+
+#: Every test drives `curiosity simrobot` and `curiosity drive` in processes of their own.
+pytestmark = pytest.mark.slow
 
 # 300 ms to answer rather than the protocol's 100: on a loaded CI machine either process
 # may be descheduled that long, and these tests are not about the timing

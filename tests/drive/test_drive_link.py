@@ -92,6 +92,7 @@ def test_a_lost_ack_is_made_good_by_a_resend(robots):
     assert link.close() is True
 
 
+@pytest.mark.slow
 def test_a_robot_that_never_answers_hello_is_refused_and_stopped(robots):
     robot = robots(lambda frame: [])
     start = time.monotonic()

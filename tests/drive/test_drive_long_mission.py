@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from test_bags import frame_records, replay, write_bag
 
 from curiosity_cli.maps.map_data import load_map
@@ -17,6 +18,7 @@ def near_identical_frames(n: int) -> list[np.ndarray]:
     return [np.clip(view + rng.integers(-3, 4, view.shape), 0, 255).astype(np.uint8) for _ in range(n)]
 
 
+@pytest.mark.slow
 def test_400_near_identical_frames_show_no_jump_in_perplexity(tmp_path):
     # the whole mission in memory (the default); a memory bound forgets one frame at a time
     # (tests/drive/test_drive_stream.py), which gave the same smooth curve here (largest change 4.9 %)

@@ -199,6 +199,7 @@ def test_lines_with_a_correct_checksum_never_raise_and_an_accepted_one_is_canoni
         assert decode(encode(result)[:-1], receiver) == result
 
 
+@pytest.mark.slow
 @FUZZ
 @given(_FRAMES)
 def test_encoded_frames_decode_to_themselves_up_to_rounding(pair):
@@ -213,6 +214,7 @@ def test_encoded_frames_decode_to_themselves_up_to_rounding(pair):
             assert getattr(decoded, name) == value
 
 
+@pytest.mark.slow
 @FUZZ
 @given(_FRAMES, st.data())
 def test_every_single_byte_corruption_of_a_frame_is_refused(pair, data):
@@ -225,6 +227,7 @@ def test_every_single_byte_corruption_of_a_frame_is_refused(pair, data):
     assert isinstance(result, Refused), (bytes(raw), result)
 
 
+@pytest.mark.slow
 @FUZZ
 @given(st.lists(st.one_of(_ROBOT_FRAMES.map(encode), st.binary(max_size=40)), max_size=12), st.data())
 def test_the_stream_parser_never_raises_and_chunking_does_not_matter(pieces, data):

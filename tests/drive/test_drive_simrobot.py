@@ -119,6 +119,7 @@ def test_state_reports_the_commanded_motion(sim):
     assert later.x > first.x and later.y == first.y == 5.0 and later.t > first.t
 
 
+@pytest.mark.slow
 def test_noise_corrupts_the_line_but_every_frame_that_decodes_is_genuine(sim):
     robot, host, events = sim(noise=Noise(garbage=0.3, checksum=0.3, truncate=0.1), seed=4)
     host.send(Hello(0, 1))
@@ -163,6 +164,7 @@ def test_bad_noise_specs_are_refused(text, message):
     assert Noise.parse("drop-ack=0.5, garbage=0.1") == Noise(garbage=0.1, drop_ack=0.5)
 
 
+@pytest.mark.slow
 def test_the_watchdog_stops_the_simulated_robot_when_the_host_goes_silent(tmp_path):
     """`curiosity simrobot` as its own process; the test is the host, then falls silent."""
     log = tmp_path / "sim.jsonl"

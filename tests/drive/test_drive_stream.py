@@ -162,6 +162,7 @@ def test_frame_words_follow_the_maps_orb_grid():
     assert [(c < 5000).sum() for c in cells] == [9] * 48
 
 
+@pytest.mark.slow
 def test_the_pipeline_is_deterministic_for_a_seed():
     reef = load_map("reef-mosaic")
     config = dataclasses.replace(CONFIG, drive=dataclasses.replace(CONFIG.drive, samples_per_frame=2000))
@@ -178,6 +179,7 @@ def test_the_pipeline_is_deterministic_for_a_seed():
     assert last.scores[last.target] == last.scores.max()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("setting, share", [(None, 0.5), (0.25, 0.25), (0.0, 0.0)])
 def test_the_pipeline_gives_the_newest_frame_drive_newest_share_else_model_eta(setting, share):
     reef = load_map("reef-mosaic")

@@ -175,6 +175,7 @@ def replayed(tmp_path_factory) -> Path:
     return folder / "out"
 
 
+@pytest.mark.slow
 def test_the_mission_file_decodes_with_foxglove_schemas_and_agrees_with_the_log(replayed):
     records = frame_records(replayed)
     channels = decoded(replayed / "mission.mcap")
@@ -211,6 +212,7 @@ def test_the_mission_file_decodes_with_foxglove_schemas_and_agrees_with_the_log(
         assert (pose.pose.position.x, pose.pose.position.y, pose.pose.orientation.z) == (p["x"], p["y"], p["qz"])
 
 
+@pytest.mark.slow
 def test_each_frame_gets_the_nearest_odometry_in_time_with_its_gap(replayed):
     for record in frame_records(replayed):
         i = record["frame"]
@@ -223,6 +225,7 @@ def test_each_frame_gets_the_nearest_odometry_in_time_with_its_gap(replayed):
     assert (replayed / "trajectory.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_the_frames_table_has_integer_nanoseconds_and_opens_with_its_config(replayed):
     table = api.open_mission(replayed)
     records = frame_records(replayed)
@@ -238,6 +241,7 @@ def test_the_frames_table_has_integer_nanoseconds_and_opens_with_its_config(repl
     assert csv["surprise"].tolist() == table["surprise"].tolist()
 
 
+@pytest.mark.slow
 def test_open_mission_reads_the_log_of_a_drive_stopped_before_its_table(replayed, tmp_path):
     copy = tmp_path / "copy"
     copy.mkdir()
@@ -253,6 +257,7 @@ def test_open_mission_of_a_folder_that_is_no_run_is_one_error(tmp_path):
         api.open_mission(tmp_path)
 
 
+@pytest.mark.slow
 def test_a_bag_without_odometry_has_frames_without_pose_and_no_trajectory(tmp_path):
     bag = write_ros2_mission(tmp_path / "bag", mission_frames(3), odometry=())
     result = replay(bag, tmp_path / "out")
@@ -264,6 +269,7 @@ def test_a_bag_without_odometry_has_frames_without_pose_and_no_trajectory(tmp_pa
     assert "/pose" not in decoded(tmp_path / "out" / "mission.mcap")
 
 
+@pytest.mark.slow
 def test_odometry_on_several_topics_needs_one_named(tmp_path):
     bag = write_ros2_mission(tmp_path / "bag", mission_frames(3), odometry=("/odom", "/odom_filtered"))
     result = replay(bag, tmp_path / "out")
@@ -290,6 +296,7 @@ def test_an_odom_topic_needs_a_bag(tmp_path):
     assert result.exit_code != 0 and "--odom-topic: got '/odom', but camera '0' is not a bag" in result.output
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("encoding", ["protobuf", "json"])
 def test_an_mcap_of_foxglove_images_replays_as_the_same_frames_in_a_ros_bag(tmp_path, replayed, encoding):
     mission = write_foxglove_mission(tmp_path / "foxglove.mcap", mission_frames(12), encoding)
@@ -336,6 +343,7 @@ def test_a_simulated_drive_writes_its_mission_with_the_robots_pose(tmp_path):
     assert {topic: len(rows) for topic, rows in decoded(tmp_path / "out" / "mission.mcap").items()}["/pose"] == 5
 
 
+@pytest.mark.slow
 def test_the_live_view_serves_the_surprise_over_foxglove_websocket_and_changes_no_byte(tmp_path):
     """A real WebSocket client connects while a replay runs, subscribes to the surprise channel, receives
     frames whose values are the log's, and disconnects; the mission file is the one made without a viewer."""

@@ -25,6 +25,7 @@ def equal_walkers(rng, pairs: int = 10, walkers: int = 4):
     return 0.3 * (1 + cv * (np.sqrt(rho) * shared + np.sqrt(1 - rho) * own))
 
 
+@pytest.mark.slow
 def test_with_four_equal_walkers_the_null_reference_rejects_about_5_in_100_and_intervals_cover_the_truth():
     rng = np.random.default_rng(2026)
     draws, rejected, covered, intervals, ratios = 2000, 0, 0, 0, []

@@ -17,6 +17,9 @@ from curiosity_cli.label.stage import LabelError, label_experiment
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.workers import dask_client
 
+#: Every test labels on a Dask cluster.
+pytestmark = pytest.mark.slow
+
 runner = CliRunner()
 
 

@@ -83,6 +83,7 @@ def test_a_planted_lead_is_found_after_correction_and_the_other_points_are_not()
     assert joint.loc["leads", "p"] < 0.05
 
 
+@pytest.mark.slow
 def test_with_nothing_planted_the_joint_tests_reject_at_about_their_level():
     # 40 curves without any lead, shared comparators: each joint test and the smallest corrected p reject at 5 %
     # about as often as 5 % (a binomial 2 of 40; at most 6 allows for chance), far from a count against 5 % per point

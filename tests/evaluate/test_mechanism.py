@@ -373,6 +373,7 @@ def _figure_table(ratio: bool) -> pd.DataFrame:
     return table
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ratio", [False, True])
 def test_the_figure_is_written_as_png_and_pdf(tmp_path, ratio):
     from curiosity_cli.plots.mechanism import write_mechanism_figure

@@ -13,6 +13,7 @@ from curiosity_cli.evaluate.power import (
 )
 
 
+@pytest.mark.slow
 def test_power_matches_the_share_of_simulated_experiments_that_find_the_difference():
     rng = np.random.default_rng(3)
     sd, pairs = 0.05, 20

@@ -61,6 +61,7 @@ def children() -> set[int]:
     return {p.pid for p in psutil.Process().children(recursive=True)}
 
 
+@pytest.mark.slow
 def test_a_grid_on_a_cluster_or_a_local_one_equals_the_loky_grid_bit_for_bit(own_map, tmp_path, cluster):
     config = grid_config(own_map)
     cache = tmp_path / "cache"
@@ -92,6 +93,7 @@ def test_a_grid_on_a_cluster_or_a_local_one_equals_the_loky_grid_bit_for_bit(own
     assert not children() - before, "the local cluster's processes are gone"
 
 
+@pytest.mark.slow
 def test_a_run_lost_with_its_killed_worker_is_computed_again_elsewhere(own_map, tmp_path):
     config = grid_config(own_map, samples_per_step=100_000)  # runs of about a second: the kill lands mid-run
     run_grid(config, results_dir=tmp_path / "loky", cache_dir=tmp_path / "cache", jobs=2)
@@ -116,6 +118,7 @@ def test_a_run_lost_with_its_killed_worker_is_computed_again_elsewhere(own_map, 
     assert folder_contents(tmp_path / "dask" / "grid") == folder_contents(tmp_path / "loky" / "grid")
 
 
+@pytest.mark.slow
 def test_a_run_that_raises_on_a_worker_is_named_and_the_others_are_written(own_map, tmp_path, cluster):
     config = grid_config(own_map)
     config = dataclasses.replace(config, explore=dataclasses.replace(config.explore, weight_functions=("random-walk", "broken")))
@@ -131,6 +134,7 @@ def test_a_run_that_raises_on_a_worker_is_named_and_the_others_are_written(own_m
     assert not (tmp_path / "grid" / "runs" / "own" / "broken").exists()
 
 
+@pytest.mark.slow
 def test_a_run_that_keeps_killing_its_workers_is_named_and_the_others_are_written(own_map, tmp_path):
     preload = tmp_path / "deadly_weight.py"
     preload.write_text(DEADLY)
@@ -150,6 +154,7 @@ def test_a_run_that_keeps_killing_its_workers_is_named_and_the_others_are_writte
     assert not (tmp_path / "grid" / "runs" / "own" / "deadly").exists()
 
 
+@pytest.mark.slow
 def test_workers_with_another_version_are_refused(own_map, tmp_path, cluster, monkeypatch):
     monkeypatch.setattr(curiosity_cli, "__version__", "9.9.9")
     with pytest.raises(BackendError, match=r"the Dask worker at tcp://127\.0\.0\.1:\d+ has curiosity .+ \(here 9\.9\.9\)"):
@@ -175,6 +180,7 @@ def test_backend_and_scheduler_mistakes(own_map, tmp_path):
         run_grid(grid_config(own_map), results_dir=tmp_path, cache_dir=tmp_path / "cache", backend="spark")
 
 
+@pytest.mark.slow
 def test_an_unreachable_scheduler_is_a_one_line_error(own_map, tmp_path):
     with socket.socket() as s:  # a port nobody listens on
         s.bind(("127.0.0.1", 0))

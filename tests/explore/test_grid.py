@@ -67,6 +67,7 @@ def test_start_cells_are_shared_and_do_not_depend_on_the_number_of_restarts():
     assert not np.array_equal(start_cells(0, "own", 48, 5), start_cells(1, "own", 48, 5))
 
 
+@pytest.mark.slow
 def test_results_do_not_depend_on_the_number_of_jobs(own_map, tmp_path):
     config = grid_config(own_map, weight_functions=("topic-perplexity", "lawnmower", "scattered-cells", "compact-block"))
     run_grid(config, results_dir=tmp_path / "one", cache_dir=tmp_path / "cache", jobs=1)
@@ -84,6 +85,7 @@ def test_a_finished_grid_is_skipped_and_force_redoes_it(own_map, tmp_path):
     assert (forced.ran, forced.skipped) == (8, 0)
 
 
+@pytest.mark.slow
 def test_a_killed_grid_resumes_to_the_results_of_an_uninterrupted_one(own_map, tmp_path):
     config_path = grid_yaml(own_map, tmp_path)
     command = [sys.executable, "-m", "curiosity_cli", "explore", str(config_path), "--jobs", "1",

@@ -59,6 +59,7 @@ def test_the_default_of_every_reading_gives_the_runs_made_before_the_readings(co
     assert runs_digest(coverage=coverage) == expected
 
 
+@pytest.mark.slow
 def test_each_reading_changes_the_runs():
     base = runs_digest()
     for key, value in [

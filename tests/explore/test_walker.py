@@ -180,6 +180,7 @@ def test_a_weight_function_added_to_the_registry_drives_the_walker(monkeypatch):
     assert e.path.tolist() == [8, 9, 10, 11, 12]
 
 
+@pytest.mark.slow
 def test_topic_perplexity_walkers_linger_on_a_rare_stripe_more_than_coverage_walkers():
     # a uniform 24 x 24 map crossed by a one-cell-wide stripe of other words (column 12);
     # 32 paired restarts from start cells within 6 columns of the stripe, 100 steps each.

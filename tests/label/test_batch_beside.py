@@ -53,6 +53,7 @@ def test_a_block_waits_for_the_batch_file_made_from_its_recipe(tmp_path):
     np.testing.assert_array_equal(got, PixelTables(pixel_words, batch, 3).tables(labels, 3))
 
 
+@pytest.mark.slow
 def test_reproduce_computes_the_batch_reference_beside_the_exploration_and_it_is_the_label_stages(own_map, tmp_path):
     from curiosity_cli.study.pipeline import reproduce
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from small_maps import grid_config
 
 from curiosity_cli.explore.grid import run_grid
@@ -11,6 +12,7 @@ from curiosity_cli.label.stage import label_experiment
 from curiosity_cli.words.store import load_store
 
 
+@pytest.mark.slow
 def test_the_segments_sum_to_the_stage_and_the_blocks_hold_every_run(own_map, tmp_path):
     config = grid_config(own_map)
     run_grid(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=2)

@@ -9,6 +9,7 @@ import threading
 from pathlib import Path
 
 import numpy as np
+import pytest
 from small_maps import grid_config
 from typer.testing import CliRunner
 
@@ -33,6 +34,7 @@ def label_bytes(folder: Path) -> dict[str, bytes]:
     return {str(path.relative_to(folder)): path.read_bytes() for path in files}
 
 
+@pytest.mark.slow
 def test_a_second_experiment_takes_every_item_and_its_files_are_the_bytes_computing_gives(own_map, tmp_path):
     config, first = explored(own_map, tmp_path, "first")
     done = label_experiment(config, first, cache_dir=tmp_path / "cache", jobs=1)
@@ -60,6 +62,7 @@ def test_a_second_experiment_takes_every_item_and_its_files_are_the_bytes_comput
             assert np.array_equal(again[name], before[name])
 
 
+@pytest.mark.slow
 def test_a_comparator_whose_specification_changes_only_topic_perplexity_takes_its_labels(own_map, tmp_path):
     config, first = explored(own_map, tmp_path, "default")
     label_experiment(config, first, cache_dir=tmp_path / "cache", jobs=1)
@@ -81,6 +84,7 @@ def test_a_comparator_whose_specification_changes_only_topic_perplexity_takes_it
     )
 
 
+@pytest.mark.slow
 def test_an_altered_shared_item_is_named_and_computed_again(own_map, tmp_path, capsys):
     config, first = explored(own_map, tmp_path, "first")
     label_experiment(config, first, cache_dir=tmp_path / "cache", jobs=1)

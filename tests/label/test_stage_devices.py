@@ -44,6 +44,7 @@ def test_a_device_taking_one_block_at_a_time_gets_every_chain_of_a_map_in_one_bl
     assert label_contents(folder) == label_contents(tmp_path / "one" / "grid")
 
 
+@pytest.mark.slow
 def test_reproduce_on_a_device_that_frees_the_cores_leaves_the_batch_references_to_the_label_stage(
     own_map, tmp_path, monkeypatch,
 ):

@@ -71,6 +71,7 @@ def test_a_tampered_archive_is_refused(cache):
     assert not fetched_dir("zurich-zh17").exists()
 
 
+@pytest.mark.slow
 def test_the_recipe_on_a_synthetic_archive(cache, monkeypatch):
     rng = np.random.default_rng(1)
     scene = rng.integers(0, 2048, size=(1025, 1112, 4), dtype=np.uint16)
@@ -122,6 +123,7 @@ def test_an_unknown_colour_in_the_ground_truth_is_refused(cache, monkeypatch):
         load_map("zurich-zh17")
 
 
+@pytest.mark.slow
 def test_a_damaged_cached_image_is_made_again_from_the_archive(cache, monkeypatch, capsys):
     scene = np.random.default_rng(2).integers(0, 2048, size=(1025, 1112, 4), dtype=np.uint16)
     truth = np.full((1025, 1112, 3), 255, np.uint8)

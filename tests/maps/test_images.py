@@ -139,6 +139,7 @@ def test_a_dataset_yaml_needs_only_the_keys_it_uses(tmp_path):
         load_map(path)
 
 
+@pytest.mark.slow
 def test_geotiff_tags_give_no_warning_on_the_terminal(tmp_path):
     tifffile.imwrite(
         tmp_path / "scene.tif", texture((64, 64, 4), 2047), photometric="minisblack", planarconfig="contig", extratags=GEO_TAGS

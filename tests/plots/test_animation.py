@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 
+import pytest
 from PIL import Image
 from small_maps import grid_config
 from typer.testing import CliRunner
@@ -16,6 +17,7 @@ from curiosity_cli.explore.grid import run_grid
 runner = CliRunner()
 
 
+@pytest.mark.slow
 def test_a_run_animates_one_frame_per_step_with_its_checkpoints_labelled(own_map, tmp_path):
     config = grid_config(own_map, restarts=1)
     folder = run_grid(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1).folder

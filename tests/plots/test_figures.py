@@ -40,6 +40,7 @@ def names(paths) -> list[str]:
     return [p.name for p in paths]
 
 
+@pytest.mark.slow
 def test_every_figure_is_written_as_png_and_pdf(experiment):
     import matplotlib
 
@@ -65,6 +66,7 @@ def test_every_figure_is_written_as_png_and_pdf(experiment):
     assert sorted(p.name for p in (experiment / "figures").iterdir()) == sorted(names(written))  # no temp files
 
 
+@pytest.mark.slow
 def test_a_map_without_human_labels_gets_no_human_panel(tmp_path, bare_map):
     experiment = make_experiment(tmp_path, [str(bare_map)], restarts=2, lengths=(10, 20, 40), n_topics=8, sweeps=5)
     written = write_figures(experiment)
@@ -74,6 +76,7 @@ def test_a_map_without_human_labels_gets_no_human_panel(tmp_path, bare_map):
     assert len(written.skipped) == 2 and written.skipped[1].startswith("REPORT.md: ")
 
 
+@pytest.mark.slow
 def test_missing_labelings_skip_their_figures_only(experiment):
     shutil.rmtree(experiment / "batch")
     shutil.rmtree(experiment / "labels" / "bare")
@@ -97,6 +100,7 @@ def test_missing_labelings_skip_their_figures_only(experiment):
         write_figures(experiment)
 
 
+@pytest.mark.slow
 def test_corrupt_or_misshapen_inputs_are_named_and_skipped(experiment):
     (experiment / "batch" / "own.npz").write_bytes(b"not a zip file")
     example = next((experiment / "labels" / "bare" / "examples").glob("topic-perplexity-restart-000-*.npz"))
@@ -118,6 +122,7 @@ def test_corrupt_or_misshapen_inputs_are_named_and_skipped(experiment):
     assert {"mi-vs-length-human.png", "labelings-own.png", "labelings-bare.png", "batch-convergence.png"} <= set(names(written))
 
 
+@pytest.mark.slow
 def test_other_weight_functions_get_grey_styles(tmp_path, own_map):
     experiment = make_experiment(
         tmp_path, [str(own_map)], restarts=2, lengths=(10, 20), weights=("random-walk", "levy-flight", "greedy"), n_topics=6
@@ -131,6 +136,7 @@ def test_other_weight_functions_get_grey_styles(tmp_path, own_map):
     assert "path-own.png" in names(written)
 
 
+@pytest.mark.slow
 def test_the_lawnmower_has_its_own_marker_and_ceilings_are_dashed_lines_after_the_walkers(tmp_path, own_map):
     weights = ("random-walk", "topic-perplexity", "lawnmower", "scattered-cells", "compact-block")
     experiment = make_experiment(tmp_path, [str(own_map)], restarts=2, lengths=(10, 20), weights=weights, n_topics=6)
@@ -148,6 +154,7 @@ def test_the_lawnmower_has_its_own_marker_and_ceilings_are_dashed_lines_after_th
     assert "mi-vs-length-human.png" in names(write_figures(experiment))
 
 
+@pytest.mark.slow
 def test_missing_folder_or_mi_table_is_a_plot_error(tmp_path, experiment):
     with pytest.raises(PlotError, match=r"no such experiment folder; explore makes it"):
         write_figures(tmp_path / "nowhere")

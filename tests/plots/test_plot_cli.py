@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import shutil
 
+import pytest
 from synthetic_experiment import make_experiment, seal
 from typer.testing import CliRunner
 
@@ -24,6 +25,7 @@ def one_line_error(result) -> str:
     return lines[0]
 
 
+@pytest.mark.slow
 def test_plot_writes_the_figures_and_lists_them(tmp_path, own_map):
     experiment = make_experiment(tmp_path, [str(own_map)], restarts=2, lengths=(10, 20, 40), n_topics=8, sweeps=10)
     shutil.rmtree(experiment / "batch")
@@ -36,6 +38,7 @@ def test_plot_writes_the_figures_and_lists_them(tmp_path, own_map):
     assert "skipped: " in result.stderr and "batch/own.npz: not found (label the experiment first)" in result.stderr
 
 
+@pytest.mark.slow
 def test_plot_defaults_to_the_quick_experiment(tmp_path, monkeypatch, own_map):
     make_experiment(tmp_path / "data", [str(own_map)], restarts=2, lengths=(10, 20), n_topics=6, sweeps=5)
     (tmp_path / "results").mkdir()

@@ -166,6 +166,7 @@ CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", CASES)
 def test_a_bad_config_yaml_or_name_is_one_clean_line(tmp_path, case):
     prepare, args, code, names = CASES[case]

@@ -62,6 +62,7 @@ def _strict_json(line: str) -> dict:
     return json.loads(line, parse_constant=lambda name: pytest.fail(f"{name} in {line}"))
 
 
+@pytest.mark.slow
 def test_every_line_a_dry_run_writes_is_strict_json(tmp_path):
     outcome = run_cli(["drive", "--dry-run", *SIM, "--heading-deg", "30", "--max-frames", "3", "--out", "run"], cwd=tmp_path)
     assert outcome.code == 0, outcome.output

@@ -15,9 +15,12 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
 import yaml
 from cli_cases import EXPERIMENT, EXPLORE, LABEL, assert_clean_error, run_cli
 
+#: Every case edits a copy of an experiment made through the command line (conftest.py's experiment).
+pytestmark = pytest.mark.slow
 RUNS = f"{EXPERIMENT}/runs/own/random-walk"
 LABELS = f"{EXPERIMENT}/labels/own"
 

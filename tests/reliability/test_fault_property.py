@@ -443,6 +443,7 @@ def test_one_fault_is_refused_by_name_or_makes_no_difference(finished: Finished,
     check_fault(fault, finished.restored(), clean)
 
 
+@pytest.mark.slow
 def test_the_faults_are_what_they_say(finished: Finished):
     """Each kind of fault changes its file as described, and a restore undoes it."""
     root, experiment = finished.restored(), finished.pristine

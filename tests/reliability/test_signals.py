@@ -98,6 +98,7 @@ def _assert_interrupted(run: Exploring, code: int) -> None:
     assert text.count(INTERRUPTED) == 1 and text.rstrip().endswith(INTERRUPTED), text
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "backend",
     ["loky", pytest.param("dask", marks=pytest.mark.skipif(not _has_distributed(), reason="distributed not installed"))],
@@ -109,6 +110,7 @@ def test_ctrl_c_while_exploring_is_one_line_and_exit_130(exploring, backend):
     assert run.remaining_workers() == []
 
 
+@pytest.mark.slow
 def test_sigterm_stops_the_workers_too_and_exits_143(exploring):
     run = exploring()
     run.process.terminate()  # to the command's process alone, as `kill PID` does
@@ -172,6 +174,7 @@ print("finished", flush=True)
 """
 
 
+@pytest.mark.slow
 def test_a_step_refined_at_the_sample_bound_stops_within_a_second_of_ctrl_c():
     process = subprocess.Popen(
         [sys.executable, "-c", _LONG_REFINEMENT], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -191,6 +194,7 @@ def test_a_step_refined_at_the_sample_bound_stops_within_a_second_of_ctrl_c():
     assert took < 1.5, f"{took:.1f} s from Ctrl-C to exit"
 
 
+@pytest.mark.slow
 def test_the_workers_of_a_killed_command_exit_on_their_own(exploring):
     run = exploring()
     run.process.kill()
@@ -224,12 +228,14 @@ def _pid(task, threads):
     return os.getpid()
 
 
+@pytest.mark.slow
 def test_one_job_runs_in_this_process_without_watching_its_parent():
     with Workers("loky", jobs=1) as workers, workers.compute(_pid, [1, 2]) as outcomes:
         assert [pid for _, pid in outcomes] == [os.getpid()] * 2
     time.sleep(2 * ORPHAN_POLL_SECONDS)  # still alive: no parent watch runs in the command's own process
 
 
+@pytest.mark.slow
 @TWO_JOBS
 def test_a_worker_that_dies_is_one_backend_error():
     with Workers("loky", jobs=2) as workers, workers.compute(_die, [1, 2]) as outcomes:
@@ -246,6 +252,7 @@ def _grow_past_the_leak_limit(task, threads):
     return task
 
 
+@pytest.mark.slow
 @TWO_JOBS
 def test_a_replaced_worker_is_one_note_line_not_a_raw_warning(capfd):
     with warnings.catch_warnings():

@@ -12,11 +12,14 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 import yaml
 from cli_cases import EXPERIMENT, EXPLORE, FAST_LABELS, assert_clean_error, run_cli
 
 from curiosity_cli.experiment.layout import ExperimentFolder
 
+#: Every case edits a copy of an experiment made through the command line (conftest.py's experiment).
+pytestmark = pytest.mark.slow
 CONFIG = f"{EXPERIMENT}/config.yaml"
 
 

@@ -11,6 +11,7 @@ import dataclasses
 import typing
 from pathlib import Path
 
+import pytest
 import yaml
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
@@ -57,6 +58,7 @@ def _write(folder: Path, name: str, text: str) -> Path:
     return path
 
 
+@pytest.mark.slow
 @FUZZ
 @given(text=st.text(max_size=200))
 def test_any_text_as_a_config_or_a_dataset_yaml(tmp_path, text):
@@ -64,6 +66,7 @@ def test_any_text_as_a_config_or_a_dataset_yaml(tmp_path, text):
     _refused_or_loaded(load_dataset_config, _write(tmp_path, "d.yaml", text))
 
 
+@pytest.mark.slow
 @FUZZ
 @given(document=VALUES)
 def test_any_yaml_document_as_a_config_or_a_dataset_yaml(tmp_path, document):
@@ -72,6 +75,7 @@ def test_any_yaml_document_as_a_config_or_a_dataset_yaml(tmp_path, document):
     _refused_or_loaded(load_dataset_config, _write(tmp_path, "d.yaml", text))
 
 
+@pytest.mark.slow
 @FUZZ
 @given(changes=st.dictionaries(st.sampled_from(_section_keys()), VALUES, max_size=4))
 @example(changes={"words.vocabulary_dir": "~nobody-here/x"})
@@ -87,12 +91,14 @@ def test_any_values_for_an_experiment_configs_keys(tmp_path, changes):
     _refused_or_loaded(load_config, _write(tmp_path, "e.yaml", yaml.safe_dump(document)))
 
 
+@pytest.mark.slow
 @FUZZ
 @given(key=st.sampled_from(_section_keys()) | st.text(max_size=12), text=st.text(max_size=40))
 def test_any_set_override(key, text):
     _refused_or_loaded(load_config, CONFIG_DIR / "quick.yaml", [f"{key}={text}"])
 
 
+@pytest.mark.slow
 @FUZZ
 @given(document=st.dictionaries(st.sampled_from(_keys(DatasetConfig)), VALUES, max_size=6))
 @example(document={"name": "f", "cell_width": 16, "word_stride": 1, "image": "~nobody-here/x"})

@@ -75,6 +75,7 @@ def test_every_chain_of_a_block_is_its_naive_twin_draw_for_draw():
         np.testing.assert_array_equal(chains.ml_topics()[:, r], ml_topics_naive(twin, sorted(twin.topics)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n_topics", [8, 13, 24, 127])
 def test_the_draw_over_many_topics_is_the_twins(n_topics):
     """The sweep searches the running sums eight topics at a time and stops once every chain is past its
@@ -173,6 +174,7 @@ def test_a_chain_does_not_depend_on_the_chains_beside_it(others):
     np.testing.assert_array_equal(block.ml_topics()[:, 0], alone.ml_topics()[:, 0])
 
 
+@pytest.mark.slow
 def test_lock_step_marginals_match_the_exact_single_chain_sampler():
     """Per-word topic frequencies of 8 lock-step chains against 8 chains of the model's own
     frozen sampler (another draw order and summation, the same distribution), next to the

@@ -22,6 +22,7 @@ pytestmark = pytest.mark.skipif(
 SCRIPT = Path(__file__).with_name("cuda_cases.py")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", list(CASES))
 def test_the_simulated_gpu_gives_the_cpus_bytes(case):
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}

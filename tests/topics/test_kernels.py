@@ -260,6 +260,7 @@ def test_frozen_refine_cells_matches_twin(spatial):
     assert_matches(model, twin)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("threads", [1, 2])
 def test_frozen_sweeps_over_runs_of_one_word_id_match_twin(threads):
     """Cells sorted by word id, as word stores are: long runs of one word id in a cell."""

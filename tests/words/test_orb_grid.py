@@ -118,6 +118,7 @@ def test_bad_arguments_are_named(image, step, message):
         grid_orb(image, step=step)
 
 
+@pytest.mark.slow
 def test_a_grid_step_that_places_no_orb_word_is_refused_by_name(tmp_path):
     """Issue 44: orb_grid_step=100000 gave a store without ORB words, and exit 0."""
     from typer.testing import CliRunner

@@ -39,6 +39,7 @@ def test_vocabulary_round_trips(tmp_path):
     assert again.sha256 == texton.sha256 and again.recipe == texton.recipe
 
 
+@pytest.mark.slow
 def test_texton_vocabulary_build_is_seeded(monkeypatch):
     import curiosity_cli.words.vocab as vocab
 
@@ -50,6 +51,7 @@ def test_texton_vocabulary_build_is_seeded(monkeypatch):
     assert build_texton_vocabulary(20, seed=6).sha256 != a.sha256
 
 
+@pytest.mark.slow
 def test_a_vocabulary_built_by_the_same_recipe_is_kept_so_a_stopped_build_goes_on(monkeypatch, tmp_path):
     import curiosity_cli.words.vocab as vocab
     from curiosity_cli import api

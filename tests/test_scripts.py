@@ -1,0 +1,94 @@
+"""Every top-level script under scripts/ runs its smoke mode, so a changed API breaks a test, not a script.
+
+A script's ``--smoke`` runs the code it always runs, on tiny inputs (the smallest shipped map,
+a few steps and sweeps), in seconds, and exits 0. The benchmarks and studies print and never
+assert, so what is checked is that each runs to its end: its exit code and its last words.
+A script that cannot run here says why in :data:`NOT_SMOKED`.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+#: Each script smoked, and words its smoke run prints at its end.
+SMOKED = {
+    "bench_batch_threads.py": "colours",
+    "bench_drive.py": "ACK: VEL written",
+    "bench_explore.py": "topic-perplexity",
+    "bench_extract.py": "issue #3's budget",
+    "bench_gibbs.py": "synthetic: a/c = ",  # tomotopy, its reference, comes with the test extra (the bench extra)
+    "bench_label.py": "goal: lock-step",
+    # without a GPU the label benchmarks run their CPU side, and device_compare.py the CPU against itself: the
+    # CUDA kernels run under numba's simulator in tests/topics/test_chains_cuda.py, on tiny maps, as a shipped
+    # map's 300,000 words would take the simulator many minutes
+    "bench_label_devices.py": "CPU / CUDA",
+    "bench_label_profile.py": "of the stage's wall time",
+    "bench_long_mission.py": "timeline:",
+    "bench_pipeline.py": "batch reference, 1 sweeps",
+    "bench_scaleout.py": "overhead per task",
+    "bench_study_reuse.py": "--reuse",
+    "check_drive_surprise.py": "target <= 1.5: met",
+    "compare_mi.py": "outside the noise:",
+    "device_compare.py": "the same bytes on both devices",
+    "make_maps.py": "rare-patches: identical",
+    "null_reference.py": "one walker 50 % worse",
+    "record_study.py": "recorded 1 combinations",
+    "study_batch_sampler.py": "verdict:",
+    "study_budget.py": "by word samples per step",
+    "study_frozen_cost.py": "fit:",
+    "study_label_sweeps.py": "doubling:",
+    "study_screening.py": "rost",
+}
+#: The smoke runs of a few seconds, in the quick tier; the others start numba's kernels, OpenCV, Dask or a drive
+#: in processes of their own and are marked slow.
+QUICK = {"compare_mi.py", "make_maps.py", "null_reference.py"}
+#: Each script not smoked, and why.
+NOT_SMOKED = {
+    "bench_chain_kernel.py": "it checks out a reference commit with `git worktree` (the repository's own .git) and "
+    "compiles each version's kernels in a numba cache of its own: minutes",
+    "bench_quick_job.py": "it checks out two commits with `git worktree` (the repository's own .git) and runs the "
+    "quick job, which fetches zurich-zh17, four times: many minutes and a download",
+    "device_check.sh": "the check on a GPU machine, run there by hand (issue 33); the scripts it runs are smoked "
+    "here, and its `--small` runs its CPU parts in minutes",
+    "make_geonrw_map.py": "its source tile is in a GitHub repository that neither CI nor a user's machine can reach "
+    "(tests/maps/test_make_maps.py checks the legend it writes)",
+    "prepare_device.sh": "it downloads a numba-cuda wheel with pip and fetches zurich-zh17: the network",
+}
+
+
+def test_every_script_is_smoked_or_says_why_not():
+    scripts = sorted(p.name for p in SCRIPTS.iterdir() if p.suffix in (".py", ".sh"))
+    assert scripts == sorted([*SMOKED, *NOT_SMOKED])
+    assert not set(SMOKED) & set(NOT_SMOKED)
+
+
+@pytest.fixture(scope="module")
+def environment(tmp_path_factory) -> dict:
+    """The scripts' environment: a user cache of their own (the smallest map's words extracted once for all), the
+    kernels compiled in the real one, results in a temporary folder, figures without a display."""
+    from curiosity_cli._numba import cache_dir
+
+    folder = tmp_path_factory.mktemp("scripts")
+    return {
+        **os.environ, "CURIOSITY_CACHE": str(folder / "cache"), "NUMBA_CACHE_DIR": str(cache_dir()),
+        "CURIOSITY_RESULTS": str(folder / "results"), "MPLBACKEND": "Agg",
+    }
+
+
+@pytest.mark.parametrize(
+    "script",
+    [pytest.param(name, marks=[] if name in QUICK else [pytest.mark.slow]) for name in SMOKED],
+)
+def test_the_smoke_mode_runs_to_its_end(script, environment, tmp_path):
+    done = subprocess.run(
+        [sys.executable, str(SCRIPTS / script), "--smoke"], env=environment, cwd=tmp_path, capture_output=True,
+        text=True, timeout=600,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert SMOKED[script] in done.stdout, done.stdout
