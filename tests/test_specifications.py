@@ -153,6 +153,7 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
     # the study ran no word perplexity: no point has every paper walker, so no joint test
     assert table["p_each_wy"].isna().all()
     assert "No point has every walker's runs: no joint test." in report
+    assert "no Westfall-Young correction (no point has every walker's runs)" in report
     inside = int(table["paper_inside"].sum())
     assert "leads every other walker (a higher mean MI at 80 steps" in report and "in **0 of 2** points" in report
     assert "Uncorrected, which is exploratory, in 0 of 2 (0 of 2 on own)" in report

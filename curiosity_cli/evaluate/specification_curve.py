@@ -212,7 +212,11 @@ def curve_sentence(table) -> str:
         return "No specification has a headline at 80 steps to count."
     total = len(table)
     holm = table[table["p_each_holm"] < ALPHA]
-    wy = int((table["p_each_wy"] < ALPHA).sum())
+    wy = (
+        f"in {int((table['p_each_wy'] < ALPHA).sum())} with Westfall-Young's correction, which uses how the points "
+        "depend on each other (the random walk left out of the permuted walkers)"
+        if table["p_each_wy"].notna().any() else "no Westfall-Young correction (no point has every walker's runs)"
+    )
     bh = int((table["p_each_bh"] < ALPHA).sum())
     uncorrected = table["beats_all"].astype(bool)
     per_map = "; ".join(
@@ -222,8 +226,7 @@ def curve_sentence(table) -> str:
     sentence = (
         f"Topic perplexity leads every other walker (a higher mean MI at {HEADLINE_LENGTH} steps and a paired "
         f"Wilcoxon p below {ALPHA:g} against each) in **{len(holm)} of {total}** points after correcting for the "
-        f"{total} (Holm{': ' + _points(holm) if len(holm) else ''}); in {wy} with Westfall-Young's correction, which "
-        f"uses how the points depend on each other (the random walk left out of the permuted walkers), and in {bh} "
+        f"{total} (Holm{': ' + _points(holm) if len(holm) else ''}); {wy}; and in {bh} "
         f"at a false discovery rate of {ALPHA:g} (Benjamini-Hochberg). Uncorrected, which is exploratory, in "
         f"{int(uncorrected.sum())} of {total} ({per_map})"
     )
