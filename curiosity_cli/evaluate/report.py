@@ -92,7 +92,10 @@ def verdict(row: Mapping, effects=None) -> str:
     steps = f"{length} steps" + ("" if length == HEADLINE_LENGTH else f" (its longest path; the paper reads {HEADLINE_LENGTH})")
     holm = row.get("p_each_holm", np.nan)
     if row["beats_all"] and holm < ALPHA:
-        claim = f"topic perplexity beats every other walker at {steps} ({_p(row['p_each'])} against each, Holm {_p(holm)} over the experiment's maps)"
+        claim = (
+            f"topic perplexity beats every other walker at {steps} ({_p(row['p_each'])} against each, "
+            f"Holm {_p(holm)} over the experiment's maps)"
+        )
     elif row["beats_all"]:
         claim = (
             f"topic perplexity beats every other walker at {steps} on this map alone ({_p(row['p_each'])} against each), "

@@ -71,16 +71,16 @@ def _versus_names(walker: str) -> tuple[str, str, str, str]:
     return f"ratio_{walker}", f"ratio_{walker}_low", f"ratio_{walker}_high", f"p_{walker}"
 
 
-#: The p-values of a curve corrected over all its points: Holm and Benjamini-Hochberg
-#: (:data:`~curiosity_cli.evaluate.headline.ADJUSTED_COLUMNS`), and Westfall-Young min-P from the joint null
-#: (:mod:`~curiosity_cli.evaluate.joint_null`): ``p_each_wy`` and ``null_no_rw_p_wy`` with the random walk left
-#: out of the permuted walkers, the one the curve's verdict reads; ``p_each_wy_all`` and ``null_p_wy`` with all.
-WY_COLUMNS = ("p_each_wy", "null_no_rw_p_wy", "p_each_wy_all", "null_p_wy")
-#: The two nulls of a curve's joint test: which of :data:`VERSUS` are permuted with topic perplexity.
+#: The two nulls of a curve's joint test (:mod:`~curiosity_cli.evaluate.joint_null`): which of :data:`VERSUS` are
+#: permuted with topic perplexity, and the columns of each point's Westfall-Young min-P adjusted intersection-union
+#: p and null p under it. The random walk left out is the one the curve's verdict reads.
 JOINT_NULLS = {
-    "without random walk": tuple(w != NOT_EXCHANGEABLE for w in VERSUS),
-    "all walkers": tuple(True for _ in VERSUS),
+    "without random walk": (tuple(w != NOT_EXCHANGEABLE for w in VERSUS), "p_each_wy", "null_no_rw_p_wy"),
+    "all walkers": (tuple(True for _ in VERSUS), "p_each_wy_all", "null_p_wy"),
 }
+#: The p-values of a curve corrected over all its points: Holm and Benjamini-Hochberg
+#: (:data:`~curiosity_cli.evaluate.headline.ADJUSTED_COLUMNS`), and Westfall-Young's under each joint null.
+WY_COLUMNS = tuple(column for _, *columns in JOINT_NULLS.values() for column in columns)
 
 #: A curve row's columns after those naming its specification (:func:`curve_table`).
 CURVE_COLUMNS = (
@@ -143,9 +143,8 @@ def curve_table(specifications: Sequence[tuple[Mapping[str, str], Pooled]], agai
     joint = []
     tested = [i for i, point in enumerate(points) if point is not None]
     if tested:
-        for null, exchangeable in JOINT_NULLS.items():
+        for null, (exchangeable, each, ratio) in JOINT_NULLS.items():
             result = joint_null([points[i] for i in tested], exchangeable)
-            each, ratio = ("p_each_wy", "null_no_rw_p_wy") if null == "without random walk" else ("p_each_wy_all", "null_p_wy")
             table.loc[tested, each], table.loc[tested, ratio] = result.p_each_wy, result.null_p_wy
             joint.append(result.statistics.assign(null=null, points=len(tested), permutations=result.permutations))
     joint = pd.concat(joint, ignore_index=True) if joint else pd.DataFrame(columns=JOINT_COLUMNS)
