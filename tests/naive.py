@@ -665,6 +665,21 @@ def mutual_information_naive(a, b) -> float:
     return total
 
 
+def expected_mutual_information_naive(table) -> float:
+    """Twin of ``evaluate/_chance_kernels.py``: E[MI] in bits over every count of every cell, each
+    weighted by its hypergeometric probability (scipy), with no tail left out."""
+    from scipy.stats import hypergeom
+
+    table = np.asarray(table)
+    total = int(table.sum())
+    expected = 0.0
+    for a in table.sum(axis=1).tolist():
+        for b in table.sum(axis=0).tolist():
+            for n in range(max(1, a + b - total), min(a, b) + 1):
+                expected += hypergeom.pmf(n, total, a, b) * n / total * math.log2(total * n / (a * b))
+    return expected
+
+
 # --------------------------------------------------------------------------- label tables
 
 

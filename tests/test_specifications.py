@@ -167,13 +167,30 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
     mtimes = {path: path.stat().st_mtime_ns for path in finished}
     first = (folder / "specifications.csv").read_bytes()
     (folder / "specifications.csv").unlink()
-    # declared in the other order: the same folders, nothing redone, the same curve
+    # every measure beside MI under each specification: the same pairs, the same decision
+    found = pd.read_csv(folder / "specifications-found.csv", dtype={"seeds": str})
+    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall"} and len(found) == 8
+    for row in found.query("measure == 'mean_recall'").to_dict("records"):
+        mi, _ = _pooled(folder, row["specification"])
+        pairs = mi.pivot_table(index=["replicate", "restart"], columns="weight_function", values="mean_recall")
+        difference = pairs["topic-perplexity"] - pairs["random-walk"]
+        assert row["difference_random-walk"] == pytest.approx(difference.mean())
+        assert row["closest_difference"] == pytest.approx(
+            min(row["difference_random-walk"], row["difference_stochastic-coverage"])
+        )
+        assert not row["beats_all"]  # 4 pairs
+    assert "### What each walker found" in report and "| mean recall | 2 | 0 | 0 |" in report
+    assert not (folder / "specification-curve-mean_recall.png").exists()
+
+    # declared in the other order: the same folders, nothing redone, the same curve; and one measure's curve
     study_yaml(own_map, tmp_path, {"clamp": SPECIFICATIONS["clamp"], "default": {}})
-    result = sweep(config, results)
+    result = sweep(config, results, "--measure", "mean_recall")
     assert result.exit_code == 0, result.output
     assert result.stderr.count("exploring (6 runs already done)") == 4
     assert {path: path.stat().st_mtime_ns for path in finished} == mtimes
     assert (folder / "specifications.csv").read_bytes() == first
+    assert "![specification curve, mean recall](specification-curve-mean_recall.png)" in (folder / "SWEEP.md").read_text()
+    assert (folder / "specification-curve-mean_recall.png").stat().st_size > 1000
 
 
 @pytest.mark.parametrize(
@@ -256,3 +273,20 @@ def test_config_show_checks_every_experiment_of_a_study_and_says_what_reproduce_
     edit_yaml(config, specifications=..., sweep={"seed": [0, -5]})
     bad = CliRunner().invoke(app, ["config", "show", str(config)])
     assert bad.exit_code == 1 and bad.stderr.startswith(f"Error: {config}: sweep.seed: got -5 (int)")
+
+
+def test_a_measure_curve_is_only_for_a_study_of_a_measure_there_is(own_map, tmp_path):
+    from test_sweep import runner
+
+    from curiosity_cli.cli import app
+
+    config = study_yaml(own_map, tmp_path)
+    unknown = sweep(config, tmp_path / "results", "--measure", "auc")
+    assert unknown.exit_code == 2 and "--measure: got 'auc', expected one of mi, nmi, ami, classes_found, mean_recall" in unknown.output
+    (tmp_path / "plain").mkdir()
+    plain = tiny_yaml(own_map, tmp_path / "plain")
+    single = runner.invoke(app, ["reproduce", str(plain), "--measure", "nmi", "--results-dir", str(tmp_path / "r")])
+    assert single.exit_code == 2 and "--measure: draws a study's specification curve" in single.output
+    swept = sweep(plain, tmp_path / "r", "--sweep", "seed=1,2", "--measure", "nmi")
+    assert swept.exit_code == 2 and "this config declares no specifications" in swept.output
+    assert not (tmp_path / "results").exists() and not (tmp_path / "r").exists()

@@ -27,7 +27,7 @@ command                function
 ``label``              :func:`label`
 ``evaluate``           :func:`evaluate`
 ``plot``               :func:`plot`; ``--animate``: :func:`animate`
-``reproduce``          :func:`reproduce`
+``reproduce``          :func:`reproduce` (``--measure``: one of :func:`measures`)
 ``drive``              :func:`drive`; ``--timeline``: :func:`redraw_timeline`
 ``simrobot``           :func:`simrobot`
 ``datasets list``      :func:`list_datasets`
@@ -48,7 +48,7 @@ from __future__ import annotations
 from curiosity_cli.api.configs import init_config, show_config
 from curiosity_cli.api.maps import DatasetRow, Preview, build_vocabularies, list_datasets, show_datasets
 from curiosity_cli.api.pipeline import (
-    Config, animate, evaluate, explore, extract, label, load, plot, reproduce, run_named, word_store,
+    Config, animate, evaluate, explore, extract, label, load, measures, plot, reproduce, run_named, word_store,
 )
 from curiosity_cli.api.results import Results, open_experiment, verdict
 from curiosity_cli.api.robot import RobotStart, drive, open_mission, redraw_timeline, simrobot
@@ -56,7 +56,7 @@ from curiosity_cli.progress import Progress
 
 __all__ = [
     "Config", "DatasetRow", "Preview", "Progress", "Results", "RobotStart", "animate", "build_vocabularies", "drive", "evaluate",
-    "explore", "extract", "init_config", "label", "list_datasets", "load", "open_experiment", "open_mission", "plot",
+    "explore", "extract", "init_config", "label", "list_datasets", "load", "measures", "open_experiment", "open_mission", "plot",
     "redraw_timeline",
     "reproduce", "run_named", "show_config", "show_datasets", "simrobot", "verdict", "word_store",
 ]

@@ -350,6 +350,7 @@ def reproduce(
     results_dir: Path = DEFAULT_RESULTS, cache_dir: Path = DEFAULT_CACHE, converged: bool = False,
     on_stage: Callable[[str, int], None] | None = None, on_done: Callable[[], None] | None = None,
     on_status: Callable[[str], None] | None = None, reuse: bool = True, record: Path | None = None,
+    measure: str = "mi",
 ) -> Path:
     """``curiosity reproduce``: explore, label, evaluate and plot; returns the path of ``REPORT.md``.
 
@@ -378,12 +379,16 @@ def reproduce(
         the seeds and specifications recorded there are taken, not computed; each one
         computed is recorded there. Only for a config that declares specifications and
         sweeps only ``seed``.
+    measure : str
+        A study's specification curve is drawn for this measure too (one of
+        :func:`measures`; MI's is always drawn). Only for a config that declares specifications.
 
     Raises
     ------
     UsageError
         ``sweeps`` not in the ``KEY=V1,V2,...`` form; ``scheduler`` without ``backend="dask"``;
-        ``record`` for a config that is not a study.
+        ``record`` or another ``measure`` than MI for a config that is not a study; a
+        ``measure`` that is none.
     RecordError
         A recorded combination made from other recipes than the study gives now, or edited.
     """
@@ -398,6 +403,8 @@ def reproduce(
     force, converged = boolean(force, "force"), boolean(converged, "converged")
     results_dir, cache_dir = folder_argument(results_dir, "results_dir"), folder_argument(cache_dir, "cache_dir")
     record = optional_path(record, "record")
+    if measure not in measures():
+        raise UsageError(f"measure: got {measure!r}, expected one of {', '.join(measures())}", parameter="measure")
     with _shown(on_stage, on_done) as (on_stage, on_done):
         if converged:
             overrides = with_converged_labels(overrides)
@@ -415,7 +422,7 @@ def reproduce(
                 return _reproduce_sweep(
                     config, overrides, sweeps, specifications, from_file, on_stage=on_stage, on_done=on_done, on_status=on_status,
                     results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, backend=backend, scheduler=scheduler,
-                    reuse=reuse, record=record,
+                    reuse=reuse, record=record, measure=measure,
                 )
             resolved = load_config(config, overrides)  # neither a sweep nor specifications, just read: one experiment
         if record is not None:
@@ -423,10 +430,22 @@ def reproduce(
                 "record: keeps a study's seeds (a config that declares specifications and sweeps seed); this is one experiment",
                 parameter="record",
             )
+        if measure != "mi":
+            raise UsageError(
+                "measure: draws a study's specification curve (a config that declares specifications); this is one "
+                "experiment, whose REPORT.md compares every measure", parameter="measure",
+            )
         return run_pipeline(
             resolved, results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force,
             backend=backend, scheduler=scheduler, on_stage=on_stage, on_done=on_done, reuse=reuse,
         )
+
+
+def measures() -> list[str]:
+    """The names of the measures a study's curve can be drawn for (``reproduce(measure=...)``), MI first."""
+    from curiosity_cli.evaluate.measures import MEASURES
+
+    return [m.name for m in MEASURES if m.name == "mi" or m.found]
 
 
 def _reproduce_sweep(config, overrides, sweeps, specifications, from_file, *, on_status, **options) -> Path:
@@ -441,6 +460,9 @@ def _reproduce_sweep(config, overrides, sweeps, specifications, from_file, *, on
     except SweepSyntaxError as exc:
         raise UsageError(f"sweeps: {exc}", parameter="sweeps") from None
     sweep = plan_sweep(config, axes, overrides, specifications, from_file)
+    if options["measure"] != "mi" and not specifications:
+        raise UsageError("measure: draws a study's specification curve; this config declares no specifications",
+                         parameter="measure")
     if on_status is not None:
         of = f" ({study_size(sweep)})" if specifications else ""
         on_status(f"{count(len(sweep.combinations), 'combination')}{of}, in {display_path(sweep.folder(options['results_dir']))}")

@@ -36,7 +36,7 @@ def evaluate(
         typer.echo(f"skipped {len(result.skipped)} (listed in skipped.json): {shown}{more}", err=True)
     typer.echo(
         f"wrote {display_path(Path(folder) / 'mi.csv')} ({len(result.mi)} rows), summary.csv, tests.csv, effects.csv, "
-        "classes.csv, classes_summary.csv, headline.csv"
+        "classes.csv, classes_summary.csv, headline.csv, found_effects.csv (what each walker found) and others"
     )
     for line in api.verdict(result):
         typer.echo(line)

@@ -33,6 +33,7 @@ def reproduce(
     cache_dir: Path = typer.Option(DEFAULT_CACHE, "--cache-dir", help="Where word stores are kept."),
     converged: bool = typer.Option(False, "--converged", help="Converged labels: 256 sweeps from random topics at every checkpoint (label.sweeps=256, label.warm_sweeps=null), about ten times the labelling time."),
     reuse: bool = typer.Option(True, "--reuse/--no-reuse", help="Take label files and batch references another experiment computed from the same inputs (kept in --cache-dir's shared/ folder); --no-reuse computes them all."),
+    measure: str = typer.Option("mi", "--measure", metavar="NAME", help="A study's specification curve of this measure too, e.g. nmi, ami, classes_found or mean_recall (MI's is always drawn); only for a config that declares specifications."),
     record: Path = typer.Option(None, "--record", metavar="DIR", help="A study's record, e.g. studies/multiverse: the seeds and specifications recorded there are taken (their tables, checked against the recipes the study gives now), not computed; each one computed is recorded there. For a config with specifications that sweeps only seed.", show_default=False),
 ) -> None:
     """Extract, explore, label, evaluate and plot, then write results/<experiment>/REPORT.md.
@@ -51,7 +52,7 @@ def reproduce(
             config if config is not None else "quick", overrides=overrides, sweeps=sweeps,
             jobs=jobs, force=force, backend=backend.value, scheduler=scheduler, results_dir=results_dir,
             cache_dir=cache_dir, converged=converged, on_stage=progress.stage, on_done=progress.advance, reuse=reuse,
-            record=record, on_status=lambda line: typer.echo(line, err=True),
+            record=record, measure=measure, on_status=lambda line: typer.echo(line, err=True),
         )
     typer.echo(f"wrote {display_path(report)}")
     for line in api.verdict(report):  # the answer of each map, its evidence in the report

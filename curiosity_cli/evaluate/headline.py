@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from curiosity_cli.evaluate.measures import MI, Measure
 from curiosity_cli.evaluate.multiplicity import intersection_union_p
 from curiosity_cli.evaluate.statistics import ALPHA, paired_blocks, paired_difference, paired_tests, wilcoxon_p
 from curiosity_cli.explore.weights import CEILINGS
@@ -28,15 +29,15 @@ def headline_length(lengths) -> int | None:
     return max(below) if below else None
 
 
-def paired_effects(mi, tests=None):
-    """Topic perplexity against each other walker, paired by restart (ceilings left out).
+def paired_effects(mi, tests=None, measure: Measure = MI):
+    """Topic perplexity against each other walker on a measure (MI unless told), paired by restart (ceilings left out).
 
     Per (dataset, path length, against, other walker): ``n`` pairs, the two means over
     those pairs, the mean paired difference with its 95 % Student-t CI
     (:func:`~curiosity_cli.evaluate.statistics.paired_difference`), the ratio of the
     means with its 95 % studentized paired-bootstrap interval
     (:func:`~curiosity_cli.evaluate.comparisons.ratio_interval`) and the Wilcoxon p of
-    the same pairs from ``tests`` (computed with
+    the same pairs from ``tests`` (of the same measure; computed with
     :func:`~curiosity_cli.evaluate.statistics.paired_tests` when not given): each walker
     a pre-specified comparison (:mod:`~curiosity_cli.evaluate.comparisons`).
     """
@@ -44,9 +45,9 @@ def paired_effects(mi, tests=None):
 
     from curiosity_cli.evaluate.comparisons import ratio_interval
 
-    tests = paired_tests(mi) if tests is None else tests
+    tests = paired_tests(mi, measure) if tests is None else tests
     rows = []
-    for against, dataset, length, block in paired_blocks(mi):
+    for against, dataset, length, block in paired_blocks(mi, measure):
         if HEADLINE_WEIGHT not in block.columns:
             continue
         for other in block.columns.drop(HEADLINE_WEIGHT):

@@ -81,6 +81,72 @@ def normalised_mutual_information(table: np.ndarray) -> float:
     return min(1.0, mutual_information(table) / h)
 
 
+def expected_mutual_information(table: np.ndarray) -> float:
+    """The MI in bits two labelings with the margins of ``table`` share by chance.
+
+    The expectation under the hypergeometric model: every labeling with the same class
+    sizes equally likely, i.e. one labeling's pixels permuted at random against the
+    other's (Vinh, Epps & Bailey, JMLR 11, 2010, eq. 24a). Exact but for the terms of
+    each cell whose probability is below e^-50 of the cell's most likely count.
+
+    Parameters
+    ----------
+    table : (n_a, n_b) integer ndarray
+        A contingency table (:func:`contingency`); empty rows and columns take no part.
+
+    Returns
+    -------
+    float
+        In bits, at least 0; 0 for an empty table.
+    """
+    from curiosity_cli.evaluate._chance_kernels import expected_mi_kernel
+
+    table = np.asarray(table)
+    if table.ndim != 2:
+        raise ParameterError(f"table: got shape {table.shape}, expected (n_a, n_b)")
+    total = int(table.sum())
+    if total == 0:
+        return 0.0
+    rows, columns = table.sum(axis=1).astype(np.int64), table.sum(axis=0).astype(np.int64)
+    logs = _logs(int(min(rows.max(), columns.max())))
+    return max(0.0, float(expected_mi_kernel(rows, columns, total, logs)) / np.log(2))
+
+
+_LOGS = np.zeros(0)
+
+
+def _logs(largest: int) -> np.ndarray:
+    """``log(n)`` for ``n`` up to at least ``largest``: kept between calls, as a map's tables share their sizes.
+    ``log(0)`` is -inf, never read: a count of 0 adds nothing."""
+    global _LOGS
+    if _LOGS.size <= largest:
+        with np.errstate(divide="ignore"):
+            _LOGS = np.log(np.arange(largest + 1, dtype=np.float64))
+    return _LOGS
+
+
+def adjusted_mutual_information(table: np.ndarray) -> float:
+    """``(I - E[I]) / ((H(A) + H(B)) / 2 - E[I])``: MI corrected for chance, at most 1.
+
+    ``E[I]`` is :func:`expected_mutual_information`: 0 when the labelings share no more than
+    labelings of the same class sizes drawn at random would, below 0 when less. With the
+    normalisation of :func:`normalised_mutual_information` (the arithmetic mean of the
+    entropies); both labelings constant: 1.0, as scikit-learn's
+    ``adjusted_mutual_info_score``. The correction grows with the labels each side uses (a
+    labeling with more topics shares more by chance) and shrinks with the pixels: over a
+    whole map's pixels it is small.
+    """
+    table = np.asarray(table)
+    h_a, h_b = entropy(table.sum(axis=1)), entropy(table.sum(axis=0))
+    if h_a == 0 and h_b == 0:
+        return 1.0
+    expected = expected_mutual_information(table)
+    denominator = (h_a + h_b) / 2 - expected
+    if denominator <= 0:  # margins so lopsided that chance alone reaches the normalisation
+        return float("nan")
+    return min(1.0, (mutual_information(table) - expected) / denominator)
+
+
 def matched_recall(table: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per-class recall of a topic labelling under the best one-to-one topic-to-class matching.
 

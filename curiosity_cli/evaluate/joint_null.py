@@ -40,7 +40,7 @@ from functools import lru_cache
 import numpy as np
 
 from curiosity_cli.evaluate.comparisons import PERMUTATIONS, _next_best_ratios
-from curiosity_cli.evaluate.statistics import ALPHA, CONFIDENCE
+from curiosity_cli.evaluate.statistics import ALPHA, CONFIDENCE, wilcoxon_pair_p
 
 #: Permutations per batch: the arrays of one batch stay within a few tens of MB.
 _CHUNK = 500
@@ -112,8 +112,8 @@ def signed_rank_p(differences) -> np.ndarray:
     """Two-sided paired Wilcoxon p of each row of differences, as ``scipy.stats.wilcoxon`` gives it.
 
     Rows without zeros or tied magnitudes take the exact null distribution, vectorised;
-    the others (rare with continuous MI) are passed to scipy one by one, so every row's p
-    is scipy's.
+    the others (rare with continuous MI) are taken one by one
+    (:func:`~curiosity_cli.evaluate.statistics.wilcoxon_pair_p`), so every row's p is scipy's.
 
     Parameters
     ----------
@@ -125,8 +125,6 @@ def signed_rank_p(differences) -> np.ndarray:
     (c,) float ndarray
         1 for a row of zeros.
     """
-    from scipy import stats
-
     d = np.asarray(differences, np.float64)
     if d.ndim != 2:
         raise ValueError(f"differences: got shape {d.shape}, expected (c, n)")
@@ -147,7 +145,7 @@ def signed_rank_p(differences) -> np.ndarray:
         above = 1.0 - np.where(w > 0, cdf[np.maximum(w - 1, 0)], 0.0)  # P(W+ >= w)
         p[rows] = np.minimum(1.0, 2.0 * np.minimum(below, above))
     for row in np.nonzero(awkward)[0]:
-        p[row] = float(stats.wilcoxon(d[row]).pvalue) if d[row].any() else 1.0
+        p[row] = wilcoxon_pair_p(d[row])
     return p
 
 

@@ -93,8 +93,8 @@ def intersection_union_p(ours: float, others: Sequence[float], p_values: Sequenc
 
     Parameters
     ----------
-    ours : float
-        Topic perplexity's mean.
+    ours : float or sequence of float
+        Topic perplexity's mean, or its mean over the pairs of each other walker.
     others, p_values : sequence of float
         Each other walker's mean, and the paired Wilcoxon p of topic perplexity against it.
 
@@ -104,9 +104,12 @@ def intersection_union_p(ours: float, others: Sequence[float], p_values: Sequenc
         The largest of ``p_values`` where ``ours`` is above every one of ``others``; 1
         where it is not; NaN with no walker, or a p or mean that is NaN.
     """
-    others, p_values = np.asarray(others, np.float64), np.asarray(p_values, np.float64)
-    if others.shape != p_values.shape or others.ndim != 1:
-        raise ValueError(f"others, p_values: got shapes {others.shape} and {p_values.shape}, expected two (m,) arrays")
-    if not others.size or not np.isfinite(ours) or not (np.isfinite(others).all() and np.isfinite(p_values).all()):
+    ours, others, p_values = (np.asarray(x, np.float64) for x in (ours, others, p_values))
+    if others.shape != p_values.shape or others.ndim != 1 or ours.ndim > 1 or ours.size not in (1, others.size):
+        raise ValueError(
+            f"ours, others, p_values: got shapes {ours.shape}, {others.shape} and {p_values.shape}, expected two (m,) "
+            "arrays and a float or a third"
+        )
+    if not others.size or not np.isfinite(ours).all() or not (np.isfinite(others).all() and np.isfinite(p_values).all()):
         return np.nan
     return float(p_values.max()) if (ours > others).all() else 1.0

@@ -17,7 +17,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from curiosity_cli.errors import RERUN
+from curiosity_cli.evaluate.found import found_effects, found_leads, missing_measures
 from curiosity_cli.evaluate.headline import headline, headline_length, paired_effects, with_adjusted, with_uncertainty
+from curiosity_cli.evaluate.measures import MEASURES
 from curiosity_cli.evaluate.statistics import paired_blocks, paired_tests, summarise, summarise_revisits, summarise_steering
 from curiosity_cli.evaluate.tables import EvaluationError, read_table
 from curiosity_cli.experiment.experiment import Experiment
@@ -57,6 +59,11 @@ class Pooled:
         :mod:`~curiosity_cli.evaluate.joint_null`): per (against, dataset, path length), a
         row per (``replicate``, ``restart``) and a column per walker
         (:func:`~curiosity_cli.evaluate.statistics.paired_blocks`).
+    found_effects, found_leads : pandas.DataFrame
+        Every measure beside MI over every pair (:mod:`~curiosity_cli.evaluate.found`).
+    missing : tuple of str
+        The measures beside MI that some folder's ``mi.csv`` lacks (recorded before they
+        existed): pooled from none, so that no seed's pairs stand in for another's.
     """
 
     headline: pd.DataFrame
@@ -67,6 +74,9 @@ class Pooled:
     steering: pd.DataFrame
     mechanism: pd.DataFrame
     blocks: dict
+    found_effects: pd.DataFrame
+    found_leads: pd.DataFrame
+    missing: tuple[str, ...]
 
     def versus(self, dataset: str, against: str) -> pd.DataFrame:
         """Topic perplexity against each other walker on ``dataset`` at the headline's length
@@ -134,7 +144,10 @@ def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Poo
     seeds = [int(mi["replicate"].iloc[0]) for mi in tables]
     if len(set(seeds)) != len(seeds):
         raise EvaluationError(f"seeds {seeds}: two experiments of the same seed cannot be pooled as replicates")
-    mi = pd.concat(tables, ignore_index=True)
+    # a measure one seed lacks is left out of all: a mean over the seeds that have it would be another treatment's
+    missing = tuple(dict.fromkeys(m.name for mi in tables for m in missing_measures(mi)))
+    lacking = [column for m in MEASURES if m.name in missing for column in m.columns.values()]
+    mi = pd.concat([mi.drop(columns=lacking, errors="ignore") for mi in tables], ignore_index=True)
     steering = pd.concat(steering, ignore_index=True)
     mechanism = pd.concat(mechanism, ignore_index=True)
     if walkers is not None:
@@ -143,7 +156,7 @@ def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Poo
         mechanism = mechanism[mechanism["weight_function"].isin(walkers)]
     tests = paired_tests(mi)
     paper_maps = Experiment.open(folders[0]).paper_maps()
-    summary, effects = summarise(mi), paired_effects(mi, tests)
+    summary, effects, found = summarise(mi), paired_effects(mi, tests), found_effects(mi)
     top = with_adjusted(with_uncertainty(headline(summary, tests, paper_maps, effects), mi))
     batch = with_adjusted(with_uncertainty(headline(summary, tests, paper_maps, effects, against="batch"), mi))
     return Pooled(
@@ -151,4 +164,5 @@ def pool(folders: Sequence[Path], walkers: Collection[str] | None = None) -> Poo
         summarise_mechanism(mechanism),
         {(against, dataset, length): block.droplevel(["dataset", "path_length"])
          for against, dataset, length, block in paired_blocks(mi)},
+        found, found_leads(found), missing,
     )

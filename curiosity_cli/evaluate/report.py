@@ -4,7 +4,7 @@ It opens with the answer: per map, a verdict in words on whether topic perplexit
 every other walker at 80 steps, by how much, with what confidence, and beside the
 paper's figure (:func:`verdict`). Then the tables behind it: the headline, the maps, MI
 with the ceilings, the check that the labels behind MI are converged, paired effect
-sizes, classes found, mean recall and the tests.
+sizes, what each walker found beside MI and the tests.
 """
 
 from __future__ import annotations
@@ -365,57 +365,85 @@ def _effects_table(effects, lengths: list[int]) -> list[str]:
     return lines + [""]
 
 
-def _classes_cell(row) -> str:
-    return f"{row['mean']:.1f} ± {(row['ci_high'] - row['ci_low']) / 2:.1f} of {int(row['classes'])}"
-
-
-def _class_length(classes_summary) -> int | None:
-    """The length the class tables show: the headline's (:func:`~curiosity_cli.evaluate.headline.headline_length`), else the shortest."""
-    if classes_summary is None or classes_summary.empty:
+def _found_length(found_summary) -> int | None:
+    """The length "What each walker found" shows: the headline's (:func:`~curiosity_cli.evaluate.headline.headline_length`), else the shortest."""
+    if found_summary is None or found_summary.empty:
         return None
-    present = set(classes_summary["path_length"])
+    present = set(found_summary["path_length"])
     return headline_length(present) or int(min(present))
 
 
-def _class_matrix(classes_summary, measure: str, length: int, cell) -> list[str]:
-    """Walkers (then ceilings) by maps: ``cell(row)`` of ``measure`` at ``length``."""
-    block = classes_summary[(classes_summary["measure"] == measure) & (classes_summary["path_length"] == length)]
-    datasets = list(dict.fromkeys(block["dataset"]))
-    lines = ["| weight function | " + " | ".join(datasets) + " |", "|---|" + "---|" * len(datasets)]
-    for weight in _order(block["weight_function"]):
-        rows = block[block["weight_function"] == weight].set_index("dataset")
-        lines.append(f"| {_label(weight)} | " + " | ".join(cell(rows.loc[d]) if d in rows.index else "" for d in datasets) + " |")
-    return lines + [""]
+def _found_cell(row, digits: int) -> str:
+    return f"{row['mean']:.{digits}f} ± {(row['ci_high'] - row['ci_low']) / 2:.{digits}f}"
 
 
-def _classes_sections(classes_summary) -> list[str]:
-    length = _class_length(classes_summary)
+def _found_versus(row, digits: int) -> str:
+    ci = f" [{_signed(row['ci_low'], digits)}, {_signed(row['ci_high'], digits)}]" if np.isfinite(row["ci_low"]) else ""
+    return f"{_signed(row['mean_difference'], digits)}{ci}, {_p(row['p_value'])}"
+
+
+def _found_lead(row) -> str:
+    if not np.isfinite(row["p_each"]):
+        return "n/a"
+    return f"{'yes' if row['p_each_holm'] < ALPHA else 'no'} ({_p(row['p_each'])}; Holm: {_p(row['p_each_holm'])})"
+
+
+def _found_section(evaluation: Evaluation) -> list[str]:
+    """Per map: each walker's classes found, mean recall, NMI and AMI, and topic perplexity against each walker on them."""
+    from curiosity_cli.evaluate.found import missing_measures
+    from curiosity_cli.evaluate.measures import MEASURES
+
+    summary, effects, leads = evaluation.found_summary, evaluation.found_effects, evaluation.found_leads
+    length = _found_length(summary)
+    lines = [f"## What each walker found{f' at {length} steps' if length else ''}", ""]
     if length is None:
-        return ["## Classes found", "", "(no map with human labels, or label files without classes found)", ""]
-    found = classes_summary[classes_summary["measure"] == "classes_found"]
-    lines = [f"## Classes found at {length} steps", ""]
-    if found.empty:
-        lines += ["(label files without classes found: label the experiment again to redo them)", ""]
-    else:
-        lines += [
-            f"Human classes the path's cells reached within {length} steps, mean over restarts ± "
-            f"{100 * CONFIDENCE:.0f} % CI half-width, of the map's classes. A class counts in a visited cell when it "
-            f"covers at least {CLASS_SHARE_PERCENT} % of the cell's pixels (a partial cell at the map's border by its "
-            "own pixels). The step each class was first reached is in `classes.csv`.",
-            "",
-        ]
-        lines += _class_matrix(found, "classes_found", length, _classes_cell)
+        return lines + ["(no measure but MI in `mi.csv`: evaluate the experiment again to compute them)", ""]
     lines += [
-        f"## Mean recall at {length} steps",
-        "",
-        "Per human class, the share of its pixels whose Z_p topic is the topic matched to the class, averaged over "
-        "the map's classes, then mean over restarts ± 95 % CI half-width. Topics are matched to classes one to one "
-        "(a topic serves at most one class) to maximise the sum of the classes' recalls (Hungarian algorithm on the "
-        "human contingency table); with fewer topics than classes the unmatched classes get recall 0. Per class "
-        "and run in `classes.csv`.",
+        "MI of the whole map's labelling need not reward a path that finds more (a labeller can set unfamiliar terrain "
+        "apart without visiting it), so walkers are compared on what their paths found too, with MI's statistics. "
+        f"**Classes found**: human classes the path's cells reached, a class counting in a visited cell when it covers "
+        f"at least {CLASS_SHARE_PERCENT} % of the cell's pixels (first steps in `classes.csv`). **Mean recall**: per "
+        "class, the share of its pixels whose Z_p topic is the topic matched to the class (one topic a class, the "
+        "matching that maximises the recalls' sum; unmatched classes 0), averaged over classes. **NMI**: MI over the "
+        "mean of the two labellings' entropies. **AMI**: the same, less the MI labellings of the same class sizes share "
+        "by chance (hypergeometric model, over the topics Z_p uses: `topics_used` in `mi.csv`); over a map's pixels "
+        "that chance share is small, so AMI sits just below NMI. Each walker: mean over restarts ± "
+        f"{100 * CONFIDENCE:.0f} % CI half-width; topic perplexity minus each walker: mean paired difference "
+        f"[{100 * CONFIDENCE:.0f} % CI], paired Wilcoxon p; \"leads each\": above every walker with p < {ALPHA} against "
+        "each (the intersection-union p), read after Holm's correction over the maps. Against human labels, or Z_b on "
+        "a map without them. Every length in `found_summary.csv`, `found_effects.csv` and `found_leads.csv`.",
         "",
     ]
-    return lines + _class_matrix(classes_summary, "mean_recall", length, _cell)
+    lacking = missing_measures(evaluation.mi)
+    if lacking:
+        lines += [f"Not in `mi.csv` (made before they existed; evaluate again): {', '.join(m.title for m in lacking)}.", ""]
+    shown = [m for m in MEASURES if m.found and m not in lacking]
+    summary = summary[summary["path_length"] == length]
+    for dataset in dict.fromkeys(summary["dataset"]):
+        block = summary[summary["dataset"] == dataset]
+        against = "human" if (block["against"] == "human").any() else "batch"
+        block = block[block["against"] == against]
+        measures = [m for m in shown if (block["measure"] == m.name).any()]
+        classes = evaluation.mi.loc[evaluation.mi["dataset"] == dataset, "classes"].max()
+        titles = [f"{m.title} (of {int(classes)})" if m.name == "classes_found" else m.title for m in measures]
+        lines += [f"**{dataset}** (against {_TARGETS[against]}):", "", "| | " + " | ".join(titles) + " |",
+                  "|---|" + "---|" * len(measures)]
+        for weight in _order(block["weight_function"]):
+            rows = block[block["weight_function"] == weight].set_index("measure")
+            lines.append(f"| {_label(weight)} | " + " | ".join(
+                _found_cell(rows.loc[m.name], m.digits) if m.name in rows.index else "" for m in measures) + " |")
+        versus = effects[(effects["dataset"] == dataset) & (effects["path_length"] == length) & (effects["against"] == against)]
+        for other in _order(versus["other"]):
+            rows = versus[versus["other"] == other].set_index("measure")
+            lines.append(f"| {HEADLINE_WEIGHT} {_MINUS} {other} | " + " | ".join(
+                _found_versus(rows.loc[m.name], m.digits) if m.name in rows.index else "" for m in measures) + " |")
+        lead = leads[(leads["dataset"] == dataset) & (leads["path_length"] == length) & (leads["against"] == against)]
+        if not lead.empty:
+            rows = lead.set_index("measure")
+            lines.append("| leads each | " + " | ".join(
+                _found_lead(rows.loc[m.name]) if m.name in rows.index else "" for m in measures) + " |")
+        lines.append("")
+    return lines
 
 
 def _significance(tests) -> list[str]:
@@ -693,7 +721,7 @@ def write_report(
     lines += _mechanism_section(evaluation.mechanism, lengths)
     lines += _convergence_section(evaluation.convergence, config)
     lines += _effects_table(evaluation.effects, lengths)
-    lines += _classes_sections(evaluation.classes_summary)
+    lines += _found_section(evaluation)
     lines += ["## Significance", ""] + _significance(tests)
     left_out = [*_short_means(evaluation.mi, config.explore.restarts), *evaluation.skipped, *figure_notes]
     if left_out:

@@ -56,25 +56,19 @@ def run_rows(
     -------
     (list of dict, list of dict)
     """
-    from curiosity_cli.evaluate.information import (
-        classes_found,
-        matched_recall,
-        mutual_information,
-        normalised_mutual_information,
-    )
-    from curiosity_cli.label.label_files import SECOND_PREFIX
+    from curiosity_cli.evaluate.information import matched_recall, mutual_information
+    from curiosity_cli.evaluate.measures import Checkpoint, measure_values
     from curiosity_cli.evaluate.revisits import REVISIT_COLUMNS, revisit_counts
+    from curiosity_cli.label.label_files import SECOND_PREFIX
 
     human, batch = arrays.get("human"), arrays["batch"]
     first = arrays.get("class_first_step")
     run = {"dataset": meta["dataset"], "weight_function": meta["weight_function"], "restart": meta["restart"]}
     rows, class_rows = [], []
     for i, length in enumerate(arrays["lengths"].tolist()):
+        point = Checkpoint(length, batch[i], None if human is None else human[i], first)
         row = {
-            **run, "path_length": length,
-            "mi_human": np.nan, "mi_batch": mutual_information(batch[i]),
-            "nmi_human": np.nan, "nmi_batch": normalised_mutual_information(batch[i]),
-            "classes_found": np.nan, "classes": np.nan, "mean_recall": np.nan,
+            **run, "path_length": length, **measure_values(point),
             "seed": " ".join(map(str, meta["run_seed"])), "replicate": meta["run_seed"][0],
             "placed_mi_human": np.nan, "placed_mi_batch": np.nan,
             **(revisit_counts(*steps, length) if steps is not None else dict.fromkeys(REVISIT_COLUMNS, np.nan)),
@@ -84,15 +78,8 @@ def run_rows(
                 row[f"placed_mi_{against}"] = mutual_information(arrays[SECOND_PREFIX + against][i])
         if human is not None:
             pixels = human[i].sum(axis=0)
-            present = np.flatnonzero(pixels > 0)
             recall, topic = matched_recall(human[i])
-            row.update({
-                "mi_human": mutual_information(human[i]), "nmi_human": normalised_mutual_information(human[i]),
-                "classes": present.size, "mean_recall": float(recall[present].mean()) if present.size else np.nan,
-            })
-            if first is not None:
-                row["classes_found"] = classes_found(first[present], length)
-            for h in present.tolist():
+            for h in np.flatnonzero(pixels > 0).tolist():
                 reached = first is not None and 0 <= first[h] < length
                 class_rows.append({
                     **run, "path_length": length, "class_id": h, "class_name": (class_names or {}).get(h, ""),

@@ -4,7 +4,9 @@
 Written under ``results/<experiment>/``:
 
 - ``mi.csv`` and ``mi.parquet``: one row per (dataset, weight function, restart, path
-  length): ``mi_human``, ``mi_batch`` (bits), ``nmi_human``, ``nmi_batch``;
+  length): every measure of :data:`~curiosity_cli.evaluate.measures.MEASURES`:
+  ``mi_human``, ``mi_batch`` (bits), ``nmi_human``, ``nmi_batch``, ``ami_human``,
+  ``ami_batch`` (chance-corrected, with ``topics_used``: the topics Z_p gives some pixel);
   ``classes_found`` (human classes the path's cells reached within the length, see
   :data:`~curiosity_cli.experiment.recipes.CLASS_SHARE_PERCENT`) of ``classes`` (the map's
   classes with pixels); ``mean_recall`` (mean per-class recall of Z_p under the best
@@ -63,6 +65,9 @@ Written under ``results/<experiment>/``:
   :mod:`~curiosity_cli.evaluate.comparisons`), the smallest ratio detectable at 80 % power
   and the pairs a 10 % lead would need; and the p of the lead and of the null reference
   adjusted for the number of maps (:func:`~curiosity_cli.evaluate.headline.with_adjusted`).
+- ``found_summary.csv``, ``found_effects.csv``, ``found_leads.csv``: every measure beside MI
+  (NMI, AMI, classes found, mean recall) per walker, topic perplexity against each other
+  walker on it, and whether it leads each, with MI's statistics (:mod:`~curiosity_cli.evaluate.found`).
 - ``tables.json``: each table's size and SHA-256 and those of every file and map fact the
   tables were made from (:meth:`~curiosity_cli.experiment.experiment.Experiment.record_tables`),
   written last with the others: ``plot`` and the report draw only a set whose record holds.
@@ -84,6 +89,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from curiosity_cli.errors import RERUN
+from curiosity_cli.evaluate.found import found_effects, found_leads, summarise_found
 from curiosity_cli.evaluate.headline import (
     ADJUSTED_COLUMNS, HEADLINE_COLUMNS, UNCERTAINTY_COLUMNS, headline, paired_effects, with_adjusted, with_uncertainty,
 )
@@ -117,6 +123,17 @@ class Evaluation:
     revisits: pd.DataFrame | None = None
     steering: pd.DataFrame | None = None
     mechanism: pd.DataFrame | None = None
+    found_summary: pd.DataFrame | None = None
+    found_effects: pd.DataFrame | None = None
+    found_leads: pd.DataFrame | None = None
+
+
+#: The tables ``evaluate`` writes as CSV, each under its name in ``results/<experiment>/`` and as the
+#: :class:`Evaluation` field of that name.
+TABLES = (
+    "mi", "classes", "summary", "classes_summary", "tests", "effects", "headline", "convergence", "revisits",
+    "steering", "mechanism", "found_summary", "found_effects", "found_leads",
+)
 
 
 class IncompleteLabelsError(EvaluationError):
@@ -195,12 +212,12 @@ def evaluate_experiment(folder: Path, *, partial: bool = False, cache_dir: Path 
         effects = paired_effects(mi, tests)
         maps = read_maps(folder)
         top = with_adjusted(with_uncertainty(headline(summary, tests, experiment.paper_maps(), effects), mi))
-        revisits = summarise_revisits(mi)
-        convergence = label_convergence(mi)
+        found = found_effects(mi)
         tables = {
             "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
-            "effects": effects, "headline": top, "convergence": convergence, "revisits": revisits, "steering": steering,
-            "mechanism": mechanism,
+            "effects": effects, "headline": top, "convergence": label_convergence(mi), "revisits": summarise_revisits(mi),
+            "steering": steering, "mechanism": mechanism, "found_summary": summarise_found(mi), "found_effects": found,
+            "found_leads": found_leads(found),
         }
         # every file is written whole before any replaces its old self, and tables.json
         # records each one's digest: a failure (a full disk) leaves the old set or a mix that
@@ -219,10 +236,7 @@ def evaluate_experiment(folder: Path, *, partial: bool = False, cache_dir: Path 
             record = experiment.record_tables(written, inputs)
             temporary(layout.tables_record).write_text(record)
         record_stage_seconds(folder, "evaluate", time.perf_counter() - started, add=False)
-        return Evaluation(
-            mi, summary, tests, top, skipped, maps, effects, classes, classes_summary, convergence, revisits, steering,
-            mechanism,
-        )
+        return Evaluation(skipped=skipped, maps=maps, **tables)
 
 
 def read_evaluation(experiment: Experiment) -> Evaluation:
@@ -238,18 +252,11 @@ def read_evaluation(experiment: Experiment) -> Evaluation:
         A table that cannot be read, naming it.
     """
     layout = experiment.folder
-
-    def read(name: str):
-        return read_table(layout.table(name))
-
     try:
         skipped = json.loads(layout.skipped.read_text())
     except (OSError, ValueError) as exc:
         raise EvaluationError(f"{display_path(layout.skipped)}: cannot read it ({exc}); {RERUN} makes it again",
                               rerun="evaluate", force=False) from None
-    return Evaluation(
-        read("mi"), read("summary"), read("tests"),
-        read_table(layout.table("headline"), [*HEADLINE_COLUMNS, *UNCERTAINTY_COLUMNS, *ADJUSTED_COLUMNS]), skipped, read_maps(layout.root), read("effects"),
-        read("classes"), read("classes_summary"), read("convergence"), read("revisits"), read("steering"),
-        read("mechanism"),
-    )
+    headline_columns = [*HEADLINE_COLUMNS, *UNCERTAINTY_COLUMNS, *ADJUSTED_COLUMNS]
+    tables = {name: read_table(layout.table(name), headline_columns if name == "headline" else ()) for name in TABLES}
+    return Evaluation(skipped=skipped, maps=read_maps(layout.root), **tables)

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from curiosity_cli.evaluate.measures import MI, Measure
 from curiosity_cli.explore.weights import CEILINGS
 
 if TYPE_CHECKING:
@@ -29,7 +30,7 @@ KEYS = ["dataset", "weight_function", "restart", "path_length"]
 PAIR_KEYS = ["replicate", "restart"]
 
 
-def _mean_ci(grouped) -> pd.DataFrame:
+def mean_ci(grouped) -> pd.DataFrame:
     """``n``, ``mean``, ``std`` and the 95 % Student-t CI of the mean, per group of a grouped Series."""
     from scipy import stats
 
@@ -48,7 +49,7 @@ def summarise(mi):
         id_vars=KEYS, value_vars=["mi_human", "mi_batch"], var_name="against", value_name="mi",
     ).dropna(subset=["mi"])
     long["against"] = long["against"].str.removeprefix("mi_")
-    return pd.DataFrame(_mean_ci(long.groupby(["dataset", "weight_function", "path_length", "against"], sort=False)["mi"]))
+    return pd.DataFrame(mean_ci(long.groupby(["dataset", "weight_function", "path_length", "against"], sort=False)["mi"]))
 
 
 def summarise_classes(mi):
@@ -63,7 +64,7 @@ def summarise_classes(mi):
         id_vars=[*KEYS, "classes"], value_vars=["classes_found", "mean_recall"], var_name="measure", value_name="value",
     ).dropna(subset=["value"])
     grouped = long.groupby(["dataset", "weight_function", "path_length", "measure", "classes"], sort=False)["value"]
-    return pd.DataFrame(_mean_ci(grouped), columns=columns)
+    return pd.DataFrame(mean_ci(grouped), columns=columns)
 
 
 def summarise_revisits(mi):
@@ -77,7 +78,7 @@ def summarise_revisits(mi):
         id_vars=KEYS, value_vars=list(REVISIT_COLUMNS), var_name="measure", value_name="value",
     ).dropna(subset=["value"])
     grouped = long.groupby(["dataset", "weight_function", "path_length", "measure"], sort=False)["value"]
-    return pd.DataFrame(_mean_ci(grouped))
+    return pd.DataFrame(mean_ci(grouped))
 
 
 def summarise_steering(steering):
@@ -86,7 +87,7 @@ def summarise_steering(steering):
     import pandas as pd
 
     grouped = steering.dropna(subset=["steering"]).groupby(["dataset", "weight_function", "path_length"], sort=False)
-    return pd.DataFrame(_mean_ci(grouped["steering"]))
+    return pd.DataFrame(mean_ci(grouped["steering"]))
 
 
 def within_noise(mean: float, sem: float, tolerance: float = CONVERGENCE_TOLERANCE) -> bool:
@@ -124,11 +125,13 @@ def walkers_only(mi):
     return mi[~mi["weight_function"].isin(CEILINGS)]
 
 
-def paired_blocks(mi):
-    """Per (against, dataset, path length): MI of the walkers (ceilings left out), a row per restart, a column per walker."""
+def paired_blocks(mi, measure: Measure = MI):
+    """Per (against, dataset, path length): a measure of the walkers (ceilings left out), MI unless told,
+    a row per restart and a column per walker; none against a labelling whose column ``mi`` lacks."""
     mi = walkers_only(mi)
-    for against in ("human", "batch"):
-        column = f"mi_{against}"
+    for against, column in measure.columns.items():
+        if column not in mi:
+            continue
         table = mi.dropna(subset=[column]).pivot_table(
             index=["dataset", "path_length", *PAIR_KEYS], columns="weight_function", values=column
         )
@@ -136,25 +139,73 @@ def paired_blocks(mi):
             yield against, dataset, length, block
 
 
-def paired_tests(mi):
-    """Wilcoxon signed-rank test between every pair of walkers, paired by restart (ceilings left out)."""
+def paired_tests(mi, measure: Measure = MI, walker: str | None = None):
+    """Wilcoxon signed-rank test between every pair of walkers on a measure (MI unless told), paired by restart
+    (ceilings left out); only the pairs with ``walker`` where given."""
     import pandas as pd
-    from scipy import stats
 
     rows = []
-    for against, dataset, length, block in paired_blocks(mi):
+    for against, dataset, length, block in paired_blocks(mi, measure):
         for a, b in itertools.combinations(block.columns, 2):
+            if walker is not None and walker not in (a, b):
+                continue
             pair = block[[a, b]].dropna()
             diff = pair[a] - pair[b]
-            if len(pair) == 0 or not diff.any():
-                p = np.nan if len(pair) == 0 else 1.0
-            else:
-                p = float(stats.wilcoxon(pair[a], pair[b]).pvalue)
+            p = wilcoxon_pair_p(diff.to_numpy()) if len(pair) else np.nan
             rows.append({
                 "dataset": dataset, "path_length": length, "against": against, "a": a, "b": b,
                 "n": len(pair), "median_difference": float(diff.median()) if len(pair) else np.nan, "p_value": p,
             })
     return pd.DataFrame(rows, columns=["dataset", "path_length", "against", "a", "b", "n", "median_difference", "p_value"])
+
+
+#: Pairs up to which scipy's Wilcoxon test of differences with ties or zeros enumerates every sign flip
+#: (2 ** 13 is below its 9,999 resamples): its p is then exact, and costly to get from scipy.
+_ENUMERATED = 13
+
+
+def wilcoxon_pair_p(differences: np.ndarray) -> float:
+    """Two-sided Wilcoxon signed-rank p of paired differences, as ``scipy.stats.wilcoxon(differences)`` gives it.
+
+    Differences with tied magnitudes or zeros (counts, such as classes found), 13 or
+    fewer, are scipy's exact permutation test, computed here at once over every sign flip
+    (:func:`_sign_flip_p`): scipy takes about 75 ms a test to enumerate them.
+
+    Parameters
+    ----------
+    differences : (n,) float ndarray
+
+    Returns
+    -------
+    float
+        1 where every difference is 0.
+    """
+    from scipy import stats
+
+    d = np.asarray(differences, np.float64)
+    if not d.any():
+        return 1.0
+    magnitude = np.sort(np.abs(d))
+    if d.size <= _ENUMERATED and (magnitude[0] == 0 or (np.diff(magnitude) == 0).any()):
+        return _sign_flip_p(d)
+    return float(stats.wilcoxon(d).pvalue)
+
+
+def _sign_flip_p(d: np.ndarray) -> float:
+    """The exact two-sided permutation p of Wilcoxon's W+ (the midranks of the non-zero magnitudes where the
+    difference is positive) over every sign flip of the non-zero differences, with scipy's tolerance for ties
+    of the statistic (``scipy.stats.permutation_test``)."""
+    from scipy.stats import rankdata
+
+    nonzero = d[d != 0]
+    ranks = rankdata(np.abs(nonzero))
+    flips = (np.arange(2**nonzero.size)[:, None] >> np.arange(nonzero.size)) & 1
+    null = flips @ ranks
+    observed = ranks[nonzero > 0].sum()
+    tolerance = abs(np.finfo(np.float64).eps * 100 * observed)
+    below = np.count_nonzero(null <= observed + tolerance) / null.size
+    above = np.count_nonzero(null >= observed - tolerance) / null.size
+    return float(min(1.0, 2 * min(below, above)))
 
 
 def smallest_wilcoxon_p(pairs: int) -> float:

@@ -7,7 +7,9 @@ next best with its null reference (a summary); the figure ``specification-curve.
 sentence counting the specifications in which topic perplexity leads every walker at
 p < 0.05, those whose interval holds the paper's ratio, and where the points lie against
 their null reference (:mod:`curiosity_cli.evaluate.specification_curve`); then the same
-against Z_b (``specifications-batch.csv``, ``specification-curve-batch.png``). It takes the place of the
+against Z_b (``specifications-batch.csv``, ``specification-curve-batch.png``); then the same decision on
+every measure of what each walker found beside MI (``specifications-found.csv``,
+:mod:`curiosity_cli.evaluate.found_curve`). It takes the place of the
 sweep's sensitivity table, which would repeat the same pooled numbers in the same rows;
 ``sensitivity.csv`` is still written. Every number comes from one pooling of each
 specification's seeds (:func:`curiosity_cli.study.report.pool_treatments`), over the
@@ -36,11 +38,14 @@ BATCH_TABLE, BATCH_JOINT_TABLE, BATCH_FIGURE = (
 )
 
 
+#: Every measure beside MI under every specification (:mod:`~curiosity_cli.evaluate.found_curve`).
+FOUND_TABLE = "specifications-found.csv"
+
 #: The mechanism's figure (SWEEP.md's "Does surprise point at what is new?").
 MECHANISM_FIGURE = "mechanism"
 
 
-def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatment]) -> list[str]:
+def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatment], measure: str = "mi") -> list[str]:
     """Write ``specifications.csv``, ``specifications-batch.csv`` and their figures, and return
     the section ``SWEEP.md`` leads with.
 
@@ -53,12 +58,17 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
     treatments : sequence of Treatment
         Each specification (and any other swept key but the seed) with its seeds pooled
         (:func:`curiosity_cli.study.report.pool_treatments`).
+    measure : str
+        A measure of :data:`~curiosity_cli.evaluate.measures.MEASURES` compared beside MI draws its own curve too,
+        ``specification-curve-<measure>.png`` (:func:`~curiosity_cli.evaluate.found_curve.measure_curve`).
 
     Returns
     -------
     list of str
         Markdown lines.
     """
+    from curiosity_cli.evaluate.found_curve import found_curve_lines, found_curve_table, measure_curve
+    from curiosity_cli.evaluate.measures import measure_named
     from curiosity_cli.evaluate.specification_curve import VERSUS, curve_sentence, curve_table, joint_lines
     from curiosity_cli.evaluate.headline import HEADLINE_LENGTH
     from curiosity_cli.plots.specification_curve import write_specification_curve
@@ -117,6 +127,22 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
         lines += _curve_rows(table, names) + ["", curve_sentence(table), ""] + joint_lines(joint)
         if against == "human":
             lines += _mechanism_section(table, names, folder, datasets)
+    found = found_curve_table([(t.values, t.pooled) for t in pooled])
+    with atomic_path(folder / FOUND_TABLE) as tmp:
+        found.to_csv(tmp, index=False)
+    lines += found_curve_lines(found, list(dict.fromkeys(m for t in pooled for m in t.pooled.missing)))
+    if measure != "mi":
+        table = measure_curve(found, measure)
+        if len(table):
+            table = table.assign(label=[", ".join(map(str, v)) for v in table[names].itertuples(index=False)])
+            figure = f"{FIGURE}-{measure}"
+            write_specification_curve(
+                table, choices, folder / figure, label="label", datasets=datasets, against="human labels",
+                measure=measure_named(measure),
+            )
+            lines += [f"![specification curve, {measure_named(measure).title}]({figure}.png)", ""]
+        else:
+            lines += [f"No point has {measure_named(measure).title}: no curve of it.", ""]
     lines += [f"- `{', '.join(t.values.values())}`: not pooled: {t.error}" for t in treatments if t.pooled is None]
     return lines + [""] * any(t.pooled is None for t in treatments)
 

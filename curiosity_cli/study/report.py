@@ -56,7 +56,9 @@ def read_headline(folder: Path):
     )
 
 
-def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], record: Path | None = None) -> Path:
+def write_sweep_report(
+    sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], record: Path | None = None, measure: str = "mi",
+) -> Path:
     """Write ``SWEEP.md``, ``sweep.csv`` and ``sensitivity.csv`` from the combinations' tables (module docstring).
 
     A study that declares specifications also gets its specification curve
@@ -74,6 +76,8 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], 
         One per combination run, in product order.
     record : Path, optional
         The study's record the sweep kept (:mod:`curiosity_cli.study.record`).
+    measure : str
+        A study's curve of this measure too (:func:`~curiosity_cli.study.curve.specification_lead`).
 
     Returns
     -------
@@ -91,7 +95,7 @@ def write_sweep_report(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], 
     treatments = pool_treatments(sweep, outcomes, PAPER_WALKERS if sweep.specifications else None)
     sensitivity, pooled_rows = _sensitivity(sweep, treatments)
     # a study's curve has the sensitivity table's rows and numbers, and more: it takes its place
-    lead = specification_lead(sweep, folder, treatments) if sweep.specifications else sensitivity
+    lead = specification_lead(sweep, folder, treatments, measure) if sweep.specifications else sensitivity
     rows, sections = [], []
     overview = [
         "| # | " + " | ".join(keys) + " | dataset | ratio | next best | paired Wilcoxon p (pairs) | paper's ratio |",

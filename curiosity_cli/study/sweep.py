@@ -414,6 +414,7 @@ def run_sweep(
     results_dir: Path = DEFAULT_RESULTS,
     on_stage: Callable[[str, int], None] | None = None,
     record: Path | None = None,
+    measure: str = "mi",
     **pipeline,
 ) -> Path:
     """Run every combination of ``sweep`` with the whole pipeline and write ``SWEEP.md``.
@@ -430,6 +431,8 @@ def run_sweep(
     record : Path, optional
         A study's record (:mod:`curiosity_cli.study.record`): the combinations it holds are
         taken from it, not computed; each one computed is recorded there when it finishes.
+    measure : str
+        A study's specification curve of this measure too (:func:`~curiosity_cli.study.curve.specification_lead`).
     **pipeline
         The other keywords of :func:`curiosity_cli.study.pipeline.reproduce` (``cache_dir``,
         ``jobs``, ``force``, ``backend``, ``scheduler``, ``on_done``), for every combination.
@@ -477,7 +480,7 @@ def run_sweep(
             outcomes.append(Outcome(combination, report, None, time.perf_counter() - started, folder / combination.name))
         except CuriosityError as exc:
             outcomes.append(Outcome(combination, None, str(exc), time.perf_counter() - started))
-    path = write_sweep_report(sweep, folder, outcomes, record)
+    path = write_sweep_report(sweep, folder, outcomes, record, measure)
     failed = [o for o in outcomes if o.error is not None]
     if failed:
         raise SweepError(

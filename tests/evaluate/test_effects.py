@@ -10,6 +10,7 @@ import pytest
 from scipy import stats
 
 from curiosity_cli.config import CONFIG_DIR, load_config
+from curiosity_cli.evaluate.found import found_effects, found_leads, summarise_found
 from curiosity_cli.evaluate.headline import headline, paired_effects, with_adjusted, with_uncertainty
 from curiosity_cli.evaluate.report import verdict, write_report
 from curiosity_cli.evaluate.stage import Evaluation
@@ -220,7 +221,11 @@ def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
     summary, tests = summarise(mi), paired_tests(mi)
     effects = paired_effects(mi, tests)
     top = with_adjusted(with_uncertainty(headline(summary, tests, {"win": "Montreal1"}, effects), mi))
-    evaluation = Evaluation(mi, summary, tests, top, ["a note"], None, effects, None, summarise_classes(mi))
+    found = found_effects(mi)
+    evaluation = Evaluation(
+        mi, summary, tests, top, ["a note"], None, effects=effects, classes_summary=summarise_classes(mi),
+        found_summary=summarise_found(mi), found_effects=found, found_leads=found_leads(found),
+    )
     config = load_config(CONFIG_DIR / "quick.yaml")
     config = dataclasses.replace(
         config, explore=dataclasses.replace(config.explore, weight_functions=(*WALKERS, *CEILINGS))
@@ -243,15 +248,18 @@ def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
     assert sections == [
         "## Verdict", "## Headline", "## Mutual information (bits, mean ± 95 % CI half-width)", "## Label convergence",
         "## Paired effect sizes",
-        "## Classes found at 80 steps", "## Mean recall at 80 steps", "## Significance", "## Left out", "## Figures",
-        "## Time", "## Config",
+        "## What each walker found at 80 steps", "## Significance", "## Left out", "## Figures", "## Time", "## Config",
     ]
     assert f"| win | {CEILINGS[0]} (ceiling) |" in report and "Ceilings (" in report
     assert "| win | human | lawnmower | " in report
-    assert "at least 10 % of the cell's pixels" in report and "one to one" in report
-    # classes found 2, 3, 4, 2, 3, 4, ... over 10 restarts: mean 2.9, CI half-width t(0.975, 9) * 0.876 / sqrt(10)
-    assert "| topic-perplexity | 2.9 ± 0.6 of 6 |" in report
-    assert "| lawnmower | 0.545 ± " in report
+    assert "at least 10 % of the cell's pixels" in report and "one topic a class" in report
+    # classes found 2, 3, 4, 2, 3, 4, ... over 10 restarts: mean 2.9, CI half-width t(0.975, 9) * 0.876 / sqrt(10);
+    # mean recall 0.5 + 0.01 restart: 0.545; the same for every walker, so no difference and no lead
+    assert "| | classes found (of 6) | mean recall |" in report
+    assert "| topic-perplexity | 2.90 ± 0.63 | 0.545 ± 0.022 |" in report
+    assert "| topic-perplexity − lawnmower | +0.00 [+0.00, +0.00], p = 1.00 | +0.000 [+0.000, +0.000], p = 1.00 |" in report
+    assert "| leads each | no (p = 1.00; Holm: p = 1.00) | no (p = 1.00; Holm: p = 1.00) |" in report
+    assert "Not in `mi.csv` (made before they existed; evaluate again): AMI." in report
 
 
 def test_too_few_pairs_for_any_test_to_reach_p_005_are_said_plainly():

@@ -47,8 +47,8 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     mi = pd.read_csv(folder / "mi.csv")
     assert list(mi.columns) == [
         "dataset", "weight_function", "restart", "path_length", "mi_human", "mi_batch", "nmi_human", "nmi_batch",
-        "classes_found", "classes", "mean_recall", "seed", "replicate", "placed_mi_human", "placed_mi_batch",
-        "distinct_cells", "revisit_steps", "boxed_in_steps",
+        "ami_human", "ami_batch", "topics_used", "classes_found", "classes", "mean_recall", "seed", "replicate",
+        "placed_mi_human", "placed_mi_batch", "distinct_cells", "revisit_steps", "boxed_in_steps",
     ]
     # label.check_restarts = 1: restart 0 of each walker is labelled a second time, from a placed start
     checked = mi["restart"] == 0
@@ -236,8 +236,15 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
     # the labels' settings (the --set above) and the convergence rule are stated
     assert "Labels: a run's first checkpoint's Z_p is 2 frozen-Φ Gibbs sweeps from random topics" in report
     assert "end at the same mean MI" in report
-    for section in ("## Paired effect sizes", "## Classes found at 12 steps", "## Mean recall at 12 steps"):
+    for section in ("## Paired effect sizes", "## What each walker found at 12 steps"):
         assert section in report
+    # every measure beside MI compared as MI is, from the same pairs
+    found, effects = pd.read_csv(folder / "found_effects.csv"), pd.read_csv(folder / "effects.csv")
+    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall"}
+    nmi = found[(found["measure"] == "nmi")].drop(columns="measure").reset_index(drop=True)
+    assert nmi[["dataset", "path_length", "against", "other", "n"]].equals(effects[["dataset", "path_length", "against", "other", "n"]])
+    assert (mi_table := pd.read_csv(folder / "mi.csv"))["ami_human"].le(mi_table["nmi_human"] + 1e-12).all()
+    assert "| leads each |" in report
     # the mechanism: a row per run of a scoring walker and length; its classes found are mi.csv's, counted apart
     mechanism, mi = pd.read_csv(folder / "mechanism.csv"), pd.read_csv(folder / "mi.csv")
     assert len(mechanism) == len(mi) == 4 * 2 * 2, "the paper's 4 walkers all score their moves: 2 restarts, 2 lengths"

@@ -1,0 +1,114 @@
+"""What each walker found: every measure of the table beside MI, summarised and compared as MI is.
+
+MI of the whole map's labelling need not reward a path that finds more (a labeller can
+set unfamiliar terrain apart without visiting it), so a comparison of walkers reads the
+other measures of :data:`~curiosity_cli.evaluate.measures.MEASURES` too, each with the
+same statistics as MI's headline:
+
+- ``found_summary.csv``: per (measure, dataset, weight function, path length, against):
+  ``n``, ``mean``, ``std`` and the 95 % Student-t CI of the mean over restarts;
+- ``found_effects.csv``: per (measure, dataset, path length, against) and other walker,
+  topic perplexity against it, paired by restart
+  (:func:`~curiosity_cli.evaluate.headline.paired_effects`: the mean paired difference
+  with its CI, the ratio of the means with its bootstrap interval, the paired Wilcoxon p);
+- ``found_leads.csv``: per (measure, dataset, path length, against), whether topic
+  perplexity leads each other walker (``beats_all``, ``not_beaten``) and the p of that
+  lead (``p_each``, the intersection-union p,
+  :func:`~curiosity_cli.evaluate.multiplicity.intersection_union_p`), adjusted for the
+  maps as the headline's is (``p_each_holm``, ``p_each_bh``, per measure, length and labelling).
+
+A measure whose columns ``mi.csv`` lacks (a table recorded before the measure existed)
+has no rows, and :func:`missing_measures` names it.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from curiosity_cli.evaluate import headline
+from curiosity_cli.evaluate.headline import HEADLINE_WEIGHT, paired_effects
+from curiosity_cli.evaluate.measures import MEASURES, Measure
+from curiosity_cli.evaluate.statistics import ALPHA, KEYS, mean_ci, paired_tests
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+SUMMARY_COLUMNS = ["measure", "dataset", "weight_function", "path_length", "against", "n", "mean", "std", "ci_low", "ci_high"]
+EFFECT_COLUMNS = ["measure", *headline.EFFECT_COLUMNS]
+LEAD_COLUMNS = [
+    "measure", "dataset", "path_length", "against", "walkers", "beats_all", "not_beaten", "p_each", "p_each_holm",
+    "p_each_bh",
+]
+
+
+def found_measures(mi) -> list[Measure]:
+    """The measures compared beside MI whose columns ``mi`` has."""
+    return [m for m in MEASURES if m.found and any(column in mi for column in m.columns.values())]
+
+
+def missing_measures(mi) -> list[Measure]:
+    """The measures compared beside MI whose columns ``mi`` lacks (a table from before they existed)."""
+    return [m for m in MEASURES if m.found and m not in found_measures(mi)]
+
+
+def summarise_found(mi):
+    """``found_summary.csv`` (module docstring): every walker's and ceiling's mean of each measure with its CI."""
+    import pandas as pd
+
+    parts = []
+    for measure in found_measures(mi):
+        present = {against: column for against, column in measure.columns.items() if column in mi}
+        long = mi.melt(id_vars=KEYS, value_vars=list(present.values()), var_name="against", value_name="value")
+        long = long.dropna(subset=["value"])
+        long["against"] = long["against"].map({column: against for against, column in present.items()})
+        summary = mean_ci(long.groupby(["dataset", "weight_function", "path_length", "against"], sort=False)["value"])
+        parts.append(summary.assign(measure=measure.name))
+    if not parts:
+        return pd.DataFrame(columns=SUMMARY_COLUMNS)
+    return pd.concat(parts, ignore_index=True)[SUMMARY_COLUMNS]
+
+
+def found_effects(mi):
+    """``found_effects.csv`` (module docstring): topic perplexity against each other walker on each measure."""
+    import pandas as pd
+
+    parts = [
+        paired_effects(mi, paired_tests(mi, measure, HEADLINE_WEIGHT), measure).assign(measure=measure.name)
+        for measure in found_measures(mi)
+    ]
+    parts = [part for part in parts if not part.empty]
+    if not parts:
+        return pd.DataFrame(columns=EFFECT_COLUMNS)
+    return pd.concat(parts, ignore_index=True)[EFFECT_COLUMNS]
+
+
+def found_leads(effects):
+    """``found_leads.csv`` (module docstring), from :func:`found_effects`' rows.
+
+    Topic perplexity leads when its mean over each walker's pairs is above that walker's
+    and the paired Wilcoxon p against each is below
+    :data:`~curiosity_cli.evaluate.statistics.ALPHA`; ``walkers`` counts the walkers it
+    is compared with.
+    """
+    import pandas as pd
+
+    from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm, intersection_union_p
+
+    rows = []
+    for (measure, dataset, length, against), block in effects.groupby(
+        ["measure", "dataset", "path_length", "against"], sort=False,
+    ):
+        # each pair's own mean of topic perplexity: a walker with fewer runs pairs fewer restarts
+        ours = block["topic_perplexity"].to_numpy(float)
+        theirs, p = block["other_mean"].to_numpy(float), block["p_value"].to_numpy(float)
+        not_beaten = [o for o, a, b, q in zip(block["other"], ours, theirs, p) if not (a > b and q < ALPHA)]
+        rows.append({
+            "measure": measure, "dataset": dataset, "path_length": length, "against": against, "walkers": len(block),
+            "beats_all": not not_beaten, "not_beaten": ";".join(not_beaten), "p_each": intersection_union_p(ours, theirs, p),
+        })
+    leads = pd.DataFrame(rows, columns=LEAD_COLUMNS)
+    for _, family in leads.groupby(["measure", "path_length", "against"], sort=False):
+        values = family["p_each"].to_numpy(float)
+        leads.loc[family.index, "p_each_holm"] = holm(values)
+        leads.loc[family.index, "p_each_bh"] = benjamini_hochberg(values)
+    return leads

@@ -1,0 +1,161 @@
+"""The table of measures: what a path found and how well its model labels the map, each declared once.
+
+A measure is a value per run and checkpoint, one ``mi.csv`` column for each labelling it
+is taken against (``human``: the map's human labels; ``batch``: Z_b). Its entry in
+:data:`MEASURES` says how a checkpoint gives it (:class:`Checkpoint`), whether walkers
+are compared on it beside MI, whose headline has tables of its own, and how the report
+writes it. Every consumer loops over the table: the rows (:mod:`~curiosity_cli.evaluate.rows`),
+the per-walker summary and the paired comparisons
+(:mod:`~curiosity_cli.evaluate.found`), the report's "What each walker found"
+(:mod:`~curiosity_cli.evaluate.report`), pooled replicates
+(:mod:`~curiosity_cli.evaluate.replicates`) and a study's curve (``--measure``). A
+study records ``mi.csv`` whole, so every measure of a recorded seed is pooled; a
+recorded table from before a measure existed lacks its columns, and the pooled tables
+say so rather than invent it.
+
+Adding a measure is a function of a :class:`Checkpoint`, an entry here and its tests.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from curiosity_cli.errors import ParameterError
+from curiosity_cli.evaluate.information import (
+    adjusted_mutual_information,
+    classes_found,
+    mean_recall,
+    mutual_information,
+    normalised_mutual_information,
+)
+
+#: The labellings a measure is taken against, in the order of ``mi.csv``'s columns.
+AGAINST = ("human", "batch")
+
+
+@dataclass(frozen=True)
+class Checkpoint:
+    """What a label file holds of one run at one path length.
+
+    Attributes
+    ----------
+    length : int
+        The path length.
+    batch : (K, K) int ndarray
+        Contingency table of Z_p's topics against Z_b's.
+    human : (K, C) int ndarray or None
+        Against the human classes; None for a map without labels.
+    first_step : (C,) int ndarray or None
+        The step each human class was first reached (-1: never), as
+        :func:`~curiosity_cli.label.classes.first_steps` records it; None for label files without it.
+    """
+
+    length: int
+    batch: np.ndarray
+    human: np.ndarray | None
+    first_step: np.ndarray | None
+
+
+@dataclass(frozen=True)
+class Measure:
+    """One measure of a run at a checkpoint.
+
+    Attributes
+    ----------
+    name : str
+        What ``--measure`` and the tables call it.
+    title : str
+        What the report calls it.
+    unit : str
+        Of its values ("" for a share or an index).
+    columns : mapping of str to str
+        Per labelling it is taken against (:data:`AGAINST`), its ``mi.csv`` column.
+    values : callable
+        ``values(checkpoint)``: the row's values of ``columns`` (NaN where the checkpoint
+        lacks what it needs), and of any column that says what they are out of.
+    found : bool
+        Compared between walkers in ``found_effects.csv`` and the report's "What each walker
+        found"; MI, the paper's measure, has its own tables (``summary.csv``, ``effects.csv``,
+        ``headline.csv``).
+    digits : int
+        Decimals the report writes.
+    """
+
+    name: str
+    title: str
+    unit: str
+    columns: Mapping[str, str]
+    values: Callable[[Checkpoint], dict]
+    found: bool
+    digits: int
+
+
+def _per_labelling(function: Callable[[np.ndarray], float], prefix: str) -> Callable[[Checkpoint], dict]:
+    """``values`` of a measure of a contingency table, taken against each labelling."""
+
+    def values(point: Checkpoint) -> dict:
+        return {
+            f"{prefix}_human": function(point.human) if point.human is not None else np.nan,
+            f"{prefix}_batch": function(point.batch),
+        }
+
+    return values
+
+
+def _present(point: Checkpoint) -> np.ndarray:
+    """The human classes with pixels at a checkpoint."""
+    return np.flatnonzero(point.human.sum(axis=0) > 0)
+
+
+def _classes_found(point: Checkpoint) -> dict:
+    if point.human is None:
+        return {"classes_found": np.nan, "classes": np.nan}
+    present = _present(point)
+    found = classes_found(point.first_step[present], point.length) if point.first_step is not None else np.nan
+    return {"classes_found": found, "classes": present.size}
+
+
+def _mean_recall(point: Checkpoint) -> dict:
+    return {"mean_recall": mean_recall(point.human) if point.human is not None else np.nan}
+
+
+def _adjusted(point: Checkpoint) -> dict:
+    # the topics Z_p gives some pixel: the chance correction counts those, not the model's K
+    return {**_per_labelling(adjusted_mutual_information, "ami")(point), "topics_used": int((point.batch.sum(axis=1) > 0).sum())}
+
+
+MI = Measure("mi", "MI", "bits", {"human": "mi_human", "batch": "mi_batch"},
+             _per_labelling(mutual_information, "mi"), found=False, digits=3)
+NMI = Measure("nmi", "NMI", "", {"human": "nmi_human", "batch": "nmi_batch"},
+              _per_labelling(normalised_mutual_information, "nmi"), found=True, digits=3)
+AMI = Measure("ami", "AMI", "", {"human": "ami_human", "batch": "ami_batch"}, _adjusted, found=True, digits=3)
+CLASSES_FOUND = Measure("classes_found", "classes found", "classes", {"human": "classes_found"}, _classes_found,
+                        found=True, digits=2)
+MEAN_RECALL = Measure("mean_recall", "mean recall", "", {"human": "mean_recall"}, _mean_recall, found=True, digits=3)
+#: Every measure, in the order of their ``mi.csv`` columns.
+MEASURES = (MI, NMI, AMI, CLASSES_FOUND, MEAN_RECALL)
+
+
+def measure_values(point: Checkpoint) -> dict:
+    """Every measure's ``mi.csv`` values at a checkpoint, in :data:`MEASURES`' order."""
+    row = {}
+    for measure in MEASURES:
+        row.update(measure.values(point))
+    return row
+
+
+def measure_named(name: str) -> Measure:
+    """The measure called ``name``.
+
+    Raises
+    ------
+    ParameterError
+        No measure is called that, naming those there are.
+    """
+    for measure in MEASURES:
+        if measure.name == name:
+            return measure
+    raise ParameterError(f"measure: got {name!r}, expected one of {', '.join(m.name for m in MEASURES)}")
