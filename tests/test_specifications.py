@@ -169,7 +169,7 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
     (folder / "specifications.csv").unlink()
     # every measure beside MI under each specification: the same pairs, the same decision
     found = pd.read_csv(folder / "specifications-found.csv", dtype={"seeds": str})
-    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall"} and len(found) == 8
+    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall", "time_to_find"} and len(found) == 10
     for row in found.query("measure == 'mean_recall'").to_dict("records"):
         mi, _ = _pooled(folder, row["specification"])
         pairs = mi.pivot_table(index=["replicate", "restart"], columns="weight_function", values="mean_recall")
@@ -282,7 +282,7 @@ def test_a_measure_curve_is_only_for_a_study_of_a_measure_there_is(own_map, tmp_
 
     config = study_yaml(own_map, tmp_path)
     unknown = sweep(config, tmp_path / "results", "--measure", "auc")
-    assert unknown.exit_code == 2 and "--measure: got 'auc', expected one of mi, nmi, ami, classes_found, mean_recall" in unknown.output
+    assert unknown.exit_code == 2 and "--measure: got 'auc', expected one of mi, nmi, ami, classes_found, mean_recall, " in unknown.output
     (tmp_path / "plain").mkdir()
     plain = tiny_yaml(own_map, tmp_path / "plain")
     single = runner.invoke(app, ["reproduce", str(plain), "--measure", "nmi", "--results-dir", str(tmp_path / "r")])

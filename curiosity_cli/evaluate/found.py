@@ -17,6 +17,13 @@ same statistics as MI's headline:
   :func:`~curiosity_cli.evaluate.multiplicity.intersection_union_p`), adjusted for the
   maps as the headline's is (``p_each_holm``, ``p_each_bh``, per measure, length and labelling).
 
+- ``found_classes.csv``: per (dataset, path length, human class) and other walker, how soon
+  topic perplexity first reached the class against it, paired by restart: each walker's
+  restricted mean time to first find (a class not reached by the length counts the length:
+  :func:`~curiosity_cli.evaluate.measures.restricted_steps`), the mean paired difference
+  with its CI and the paired Wilcoxon p, and the share of restarts that found the class by
+  the length (``found`` in ``classes.csv``), each walker's.
+
 A measure whose columns ``mi.csv`` lacks (a table recorded before the measure existed)
 has no rows, and :func:`missing_measures` names it.
 """
@@ -25,9 +32,11 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from curiosity_cli.evaluate import headline
 from curiosity_cli.evaluate.headline import HEADLINE_WEIGHT, paired_effects
-from curiosity_cli.evaluate.measures import MEASURES, Measure
+from curiosity_cli.evaluate.measures import MEASURES, Measure, measure_named
 from curiosity_cli.evaluate.statistics import ALPHA, KEYS, mean_ci, paired_tests
 
 if TYPE_CHECKING:
@@ -82,17 +91,37 @@ def found_effects(mi):
     return pd.concat(parts, ignore_index=True)[EFFECT_COLUMNS]
 
 
+def lead_each(measure: Measure, others, ours, theirs, p) -> dict:
+    """``beats_all``, ``not_beaten`` and ``p_each`` of topic perplexity against ``others`` on ``measure``.
+
+    Parameters
+    ----------
+    measure : Measure
+        Whose direction says which mean is ahead.
+    others : sequence of str
+        The walkers, and per walker ``ours`` (topic perplexity's mean over their pairs), ``theirs`` (theirs)
+        and ``p`` (the paired Wilcoxon p).
+    """
+    from curiosity_cli.evaluate.multiplicity import intersection_union_p
+
+    ours, theirs, p = (np.asarray(x, np.float64) for x in (ours, theirs, p))
+    not_beaten = [o for o, ahead, q in zip(others, measure.ahead(ours, theirs), p) if not (ahead and q < ALPHA)]
+    sign = -1.0 if measure.lower_is_better else 1.0  # the intersection-union p reads "above"
+    return {"beats_all": not not_beaten, "not_beaten": ";".join(not_beaten),
+            "p_each": intersection_union_p(sign * ours, sign * theirs, p)}
+
+
 def found_leads(effects):
     """``found_leads.csv`` (module docstring), from :func:`found_effects`' rows.
 
-    Topic perplexity leads when its mean over each walker's pairs is above that walker's
-    and the paired Wilcoxon p against each is below
+    Topic perplexity leads when its mean over each walker's pairs is better than that walker's
+    (above, or below for a measure where lower is better) and the paired Wilcoxon p against each is below
     :data:`~curiosity_cli.evaluate.statistics.ALPHA`; ``walkers`` counts the walkers it
     is compared with.
     """
     import pandas as pd
 
-    from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm, intersection_union_p
+    from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm
 
     rows = []
     for (measure, dataset, length, against), block in effects.groupby(
@@ -101,10 +130,9 @@ def found_leads(effects):
         # each pair's own mean of topic perplexity: a walker with fewer runs pairs fewer restarts
         ours = block["topic_perplexity"].to_numpy(float)
         theirs, p = block["other_mean"].to_numpy(float), block["p_value"].to_numpy(float)
-        not_beaten = [o for o, a, b, q in zip(block["other"], ours, theirs, p) if not (a > b and q < ALPHA)]
         rows.append({
             "measure": measure, "dataset": dataset, "path_length": length, "against": against, "walkers": len(block),
-            "beats_all": not not_beaten, "not_beaten": ";".join(not_beaten), "p_each": intersection_union_p(ours, theirs, p),
+            **lead_each(measure_named(measure), block["other"], ours, theirs, p),
         })
     leads = pd.DataFrame(rows, columns=LEAD_COLUMNS)
     for _, family in leads.groupby(["measure", "path_length", "against"], sort=False):
@@ -112,3 +140,45 @@ def found_leads(effects):
         leads.loc[family.index, "p_each_holm"] = holm(values)
         leads.loc[family.index, "p_each_bh"] = benjamini_hochberg(values)
     return leads
+
+
+#: ``found_classes.csv``'s columns (:func:`class_times`).
+CLASS_COLUMNS = [
+    "dataset", "path_length", "class_id", "class_name", "other", "n", "topic_perplexity_steps", "other_steps",
+    "mean_difference", "ci_low", "ci_high", "p_value", "topic_perplexity_found", "other_found",
+]
+
+
+def class_times(classes):
+    """``found_classes.csv`` (module docstring), from ``classes.csv``'s rows; ceilings take no part."""
+    import pandas as pd
+
+    from curiosity_cli.evaluate.measures import restricted_steps
+    from curiosity_cli.evaluate.statistics import paired_difference, walkers_only, wilcoxon_pair_p
+
+    walkers = walkers_only(classes).dropna(subset=["found"])  # label files without first steps say nothing here
+    if walkers.empty:
+        return pd.DataFrame(columns=CLASS_COLUMNS)
+    walkers = walkers.assign(
+        steps=restricted_steps(walkers["first_step"].fillna(-1).to_numpy(), walkers["path_length"].to_numpy()),
+        found=walkers["found"].astype(float),
+    )
+    rows = []
+    for (dataset, length, class_id), block in walkers.groupby(["dataset", "path_length", "class_id"], sort=False):
+        steps = block.pivot_table(index="restart", columns="weight_function", values="steps")
+        found = block.pivot_table(index="restart", columns="weight_function", values="found")
+        if HEADLINE_WEIGHT not in steps.columns:
+            continue
+        for other in steps.columns.drop(HEADLINE_WEIGHT):
+            pair = steps[[HEADLINE_WEIGHT, other]].dropna()
+            ours, theirs = pair[HEADLINE_WEIGHT].to_numpy(), pair[other].to_numpy()
+            mean, low, high = paired_difference(ours, theirs)
+            rows.append({
+                "dataset": dataset, "path_length": length, "class_id": class_id, "class_name": block["class_name"].iloc[0],
+                "other": other, "n": len(pair), "topic_perplexity_steps": float(ours.mean()),
+                "other_steps": float(theirs.mean()), "mean_difference": mean, "ci_low": low, "ci_high": high,
+                "p_value": wilcoxon_pair_p(ours - theirs),
+                "topic_perplexity_found": float(found.loc[pair.index, HEADLINE_WEIGHT].mean()),
+                "other_found": float(found.loc[pair.index, other].mean()),
+            })
+    return pd.DataFrame(rows, columns=CLASS_COLUMNS)

@@ -11,7 +11,7 @@ leads every one (``beats_all``, ``not_beaten``, the intersection-union ``p_each`
 ``p_each`` adjusted over every point of the measure's curve (``p_each_holm``,
 ``p_each_bh``): a point leads only after Holm, as on MI's curve. The curve of one measure
 (:func:`measure_curve`, ``reproduce --measure``) draws each point's difference to the
-closest of those walkers (``closest``, ``closest_difference`` and its interval): the one
+closest of those walkers (the least advantage: the largest difference where lower is better) (``closest``, ``closest_difference`` and its interval): the one
 the decision turns on, chosen after seeing the data and so biased toward "no lead", as
 MI's next best is; no difference is 0. A measure that a
 specification's recorded seeds lack has no points there (:attr:`~curiosity_cli.evaluate.replicates.Pooled.missing`).
@@ -62,8 +62,10 @@ def found_curve_table(specifications: Sequence[tuple[Mapping[str, str], Pooled]]
     """
     import pandas as pd
 
-    from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm, intersection_union_p
+    from curiosity_cli.evaluate.found import lead_each
+    from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm
 
+    by_name = {m.name: m for m in MEASURES}
     rows, names = [], []
     for labels, pooled in specifications:
         names += [k for k in labels if k not in names]
@@ -81,13 +83,11 @@ def found_curve_table(specifications: Sequence[tuple[Mapping[str, str], Pooled]]
                     row[column] = float(values[source]) if values is not None else np.nan
             ours = [versus.loc[w, "topic_perplexity"] if w in versus.index else np.nan for w in VERSUS]
             theirs = [versus.loc[w, "other_mean"] if w in versus.index else np.nan for w in VERSUS]
-            p = [row[f"p_{w}"] for w in VERSUS]
-            not_beaten = [w for w, a, b, q in zip(VERSUS, ours, theirs, p) if not (a > b and q < ALPHA)]
-            row.update({"beats_all": not not_beaten, "not_beaten": ";".join(not_beaten),
-                        "p_each": intersection_union_p(ours, theirs, p)})
-            differences = np.array([row[f"difference_{w}"] for w in VERSUS])
-            if np.isfinite(differences).any():
-                closest = VERSUS[int(np.nanargmin(differences))]
+            row.update(lead_each(by_name[measure], VERSUS, ours, theirs, [row[f"p_{w}"] for w in VERSUS]))
+            # the closest walker: where topic perplexity's advantage is least
+            advantage = np.array([row[f"difference_{w}"] for w in VERSUS]) * (-1 if by_name[measure].lower_is_better else 1)
+            if np.isfinite(advantage).any():
+                closest = VERSUS[int(np.nanargmin(advantage))]
                 mean, low, high, _ = _versus_names(closest)
                 row.update({"closest": closest, "closest_difference": row[mean], "closest_low": row[low],
                             "closest_high": row[high]})
@@ -115,7 +115,7 @@ def found_curve_lines(table, missing: Sequence[str]) -> list[str]:
         "### What each walker found",
         "",
         f"The same decision on each measure beside MI (REPORT.md's \"What each walker found\"), at the headline's length: "
-        f"topic perplexity leads where its mean is higher than each of {versus} with a paired Wilcoxon p below "
+        f"topic perplexity leads where its mean is better (higher; lower for a time) than each of {versus} with a paired Wilcoxon p below "
         f"{ALPHA:g} against each, read after Holm's correction over the measure's points. The points, with the paired "
         "difference to each walker and its interval, are in `specifications-found.csv`.",
         "",

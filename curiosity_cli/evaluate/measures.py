@@ -82,6 +82,8 @@ class Measure:
         ``headline.csv``).
     digits : int
         Decimals the report writes.
+    lower_is_better : bool
+        A walker leads by a lower value (a time), not a higher one.
     """
 
     name: str
@@ -91,6 +93,11 @@ class Measure:
     values: Callable[[Checkpoint], dict]
     found: bool
     digits: int
+    lower_is_better: bool = False
+
+    def ahead(self, ours, theirs):
+        """Whether ``ours`` is better than ``theirs`` (elementwise for arrays)."""
+        return ours < theirs if self.lower_is_better else ours > theirs
 
 
 def _per_labelling(function: Callable[[np.ndarray], float], prefix: str) -> Callable[[Checkpoint], dict]:
@@ -122,6 +129,31 @@ def _mean_recall(point: Checkpoint) -> dict:
     return {"mean_recall": mean_recall(point.human) if point.human is not None else np.nan}
 
 
+def _time_to_find(point: Checkpoint) -> dict:
+    # a class not found by the checkpoint is censored there: it counts the whole length, never more
+    if point.human is None or point.first_step is None:
+        return {"time_to_find": np.nan}
+    return {"time_to_find": float(restricted_steps(point.first_step[_present(point)], point.length).mean())}
+
+
+def restricted_steps(first_step: np.ndarray, length: int) -> np.ndarray:
+    """The steps a path took to first reach each class, censored at ``length``: ``first_step`` where
+    ``0 <= first_step < length``, ``length`` for a class not reached by then (-1, or later).
+
+    Parameters
+    ----------
+    first_step : (C,) int ndarray
+        As :func:`~curiosity_cli.label.classes.first_steps` records them (step 0 is the start cell).
+    length : int
+
+    Returns
+    -------
+    (C,) float64 ndarray
+    """
+    first_step = np.asarray(first_step)
+    return np.where((first_step >= 0) & (first_step < length), first_step, length).astype(np.float64)
+
+
 def _adjusted(point: Checkpoint) -> dict:
     # the topics Z_p gives some pixel: the chance correction counts those, not the model's K
     return {**_per_labelling(adjusted_mutual_information, "ami")(point), "topics_used": int((point.batch.sum(axis=1) > 0).sum())}
@@ -135,8 +167,13 @@ AMI = Measure("ami", "AMI", "", {"human": "ami_human", "batch": "ami_batch"}, _a
 CLASSES_FOUND = Measure("classes_found", "classes found", "classes", {"human": "classes_found"}, _classes_found,
                         found=True, digits=2)
 MEAN_RECALL = Measure("mean_recall", "mean recall", "", {"human": "mean_recall"}, _mean_recall, found=True, digits=3)
+#: The restricted mean time to first find: over the map's classes, the step each was first reached, a class not
+#: reached by the checkpoint counting the checkpoint's length (censored there), so that walkers are compared on one
+#: scale however many classes they miss.
+TIME_TO_FIND = Measure("time_to_find", "time to first find", "steps", {"human": "time_to_find"}, _time_to_find,
+                       found=True, digits=1, lower_is_better=True)
 #: Every measure, in the order of their ``mi.csv`` columns.
-MEASURES = (MI, NMI, AMI, CLASSES_FOUND, MEAN_RECALL)
+MEASURES = (MI, NMI, AMI, CLASSES_FOUND, MEAN_RECALL, TIME_TO_FIND)
 
 
 def measure_values(point: Checkpoint) -> dict:

@@ -407,9 +407,11 @@ def _found_section(evaluation: Evaluation) -> list[str]:
         "matching that maximises the recalls' sum; unmatched classes 0), averaged over classes. **NMI**: MI over the "
         "mean of the two labellings' entropies. **AMI**: the same, less the MI labellings of the same class sizes share "
         "by chance (hypergeometric model, over the topics Z_p uses: `topics_used` in `mi.csv`); over a map's pixels "
-        "that chance share is small, so AMI sits just below NMI. Each walker: mean over restarts ± "
+        "that chance share is small, so AMI sits just below NMI. **Time to first find**: per class, the step the "
+        "path first reached it, a class not reached by the length counting the length (censored there: the restricted "
+        "mean), averaged over classes; lower is better. Each walker: mean over restarts ± "
         f"{100 * CONFIDENCE:.0f} % CI half-width; topic perplexity minus each walker: mean paired difference "
-        f"[{100 * CONFIDENCE:.0f} % CI], paired Wilcoxon p; \"leads each\": above every walker with p < {ALPHA} against "
+        f"[{100 * CONFIDENCE:.0f} % CI], paired Wilcoxon p; \"leads each\": better than every walker with p < {ALPHA} against "
         "each (the intersection-union p), read after Holm's correction over the maps. Against human labels, or Z_b on "
         "a map without them. Every length in `found_summary.csv`, `found_effects.csv` and `found_leads.csv`.",
         "",
@@ -442,8 +444,38 @@ def _found_section(evaluation: Evaluation) -> list[str]:
             rows = lead.set_index("measure")
             lines.append("| leads each | " + " | ".join(
                 _found_lead(rows.loc[m.name]) if m.name in rows.index else "" for m in measures) + " |")
-        lines.append("")
+        lines += ["", *_class_times(evaluation.found_classes, dataset, length)]
     return lines
+
+
+def _class_times(found_classes, dataset: str, length: int) -> list[str]:
+    """A map's time to first find of each class: topic perplexity's, and its paired difference to each walker."""
+    if found_classes is None:
+        return []
+    block = found_classes[(found_classes["dataset"] == dataset) & (found_classes["path_length"] == length)]
+    if block.empty:
+        return []
+    others = _order(block["other"])
+    lines = [
+        f"Time to first find of each class (steps, restricted to {length}; in brackets the share of restarts that "
+        f"found it), {HEADLINE_WEIGHT}'s and its paired difference to each walker [95 % CI], p (`found_classes.csv`):",
+        "",
+        f"| class | {HEADLINE_WEIGHT} | " + " | ".join(f"{_MINUS} {o}" for o in others) + " |",
+        "|---|---|" + "---|" * len(others),
+    ]
+    for class_id, rows in block.groupby("class_id", sort=True):
+        rows = rows.set_index("other")
+        first = rows.iloc[0]
+        name = f"{first['class_name']} ({class_id})" if isinstance(first["class_name"], str) and first["class_name"] else str(class_id)
+        cells = [
+            f"{_found_versus(rows.loc[o], 1)} ({100 * rows.loc[o, 'other_found']:.0f} %)" if o in rows.index else ""
+            for o in others
+        ]
+        lines.append(
+            f"| {name} | {first['topic_perplexity_steps']:.1f} ({100 * first['topic_perplexity_found']:.0f} %) | "
+            + " | ".join(cells) + " |"
+        )
+    return lines + [""]
 
 
 def _significance(tests) -> list[str]:

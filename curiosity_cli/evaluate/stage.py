@@ -67,7 +67,8 @@ Written under ``results/<experiment>/``:
   adjusted for the number of maps (:func:`~curiosity_cli.evaluate.headline.with_adjusted`).
 - ``found_summary.csv``, ``found_effects.csv``, ``found_leads.csv``: every measure beside MI
   (NMI, AMI, classes found, mean recall) per walker, topic perplexity against each other
-  walker on it, and whether it leads each, with MI's statistics (:mod:`~curiosity_cli.evaluate.found`).
+  walker on it, and whether it leads each, with MI's statistics; ``found_classes.csv``: how
+  soon it first reached each human class against each walker (:mod:`~curiosity_cli.evaluate.found`).
 - ``tables.json``: each table's size and SHA-256 and those of every file and map fact the
   tables were made from (:meth:`~curiosity_cli.experiment.experiment.Experiment.record_tables`),
   written last with the others: ``plot`` and the report draw only a set whose record holds.
@@ -89,7 +90,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from curiosity_cli.errors import RERUN
-from curiosity_cli.evaluate.found import found_effects, found_leads, summarise_found
+from curiosity_cli.evaluate.found import class_times, found_effects, found_leads, summarise_found
 from curiosity_cli.evaluate.headline import (
     ADJUSTED_COLUMNS, HEADLINE_COLUMNS, UNCERTAINTY_COLUMNS, headline, paired_effects, with_adjusted, with_uncertainty,
 )
@@ -126,13 +127,14 @@ class Evaluation:
     found_summary: pd.DataFrame | None = None
     found_effects: pd.DataFrame | None = None
     found_leads: pd.DataFrame | None = None
+    found_classes: pd.DataFrame | None = None
 
 
 #: The tables ``evaluate`` writes as CSV, each under its name in ``results/<experiment>/`` and as the
 #: :class:`Evaluation` field of that name.
 TABLES = (
     "mi", "classes", "summary", "classes_summary", "tests", "effects", "headline", "convergence", "revisits",
-    "steering", "mechanism", "found_summary", "found_effects", "found_leads",
+    "steering", "mechanism", "found_summary", "found_effects", "found_leads", "found_classes",
 )
 
 
@@ -217,7 +219,7 @@ def evaluate_experiment(folder: Path, *, partial: bool = False, cache_dir: Path 
             "mi": mi, "classes": classes, "summary": summary, "classes_summary": classes_summary, "tests": tests,
             "effects": effects, "headline": top, "convergence": label_convergence(mi), "revisits": summarise_revisits(mi),
             "steering": steering, "mechanism": mechanism, "found_summary": summarise_found(mi), "found_effects": found,
-            "found_leads": found_leads(found),
+            "found_leads": found_leads(found), "found_classes": class_times(classes),
         }
         # every file is written whole before any replaces its old self, and tables.json
         # records each one's digest: a failure (a full disk) leaves the old set or a mix that

@@ -119,7 +119,8 @@ def specification_curve_figure(
     if measure is None:
         top.set_ylabel(f"MI ratio at 80 steps ({against}):\ntopic perplexity / next best")
     else:
-        top.set_ylabel(f"{measure.title} at 80 steps ({against}):\ntopic perplexity {_MINUS} closest walker")
+        better = "lower" if measure.lower_is_better else "higher"
+        top.set_ylabel(f"{measure.title} at 80 steps ({against}):\ntopic perplexity {_MINUS} closest walker ({better} is better)")
     top.grid(True, axis="y", color="0.92")
     handles += [
         Line2D([], [], color="0.3", marker="o", linestyle="", label="leads each walker, Holm p < 0.05 over the curve"),

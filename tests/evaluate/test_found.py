@@ -33,6 +33,7 @@ def found_mi(lead: float, seed: int = 0, datasets=("a", "b", "c")) -> pd.DataFra
                     "nmi_batch": 0.3, "ami_human": 0.2 + 0.02 * (shared + noise), "ami_batch": 0.3,
                     "classes_found": 3 + shared + noise + ahead, "classes": 6,
                     "mean_recall": 0.4 + 0.05 * (shared + noise + ahead), "replicate": 0,
+                    "time_to_find": 40 + 5 * (shared + noise - ahead),  # sooner is better
                 })
     return pd.DataFrame(rows)
 
@@ -41,7 +42,7 @@ def test_a_planted_lead_on_what_a_path_finds_is_found_and_a_sham_one_is_not():
     for lead, expected in ((2.0, True), (0.0, False)):
         mi = found_mi(lead)
         leads = found_leads(found_effects(mi)).query("against == 'human'").set_index(["measure", "dataset"])
-        for measure in ("classes_found", "mean_recall", "nmi"):
+        for measure in ("classes_found", "mean_recall", "nmi", "time_to_find"):
             rows = leads.loc[measure]
             assert (rows["beats_all"] & (rows["p_each_holm"] < 0.05)).all() == expected, (lead, measure)
             assert rows["walkers"].eq(3).all()  # the ceiling is not a walker
@@ -90,6 +91,7 @@ def test_a_checkpoint_gives_every_measure_column_in_order():
     assert values["classes_found"] == 1 and values["classes"] == 2  # class 1 first reached at step 50 > 40
     assert values["mean_recall"] == pytest.approx((30 / 32 + 20 / 21) / 2)
     assert values["topics_used"] == 4
+    assert values["time_to_find"] == (3 + 40) / 2  # class 1 not found by step 40: censored there
     assert values["ami_human"] < values["nmi_human"]
     unlabelled = measure_values(Checkpoint(40, batch, None, None))
     assert np.isnan(unlabelled["mi_human"]) and np.isnan(unlabelled["classes_found"]) and np.isfinite(unlabelled["ami_batch"])
@@ -111,12 +113,14 @@ def test_a_study_counts_each_measures_leads_over_its_points_after_holm():
         ({"specification": "level"}, SimpleNamespace(found_effects=found_effects(found_mi(0.0, seed=2)), seeds=(0, 1))),
     ]
     table = found_curve_table(specifications)
-    assert len(table) == 4 * 2 * 3  # measures x specifications x maps
+    assert len(table) == 5 * 2 * 3  # measures x specifications x maps
     recall = table[table.measure == "mean_recall"].set_index(["specification", "dataset"])
     assert (recall.loc["ahead", "p_each_holm"] < 0.05).all() and not (recall.loc["level", "p_each_holm"] < 0.05).any()
     assert (recall["against"] == "human").all() and (recall["path_length"] == 80).all()
     # Holm over the measure's six points: never below the point's own p
     assert (recall["p_each_holm"] >= recall["p_each"]).all()
+    time = table[table.measure == "time_to_find"].set_index(["specification", "dataset"])
+    assert (time.loc["ahead", "p_each_holm"] < 0.05).all() and (time.loc["ahead", "closest_difference"] < 0).all()
     lines = "\n".join(found_curve_lines(table, ["ami"]))
     assert "| mean recall | 6 | 3 |" in lines
     assert "Not pooled (AMI)" in lines
@@ -133,3 +137,24 @@ def test_the_wilcoxon_p_of_counts_is_scipys_exact_permutation_p(differences):
     d = np.array(differences, float)
     expected = stats.wilcoxon(d).pvalue if d.any() else 1.0
     assert wilcoxon_pair_p(d) == pytest.approx(expected, rel=1e-12, abs=1e-15)
+
+
+def test_each_class_is_timed_censored_at_the_length_and_paired_by_restart():
+    from curiosity_cli.evaluate.found import class_times
+
+    rows = []
+    for restart in range(6):
+        for weight, first in (("topic-perplexity", 5 + restart), ("random-walk", None if restart < 3 else 30), (CEILINGS[0], 0)):
+            rows.append({
+                "dataset": "m", "weight_function": weight, "restart": restart, "path_length": 40, "class_id": 2,
+                "class_name": "rock", "pixels": 10, "found": first is not None, "first_step": first, "topic": 0,
+                "recall": 0.5,
+            })
+    times = class_times(pd.DataFrame(rows))
+    assert len(times) == 1  # the ceiling is not a walker
+    row = times.iloc[0]
+    assert row["other"] == "random-walk" and row["n"] == 6
+    assert row["topic_perplexity_steps"] == pytest.approx(np.mean([5, 6, 7, 8, 9, 10]))
+    assert row["other_steps"] == pytest.approx((3 * 40 + 3 * 30) / 6)  # never found: 40, the length
+    assert row["mean_difference"] == pytest.approx(7.5 - 35) and row["ci_high"] < 0
+    assert (row["topic_perplexity_found"], row["other_found"]) == (1.0, 0.5)

@@ -47,7 +47,7 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     mi = pd.read_csv(folder / "mi.csv")
     assert list(mi.columns) == [
         "dataset", "weight_function", "restart", "path_length", "mi_human", "mi_batch", "nmi_human", "nmi_batch",
-        "ami_human", "ami_batch", "topics_used", "classes_found", "classes", "mean_recall", "seed", "replicate",
+        "ami_human", "ami_batch", "topics_used", "classes_found", "classes", "mean_recall", "time_to_find", "seed", "replicate",
         "placed_mi_human", "placed_mi_batch", "distinct_cells", "revisit_steps", "boxed_in_steps",
     ]
     # label.check_restarts = 1: restart 0 of each walker is labelled a second time, from a placed start
@@ -240,7 +240,7 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
         assert section in report
     # every measure beside MI compared as MI is, from the same pairs
     found, effects = pd.read_csv(folder / "found_effects.csv"), pd.read_csv(folder / "effects.csv")
-    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall"}
+    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall", "time_to_find"}
     nmi = found[(found["measure"] == "nmi")].drop(columns="measure").reset_index(drop=True)
     assert nmi[["dataset", "path_length", "against", "other", "n"]].equals(effects[["dataset", "path_length", "against", "other", "n"]])
     assert (mi_table := pd.read_csv(folder / "mi.csv"))["ami_human"].le(mi_table["nmi_human"] + 1e-12).all()
