@@ -11,7 +11,12 @@ on). So this plugin
 - has Python write every signal it receives to a pipe (:func:`signal.set_wakeup_fd`, which
   sees a signal whatever handler takes it), and after each test stops the run with exit
   code 2 when SIGINT or SIGTERM arrived during it;
-- puts back the SIGINT and SIGTERM handlers a test left changed.
+- puts back the SIGINT and SIGTERM handlers a test left changed;
+- in a run of several worker processes (pytest-xdist's ``-n``), passes a SIGTERM the controlling
+  process receives on to its workers, so that each stops its test as a run of one process
+  does (a command a test started is stopped with it) rather than being killed when the
+  controller gives up waiting on it. Ctrl-C reaches every process of the terminal's group
+  already.
 
 ``tests/conftest.py`` takes its hooks; a pytest of its own loads it with ``-p interrupts``
 (``tests/drive/test_interrupts.py``).
@@ -35,7 +40,8 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     _pipe = os.pipe()
     for end in _pipe:
         os.set_blocking(end, False)
-    _before = (signal.signal(signal.SIGTERM, signal.default_int_handler), _arm())
+    controller = session.config.pluginmanager.has_plugin("dsession")  # xdist's, in the process that runs no test
+    _before = (signal.signal(signal.SIGTERM, _to_workers_too if controller else signal.default_int_handler), _arm())
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:
@@ -62,6 +68,18 @@ def pytest_runtest_protocol(item: pytest.Item, nextitem: pytest.Item | None):
     if received is not None:
         pytest.exit(f"{received.name} during {item.nodeid}; the run stops", returncode=pytest.ExitCode.INTERRUPTED)
     return reports
+
+
+def _to_workers_too(signum: int, frame) -> None:
+    """SIGTERM in the controlling process of an xdist run: sent on to its workers, then KeyboardInterrupt here."""
+    import psutil
+
+    for worker in psutil.Process().children():
+        try:
+            worker.send_signal(signum)
+        except psutil.Error:
+            pass  # gone already
+    raise KeyboardInterrupt
 
 
 def _arm() -> int:

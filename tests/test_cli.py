@@ -154,12 +154,17 @@ def test_a_map_listed_twice_is_refused_by_config_show_as_explore_would(own_map, 
     assert not (tmp_path / "results").exists()
 
 
-def test_a_vocabulary_that_is_not_there_is_refused_by_config_show_as_explore_would(tmp_path):
+def test_a_vocabulary_that_is_not_there_is_refused_by_config_show_as_explore_would(tmp_path, monkeypatch):
     message = "orb-10.npz: vocabulary not found; `curiosity vocab build` builds the orb vocabulary of 10 words"
     _assert_one_line_error(run("config", "show", "quick", "--set", "words.orb_vocabulary=10"), message)
+    # with nothing cached: refused before the quick map's source is fetched, not after a download
+    cache = tmp_path / "cache"
+    monkeypatch.setenv("CURIOSITY_CACHE", str(cache))
     _assert_one_line_error(
-        run("explore", "quick", "--set", "words.orb_vocabulary=10", "--results-dir", str(tmp_path)), message
+        run("explore", "quick", "--set", "words.orb_vocabulary=10", "--results-dir", str(tmp_path / "results"),
+            "--cache-dir", str(cache / "stores")), message
     )
+    assert not cache.exists() or not any(path.is_file() for path in cache.rglob("*"))
 
 
 def test_unknown_dataset_is_one_line_error():

@@ -27,6 +27,14 @@ def test_ci_runs_the_readme_test_command_verbatim():
     assert "pytest" in COMMANDS[1] and "[test]" in COMMANDS[1]
 
 
+def test_the_test_commands_worker_processes_come_with_the_test_extra():
+    import tomllib
+
+    test_extra = tomllib.loads((PROJECT_ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]["test"]
+    assert COMMANDS[1].endswith("pytest -n 2")  # -n is pytest-xdist's
+    assert any(re.match(r"pytest-xdist\b", requirement) for requirement in test_extra), test_extra
+
+
 def test_readme_pictures_exist():
     pictures = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", README)
     assert "docs/datasets.png" in pictures and "docs/specification-curve-seeds-0-1-2.png" in pictures

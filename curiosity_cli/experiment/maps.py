@@ -106,10 +106,15 @@ def prepare_stores(config: ExperimentConfig, cache_dir: Path) -> dict[str, Store
     ------
     ConfigError
         Two entries naming maps of the same name (their runs would share folders).
+    CuriosityError
+        A vocabulary the words name that is not there, before any map is fetched.
     """
     from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.words.extract import extract_words
+    from curiosity_cli.words.kinds import WordRecipe
 
+    # a vocabulary that is not there is refused before any map is fetched or read (config show refuses it so too)
+    WordRecipe(config.words)
     stores = {}
     for entry in config.datasets:
         map_data = load_map(entry)

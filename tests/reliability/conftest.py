@@ -1,4 +1,4 @@
-"""The reliability cases' shared experiment: explored, labelled and evaluated once per module, copied per case."""
+"""The reliability cases' shared experiment: explored, labelled and evaluated once per test process, copied per case."""
 
 from __future__ import annotations
 
@@ -10,9 +10,13 @@ from cli_cases import EXPERIMENT, EXPLORE, LABEL, run_cli
 from small_maps import grid_yaml, write_own_map
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def experiment(tmp_path_factory) -> Path:
-    """A folder holding the own map, ``grid.yaml`` and ``results/grid`` explored, labelled and evaluated."""
+    """A folder holding the own map, ``grid.yaml`` and ``results/grid`` explored, labelled and evaluated.
+
+    Made once for every module that breaks it: no case writes here (``work`` is a copy, and a case that edits the
+    map copies it first), so a case cannot see another's fault.
+    """
     root = tmp_path_factory.mktemp("experiment")
     grid_yaml(write_own_map(root), root)
     for args in (EXPLORE, LABEL, ["evaluate", EXPERIMENT]):
