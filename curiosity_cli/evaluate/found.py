@@ -37,7 +37,7 @@ import numpy as np
 from curiosity_cli.evaluate import headline
 from curiosity_cli.evaluate.headline import HEADLINE_WEIGHT, paired_effects
 from curiosity_cli.evaluate.measures import MEASURES, Measure, measure_named
-from curiosity_cli.evaluate.statistics import ALPHA, KEYS, mean_ci, paired_tests
+from curiosity_cli.evaluate.statistics import ALPHA, KEYS, mean_ci
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -81,10 +81,7 @@ def found_effects(mi):
     """``found_effects.csv`` (module docstring): topic perplexity against each other walker on each measure."""
     import pandas as pd
 
-    parts = [
-        paired_effects(mi, paired_tests(mi, measure, HEADLINE_WEIGHT), measure).assign(measure=measure.name)
-        for measure in found_measures(mi)
-    ]
+    parts = [paired_effects(mi, measure=measure).assign(measure=measure.name) for measure in found_measures(mi)]
     parts = [part for part in parts if not part.empty]
     if not parts:
         return pd.DataFrame(columns=EFFECT_COLUMNS)
@@ -162,20 +159,23 @@ def class_times(classes):
     walkers = walkers.assign(
         steps=restricted_steps(walkers["first_step"].fillna(-1).to_numpy(), walkers["path_length"].to_numpy()),
         found=walkers["found"].astype(float),
+        class_name=walkers["class_name"].fillna(""),  # a group key: a missing name would drop the class
     )
+    index = ["dataset", "path_length", "class_id", "class_name"]
+    wide = walkers.pivot_table(index=[*index, "restart"], columns="weight_function", values=["steps", "found"])
+    if HEADLINE_WEIGHT not in wide["steps"].columns:
+        return pd.DataFrame(columns=CLASS_COLUMNS)
     rows = []
-    for (dataset, length, class_id), block in walkers.groupby(["dataset", "path_length", "class_id"], sort=False):
-        steps = block.pivot_table(index="restart", columns="weight_function", values="steps")
-        found = block.pivot_table(index="restart", columns="weight_function", values="found")
-        if HEADLINE_WEIGHT not in steps.columns:
-            continue
+    for names, block in wide.groupby(level=index, sort=False):
+        steps, found = block["steps"], block["found"]
         for other in steps.columns.drop(HEADLINE_WEIGHT):
             pair = steps[[HEADLINE_WEIGHT, other]].dropna()
+            if pair.empty:
+                continue
             ours, theirs = pair[HEADLINE_WEIGHT].to_numpy(), pair[other].to_numpy()
             mean, low, high = paired_difference(ours, theirs)
             rows.append({
-                "dataset": dataset, "path_length": length, "class_id": class_id, "class_name": block["class_name"].iloc[0],
-                "other": other, "n": len(pair), "topic_perplexity_steps": float(ours.mean()),
+                **dict(zip(index, names)), "other": other, "n": len(pair), "topic_perplexity_steps": float(ours.mean()),
                 "other_steps": float(theirs.mean()), "mean_difference": mean, "ci_low": low, "ci_high": high,
                 "p_value": wilcoxon_pair_p(ours - theirs),
                 "topic_perplexity_found": float(found.loc[pair.index, HEADLINE_WEIGHT].mean()),

@@ -13,7 +13,9 @@ import numpy as np
 
 from curiosity_cli.evaluate.measures import MI, Measure
 from curiosity_cli.evaluate.multiplicity import intersection_union_p
-from curiosity_cli.evaluate.statistics import ALPHA, paired_blocks, paired_difference, paired_tests, wilcoxon_p
+from curiosity_cli.evaluate.statistics import (
+    ALPHA, paired_blocks, paired_difference, wilcoxon_p, wilcoxon_pair_p,
+)
 from curiosity_cli.explore.weights import CEILINGS
 
 #: The path length the paper reads its headline at (about a map's width); a map without
@@ -37,15 +39,15 @@ def paired_effects(mi, tests=None, measure: Measure = MI):
     (:func:`~curiosity_cli.evaluate.statistics.paired_difference`), the ratio of the
     means with its 95 % studentized paired-bootstrap interval
     (:func:`~curiosity_cli.evaluate.comparisons.ratio_interval`) and the Wilcoxon p of
-    the same pairs from ``tests`` (of the same measure; computed with
-    :func:`~curiosity_cli.evaluate.statistics.paired_tests` when not given): each walker
-    a pre-specified comparison (:mod:`~curiosity_cli.evaluate.comparisons`).
+    the same pairs, from ``tests`` (:func:`~curiosity_cli.evaluate.statistics.paired_tests` of
+    the same measure, as ``tests.csv`` reports it) or, without, from the pairs themselves
+    (:func:`~curiosity_cli.evaluate.statistics.wilcoxon_pair_p`): each walker a
+    pre-specified comparison (:mod:`~curiosity_cli.evaluate.comparisons`).
     """
     import pandas as pd
 
     from curiosity_cli.evaluate.comparisons import ratio_interval
 
-    tests = paired_tests(mi, measure) if tests is None else tests
     rows = []
     for against, dataset, length, block in paired_blocks(mi, measure):
         if HEADLINE_WEIGHT not in block.columns:
@@ -63,7 +65,8 @@ def paired_effects(mi, tests=None, measure: Measure = MI):
                 "mean_difference": mean, "ci_low": low, "ci_high": high,
                 "ratio": float(ours.mean() / theirs.mean()) if theirs.mean() > 0 else np.nan,
                 "ratio_ci_low": ratio_low, "ratio_ci_high": ratio_high,
-                "p_value": wilcoxon_p(tests, dataset, length, against, HEADLINE_WEIGHT, other)[0],
+                "p_value": wilcoxon_pair_p(ours - theirs) if tests is None
+                else wilcoxon_p(tests, dataset, length, against, HEADLINE_WEIGHT, other)[0],
             })
     return pd.DataFrame(rows, columns=EFFECT_COLUMNS)
 

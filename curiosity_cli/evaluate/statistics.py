@@ -139,16 +139,14 @@ def paired_blocks(mi, measure: Measure = MI):
             yield against, dataset, length, block
 
 
-def paired_tests(mi, measure: Measure = MI, walker: str | None = None):
+def paired_tests(mi, measure: Measure = MI):
     """Wilcoxon signed-rank test between every pair of walkers on a measure (MI unless told), paired by restart
-    (ceilings left out); only the pairs with ``walker`` where given."""
+    (ceilings left out)."""
     import pandas as pd
 
     rows = []
     for against, dataset, length, block in paired_blocks(mi, measure):
         for a, b in itertools.combinations(block.columns, 2):
-            if walker is not None and walker not in (a, b):
-                continue
             pair = block[[a, b]].dropna()
             diff = pair[a] - pair[b]
             p = wilcoxon_pair_p(diff.to_numpy()) if len(pair) else np.nan
