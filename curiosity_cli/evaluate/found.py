@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from curiosity_cli.evaluate import headline
-from curiosity_cli.evaluate.headline import HEADLINE_WEIGHT, paired_effects
+from curiosity_cli.evaluate.headline import HEADLINE_WEIGHT, paired_effects, versus_pairs
 from curiosity_cli.evaluate.measures import MEASURES, Measure, measure_named
 from curiosity_cli.evaluate.statistics import ALPHA, KEYS, mean_ci
 
@@ -167,18 +167,14 @@ def class_times(classes):
         return pd.DataFrame(columns=CLASS_COLUMNS)
     rows = []
     for names, block in wide.groupby(level=index, sort=False):
-        steps, found = block["steps"], block["found"]
-        for other in steps.columns.drop(HEADLINE_WEIGHT):
-            pair = steps[[HEADLINE_WEIGHT, other]].dropna()
-            if pair.empty:
-                continue
-            ours, theirs = pair[HEADLINE_WEIGHT].to_numpy(), pair[other].to_numpy()
+        found = block["found"]
+        for other, pairs, ours, theirs in versus_pairs(block["steps"]):
             mean, low, high = paired_difference(ours, theirs)
             rows.append({
-                **dict(zip(index, names)), "other": other, "n": len(pair), "topic_perplexity_steps": float(ours.mean()),
+                **dict(zip(index, names)), "other": other, "n": len(pairs), "topic_perplexity_steps": float(ours.mean()),
                 "other_steps": float(theirs.mean()), "mean_difference": mean, "ci_low": low, "ci_high": high,
                 "p_value": wilcoxon_pair_p(ours - theirs),
-                "topic_perplexity_found": float(found.loc[pair.index, HEADLINE_WEIGHT].mean()),
-                "other_found": float(found.loc[pair.index, other].mean()),
+                "topic_perplexity_found": float(found.loc[pairs, HEADLINE_WEIGHT].mean()),
+                "other_found": float(found.loc[pairs, other].mean()),
             })
     return pd.DataFrame(rows, columns=CLASS_COLUMNS)

@@ -31,6 +31,18 @@ def headline_length(lengths) -> int | None:
     return max(below) if below else None
 
 
+def versus_pairs(block):
+    """Topic perplexity against each other walker of ``block`` (a row per restart, a column per walker): per
+    walker, ``(other, pairs, ours, theirs)``: the restarts both have, and the two walkers' values on them;
+    nothing when topic perplexity is not a column."""
+    if HEADLINE_WEIGHT not in block.columns:
+        return
+    for other in block.columns.drop(HEADLINE_WEIGHT):
+        pair = block[[HEADLINE_WEIGHT, other]].dropna()
+        if len(pair):
+            yield other, pair.index, pair[HEADLINE_WEIGHT].to_numpy(), pair[other].to_numpy()
+
+
 def paired_effects(mi, tests=None, measure: Measure = MI):
     """Topic perplexity against each other walker on a measure (MI unless told), paired by restart (ceilings left out).
 
@@ -50,13 +62,7 @@ def paired_effects(mi, tests=None, measure: Measure = MI):
 
     rows = []
     for against, dataset, length, block in paired_blocks(mi, measure):
-        if HEADLINE_WEIGHT not in block.columns:
-            continue
-        for other in block.columns.drop(HEADLINE_WEIGHT):
-            pair = block[[HEADLINE_WEIGHT, other]].dropna()
-            if pair.empty:
-                continue
-            ours, theirs = pair[HEADLINE_WEIGHT].to_numpy(), pair[other].to_numpy()
+        for other, pair, ours, theirs in versus_pairs(block):
             mean, low, high = paired_difference(ours, theirs)
             ratio_low, ratio_high = ratio_interval(ours, theirs)
             rows.append({
