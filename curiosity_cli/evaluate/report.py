@@ -427,7 +427,10 @@ def _found_section(evaluation: Evaluation) -> list[str]:
         block = block[block["against"] == against]
         measures = [m for m in shown if (block["measure"] == m.name).any()]
         classes = evaluation.mi.loc[evaluation.mi["dataset"] == dataset, "classes"].max()
-        titles = [f"{m.title} (of {int(classes)})" if m.name == "classes_found" else m.title for m in measures]
+        titles = [
+            f"{m.title} (of {int(classes)})" if m.name == "classes_found" else f"{m.title} ({m.unit})" if m.unit else m.title
+            for m in measures
+        ]
         lines += [f"**{dataset}** (against {_TARGETS[against]}):", "", "| | " + " | ".join(titles) + " |",
                   "|---|" + "---|" * len(measures)]
         for weight in _order(block["weight_function"]):

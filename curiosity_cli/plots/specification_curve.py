@@ -120,7 +120,10 @@ def specification_curve_figure(
         top.set_ylabel(f"MI ratio at 80 steps ({against}):\ntopic perplexity / next best")
     else:
         better = "lower" if measure.lower_is_better else "higher"
-        top.set_ylabel(f"{measure.title} at 80 steps ({against}):\ntopic perplexity {_MINUS} closest walker ({better} is better)")
+        unit = f", {measure.unit}" if measure.unit else ""
+        top.set_ylabel(
+            f"{measure.title} at 80 steps ({against}{unit}):\ntopic perplexity {_MINUS} closest walker ({better} is better)"
+        )
     top.grid(True, axis="y", color="0.92")
     handles += [
         Line2D([], [], color="0.3", marker="o", linestyle="", label="leads each walker, Holm p < 0.05 over the curve"),
