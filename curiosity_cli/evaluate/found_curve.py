@@ -11,10 +11,11 @@ leads every one (``beats_all``, ``not_beaten``, the intersection-union ``p_each`
 ``p_each`` adjusted over every point of the measure's curve (``p_each_holm``,
 ``p_each_bh``): a point leads only after Holm, as on MI's curve. The curve of one measure
 (:func:`measure_curve`, ``reproduce --measure``) draws each point's difference to the
-closest of those walkers (the least advantage: the largest difference where lower is better) (``closest``, ``closest_difference`` and its interval): the one
-the decision turns on, chosen after seeing the data and so biased toward "no lead", as
-MI's next best is; no difference is 0. A measure that a
-specification's recorded seeds lack has no points there (:attr:`~curiosity_cli.evaluate.replicates.Pooled.missing`).
+closest of those walkers, where topic perplexity's advantage is least (``closest``,
+``closest_difference`` and its interval): the one the decision turns on, chosen after
+seeing the data and so biased toward "no lead", as MI's next best is; no difference is 0.
+A measure that a specification's recorded seeds lack has no points there
+(:attr:`~curiosity_cli.evaluate.replicates.Pooled.missing`).
 """
 
 from __future__ import annotations
@@ -115,8 +116,8 @@ def found_curve_lines(table, missing: Sequence[str]) -> list[str]:
         "### What each walker found",
         "",
         f"The same decision on each measure beside MI (REPORT.md's \"What each walker found\"), at the headline's length: "
-        f"topic perplexity leads where its mean is better (higher; lower for a time) than each of {versus} with a paired Wilcoxon p below "
-        f"{ALPHA:g} against each, read after Holm's correction over the measure's points. The points, with the paired "
+        f"topic perplexity leads where its mean is better (higher; lower for a time) than each of {versus} with a "
+        f"paired Wilcoxon p below {ALPHA:g} against each, read after Holm's correction over the measure's points. The points, with the paired "
         "difference to each walker and its interval, are in `specifications-found.csv`.",
         "",
         "| measure | points | lead after Holm | uncorrected (exploratory) | " +
