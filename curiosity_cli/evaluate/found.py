@@ -15,8 +15,7 @@ same statistics as MI's headline:
   perplexity leads each other walker (``beats_all``, ``not_beaten``) and the p of that
   lead (``p_each``, the intersection-union p,
   :func:`~curiosity_cli.evaluate.multiplicity.intersection_union_p`), adjusted for the
-  maps as the headline's is (``p_each_holm``, ``p_each_bh``, per measure, length and labelling).
-
+  maps as the headline's is (``p_each_holm``, ``p_each_bh``, per measure, length and labelling);
 - ``found_classes.csv``: per (dataset, path length, human class) and other walker, how soon
   topic perplexity first reached the class against it, paired by restart: each walker's
   restricted mean time to first find (a class not reached by the length counts the length:
@@ -32,12 +31,11 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from curiosity_cli.evaluate import headline
-from curiosity_cli.evaluate.headline import HEADLINE_WEIGHT, paired_effects, versus_pairs
+from curiosity_cli.evaluate.headline import HEADLINE_WEIGHT, lead_each, paired_effects, versus_pairs
 from curiosity_cli.evaluate.measures import MEASURES, Measure, measure_named
-from curiosity_cli.evaluate.statistics import ALPHA, KEYS, mean_ci
+from curiosity_cli.evaluate.multiplicity import adjusted_columns, with_adjusted_p
+from curiosity_cli.evaluate.statistics import summarise
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -45,8 +43,8 @@ if TYPE_CHECKING:
 SUMMARY_COLUMNS = ["measure", "dataset", "weight_function", "path_length", "against", "n", "mean", "std", "ci_low", "ci_high"]
 EFFECT_COLUMNS = ["measure", *headline.EFFECT_COLUMNS]
 LEAD_COLUMNS = [
-    "measure", "dataset", "path_length", "against", "walkers", "beats_all", "not_beaten", "p_each", "p_each_holm",
-    "p_each_bh",
+    "measure", "dataset", "path_length", "against", "walkers", "beats_all", "not_beaten", "p_each",
+    *adjusted_columns(["p_each"]),
 ]
 
 
@@ -64,14 +62,7 @@ def summarise_found(mi):
     """``found_summary.csv`` (module docstring): every walker's and ceiling's mean of each measure with its CI."""
     import pandas as pd
 
-    parts = []
-    for measure in found_measures(mi):
-        present = {against: column for against, column in measure.columns.items() if column in mi}
-        long = mi.melt(id_vars=KEYS, value_vars=list(present.values()), var_name="against", value_name="value")
-        long = long.dropna(subset=["value"])
-        long["against"] = long["against"].map({column: against for against, column in present.items()})
-        summary = mean_ci(long.groupby(["dataset", "weight_function", "path_length", "against"], sort=False)["value"])
-        parts.append(summary.assign(measure=measure.name))
+    parts = [summarise(mi, measure).assign(measure=measure.name) for measure in found_measures(mi)]
     if not parts:
         return pd.DataFrame(columns=SUMMARY_COLUMNS)
     return pd.concat(parts, ignore_index=True)[SUMMARY_COLUMNS]
@@ -88,26 +79,6 @@ def found_effects(mi):
     return pd.concat(parts, ignore_index=True)[EFFECT_COLUMNS]
 
 
-def lead_each(measure: Measure, others, ours, theirs, p) -> dict:
-    """``beats_all``, ``not_beaten`` and ``p_each`` of topic perplexity against ``others`` on ``measure``.
-
-    Parameters
-    ----------
-    measure : Measure
-        Whose direction says which mean is ahead.
-    others : sequence of str
-        The walkers, and per walker ``ours`` (topic perplexity's mean over their pairs), ``theirs`` (theirs)
-        and ``p`` (the paired Wilcoxon p).
-    """
-    from curiosity_cli.evaluate.multiplicity import intersection_union_p
-
-    ours, theirs, p = (np.asarray(x, np.float64) for x in (ours, theirs, p))
-    not_beaten = [o for o, ahead, q in zip(others, measure.ahead(ours, theirs), p) if not (ahead and q < ALPHA)]
-    sign = -1.0 if measure.lower_is_better else 1.0  # the intersection-union p reads "above"
-    return {"beats_all": not not_beaten, "not_beaten": ";".join(not_beaten),
-            "p_each": intersection_union_p(sign * ours, sign * theirs, p)}
-
-
 def found_leads(effects):
     """``found_leads.csv`` (module docstring), from :func:`found_effects`' rows.
 
@@ -117,8 +88,6 @@ def found_leads(effects):
     is compared with.
     """
     import pandas as pd
-
-    from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm
 
     rows = []
     for (measure, dataset, length, against), block in effects.groupby(
@@ -131,12 +100,7 @@ def found_leads(effects):
             "measure": measure, "dataset": dataset, "path_length": length, "against": against, "walkers": len(block),
             **lead_each(measure_named(measure), block["other"], ours, theirs, p),
         })
-    leads = pd.DataFrame(rows, columns=LEAD_COLUMNS)
-    for _, family in leads.groupby(["measure", "path_length", "against"], sort=False):
-        values = family["p_each"].to_numpy(float)
-        leads.loc[family.index, "p_each_holm"] = holm(values)
-        leads.loc[family.index, "p_each_bh"] = benjamini_hochberg(values)
-    return leads
+    return with_adjusted_p(pd.DataFrame(rows, columns=LEAD_COLUMNS), ["measure", "path_length", "against"], ["p_each"])
 
 
 #: ``found_classes.csv``'s columns (:func:`class_times`).

@@ -25,8 +25,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from curiosity_cli.evaluate.headline import headline_length
+from curiosity_cli.evaluate.headline import headline_length, lead_each
 from curiosity_cli.evaluate.measures import MEASURES, Measure
+from curiosity_cli.evaluate.multiplicity import adjusted_columns, with_adjusted_p
 from curiosity_cli.evaluate.specification_curve import VERSUS
 from curiosity_cli.evaluate.statistics import ALPHA
 
@@ -40,8 +41,8 @@ def _versus_names(walker: str) -> tuple[str, str, str, str]:
 
 #: A found curve's columns after those naming its specification.
 FOUND_CURVE_COLUMNS = (
-    "measure", "dataset", "against", "path_length", "seeds", "beats_all", "not_beaten", "p_each", "p_each_holm",
-    "p_each_bh", *(name for w in VERSUS for name in _versus_names(w)), "closest", "closest_difference",
+    "measure", "dataset", "against", "path_length", "seeds", "beats_all", "not_beaten", "p_each",
+    *adjusted_columns(["p_each"]), *(name for w in VERSUS for name in _versus_names(w)), "closest", "closest_difference",
     "closest_low", "closest_high",
 )
 
@@ -62,9 +63,6 @@ def found_curve_table(specifications: Sequence[tuple[Mapping[str, str], Pooled]]
         The naming columns, then :data:`FOUND_CURVE_COLUMNS`.
     """
     import pandas as pd
-
-    from curiosity_cli.evaluate.found import lead_each
-    from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm
 
     by_name = {m.name: m for m in MEASURES}
     rows, names = [], []
@@ -93,12 +91,7 @@ def found_curve_table(specifications: Sequence[tuple[Mapping[str, str], Pooled]]
                 row.update({"closest": closest, "closest_difference": row[mean], "closest_low": row[low],
                             "closest_high": row[high]})
             rows.append(row)
-    table = pd.DataFrame(rows, columns=[*names, *FOUND_CURVE_COLUMNS])
-    for _, family in table.groupby("measure", sort=False):
-        values = family["p_each"].to_numpy(float)
-        table.loc[family.index, "p_each_holm"] = holm(values)
-        table.loc[family.index, "p_each_bh"] = benjamini_hochberg(values)
-    return table
+    return with_adjusted_p(pd.DataFrame(rows, columns=[*names, *FOUND_CURVE_COLUMNS]), "measure", ["p_each"])
 
 
 def found_curve_lines(table, missing: Sequence[str]) -> list[str]:

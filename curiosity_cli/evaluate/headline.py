@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from curiosity_cli.evaluate.measures import MI, Measure
-from curiosity_cli.evaluate.multiplicity import intersection_union_p
+from curiosity_cli.evaluate.multiplicity import adjusted_columns, intersection_union_p, with_adjusted_p
 from curiosity_cli.evaluate.statistics import (
     ALPHA, paired_blocks, paired_difference, wilcoxon_p, wilcoxon_pair_p,
 )
@@ -95,7 +95,7 @@ UNCERTAINTY_COLUMNS = [
 #: The p-values :func:`with_adjusted` corrects for the family of maps (and a study's curve for its points), and the
 #: columns it adds: each one Holm- and Benjamini-Hochberg-adjusted.
 ADJUSTED_P = ("p_each", "null_no_rw_p", "null_p")
-ADJUSTED_COLUMNS = [f"{p}_{method}" for p in ADJUSTED_P for method in ("holm", "bh")]
+ADJUSTED_COLUMNS = adjusted_columns(ADJUSTED_P)
 #: The walker left out of the stricter null reference's exchangeable set (``null_no_rw_*``): the random walk
 #: ignores eq. 8's coverage and sees about half the cells the others see in 80 steps, so no reading makes it
 #: exchangeable with topic perplexity, and permuting it in puts the null ratios too low (the null p too small).
@@ -141,8 +141,7 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None, agains
         others = walkers.drop(HEADLINE_WEIGHT).sort_values(ascending=False, kind="stable")
         next_best = others.index[0]
         p_values = {o: wilcoxon_p(tests, dataset, length, read, HEADLINE_WEIGHT, o) for o in others.index}
-        not_beaten = [o for o in others.index if not (ours > others[o] and p_values[o][0] < ALPHA)]
-        p_each = intersection_union_p(ours, others.to_numpy(), [p_values[o][0] for o in others.index])
+        lead = lead_each(MI, others.index, ours, others.to_numpy(), [p_values[o][0] for o in others.index])
         effect = None
         if effects is not None:
             match = effects[
@@ -160,12 +159,33 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None, agains
             "ci_low": effect["ci_low"] if effect is not None else np.nan,
             "ci_high": effect["ci_high"] if effect is not None else np.nan,
             "p_value": p_values[next_best][0], "pairs": p_values[next_best][1],
-            "beats_all": not not_beaten, "not_beaten": ";".join(not_beaten), "p_each": p_each,
+            **lead,
             "best_ceiling": best_ceiling, "ceiling_mi": ceiling_mi,
             "ceiling_share": ours / ceiling_mi if best_ceiling and ceiling_mi > 0 else np.nan,
             "paper_map": paper.name if paper else "", "paper_ratio": paper.headline_ratio if paper else np.nan,
         })
     return pd.DataFrame(rows, columns=HEADLINE_COLUMNS)
+
+
+def lead_each(measure: Measure, others, ours, theirs, p) -> dict:
+    """``beats_all``, ``not_beaten`` and ``p_each`` of topic perplexity against ``others`` on ``measure``: it leads
+    where its mean is better than each walker's (above, or below where lower is better) with a paired Wilcoxon p
+    below :data:`~curiosity_cli.evaluate.statistics.ALPHA` against each, and ``p_each`` is the intersection-union p
+    of that (:func:`~curiosity_cli.evaluate.multiplicity.intersection_union_p`).
+
+    Parameters
+    ----------
+    measure : Measure
+        Whose direction says which mean is ahead.
+    others : sequence of str
+        The walkers, and per walker ``ours`` (topic perplexity's mean: one for all, or over each walker's pairs),
+        ``theirs`` (the walker's) and ``p`` (the paired Wilcoxon p).
+    """
+    ours, theirs, p = (np.asarray(x, np.float64) for x in (ours, theirs, p))
+    not_beaten = [o for o, ahead, q in zip(others, measure.ahead(ours, theirs), p) if not (ahead and q < ALPHA)]
+    sign = -1.0 if measure.lower_is_better else 1.0  # the intersection-union p reads "above"
+    return {"beats_all": not not_beaten, "not_beaten": ";".join(not_beaten),
+            "p_each": intersection_union_p(sign * ours, sign * theirs, p)}
 
 
 def with_uncertainty(top, mi):
@@ -226,14 +246,4 @@ def with_adjusted(top):
     labels (:mod:`~curiosity_cli.evaluate.multiplicity`): an experiment on five maps asks
     five questions, and "leads on one of them" needs the adjusted p.
     """
-    from curiosity_cli.evaluate.multiplicity import benjamini_hochberg, holm
-
-    top = top.copy()
-    for column in ADJUSTED_COLUMNS:
-        top[column] = np.nan
-    for _, rows in top.groupby("against", sort=False):
-        for p in ADJUSTED_P:
-            values = rows[p].to_numpy(float)
-            top.loc[rows.index, f"{p}_holm"] = holm(values)
-            top.loc[rows.index, f"{p}_bh"] = benjamini_hochberg(values)
-    return top
+    return with_adjusted_p(top, "against", ADJUSTED_P)

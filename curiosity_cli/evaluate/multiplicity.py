@@ -88,6 +88,26 @@ def benjamini_hochberg(p) -> np.ndarray:
     return adjusted
 
 
+def adjusted_columns(p_columns: Sequence[str]) -> list[str]:
+    """The columns :func:`with_adjusted_p` writes for ``p_columns``, in its order."""
+    return [f"{p}_{method}" for p in p_columns for method in ("holm", "bh")]
+
+
+def with_adjusted_p(table, by, p_columns: Sequence[str]):
+    """``table`` with each column of ``p_columns`` Holm-adjusted (``<column>_holm``) and Benjamini-Hochberg-adjusted
+    (``<column>_bh``) over each family of rows that share ``by`` (a column or a list of them); a column of ``table``
+    of that name is replaced in its place, another added at the end."""
+    table = table.copy()
+    for column in adjusted_columns(p_columns):
+        table[column] = np.nan
+    for _, rows in table.groupby(by, sort=False):
+        for p in p_columns:
+            values = rows[p].to_numpy(float)
+            table.loc[rows.index, f"{p}_holm"] = holm(values)
+            table.loc[rows.index, f"{p}_bh"] = benjamini_hochberg(values)
+    return table
+
+
 def intersection_union_p(ours: float, others: Sequence[float], p_values: Sequence[float]) -> float:
     """The p of "topic perplexity leads each of these walkers" (module docstring).
 

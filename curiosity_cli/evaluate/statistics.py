@@ -30,7 +30,7 @@ KEYS = ["dataset", "weight_function", "restart", "path_length"]
 PAIR_KEYS = ["replicate", "restart"]
 
 
-def mean_ci(grouped) -> pd.DataFrame:
+def _mean_ci(grouped) -> pd.DataFrame:
     """``n``, ``mean``, ``std`` and the 95 % Student-t CI of the mean, per group of a grouped Series."""
     from scipy import stats
 
@@ -41,15 +41,15 @@ def mean_ci(grouped) -> pd.DataFrame:
     return summary
 
 
-def summarise(mi):
-    """Mean, standard deviation and 95 % CI of MI per (dataset, weight function, length, against)."""
+def summarise(mi, measure: Measure = MI):
+    """Mean, standard deviation and 95 % CI of a measure (MI unless told) per (dataset, weight function, length,
+    against), against each labelling whose column ``mi`` has."""
     import pandas as pd
 
-    long = mi.melt(
-        id_vars=KEYS, value_vars=["mi_human", "mi_batch"], var_name="against", value_name="mi",
-    ).dropna(subset=["mi"])
-    long["against"] = long["against"].str.removeprefix("mi_")
-    return pd.DataFrame(mean_ci(long.groupby(["dataset", "weight_function", "path_length", "against"], sort=False)["mi"]))
+    present = {column: against for against, column in measure.columns.items() if column in mi}
+    long = mi.melt(id_vars=KEYS, value_vars=list(present), var_name="against", value_name="value").dropna(subset=["value"])
+    long["against"] = long["against"].map(present)
+    return pd.DataFrame(_mean_ci(long.groupby(["dataset", "weight_function", "path_length", "against"], sort=False)["value"]))
 
 
 def summarise_classes(mi):
@@ -64,7 +64,7 @@ def summarise_classes(mi):
         id_vars=[*KEYS, "classes"], value_vars=["classes_found", "mean_recall"], var_name="measure", value_name="value",
     ).dropna(subset=["value"])
     grouped = long.groupby(["dataset", "weight_function", "path_length", "measure", "classes"], sort=False)["value"]
-    return pd.DataFrame(mean_ci(grouped), columns=columns)
+    return pd.DataFrame(_mean_ci(grouped), columns=columns)
 
 
 def summarise_revisits(mi):
@@ -78,7 +78,7 @@ def summarise_revisits(mi):
         id_vars=KEYS, value_vars=list(REVISIT_COLUMNS), var_name="measure", value_name="value",
     ).dropna(subset=["value"])
     grouped = long.groupby(["dataset", "weight_function", "path_length", "measure"], sort=False)["value"]
-    return pd.DataFrame(mean_ci(grouped))
+    return pd.DataFrame(_mean_ci(grouped))
 
 
 def summarise_steering(steering):
@@ -87,7 +87,7 @@ def summarise_steering(steering):
     import pandas as pd
 
     grouped = steering.dropna(subset=["steering"]).groupby(["dataset", "weight_function", "path_length"], sort=False)
-    return pd.DataFrame(mean_ci(grouped["steering"]))
+    return pd.DataFrame(_mean_ci(grouped["steering"]))
 
 
 def within_noise(mean: float, sem: float, tolerance: float = CONVERGENCE_TOLERANCE) -> bool:
