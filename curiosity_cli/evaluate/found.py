@@ -55,7 +55,8 @@ def found_measures(mi) -> list[Measure]:
 
 def missing_measures(mi) -> list[Measure]:
     """The measures compared beside MI whose columns ``mi`` lacks (a table from before they existed)."""
-    return [m for m in MEASURES if m.found and m not in found_measures(mi)]
+    present = found_measures(mi)
+    return [m for m in MEASURES if m.found and m not in present]
 
 
 def summarise_found(mi):
