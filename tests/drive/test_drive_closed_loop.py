@@ -132,8 +132,14 @@ def test_on_estop_the_driver_stops_commanding_and_exits_cleanly(tmp_path, simrob
     assert "the robot sent ESTOP (SIMULATED)" in result.stdout
     log = read_log(out)
     estop = next(i for i, e in enumerate(log) if e["event"] == "estop")
-    # the loop notices ESTOP before its next frame: at most the frame in progress commands
-    assert sum(1 for e in log[estop:] if e["event"] == "frame" and e["seq"] is not None) <= 1
+    # the loop notices ESTOP before its next frame. A frame's row is written after the next frame's
+    # command (it waits for its ACK), so after the ESTOP line come at most the row of the frame
+    # commanded before it arrived and the row of the frame in progress; a loop that went on would add more
+    assert sum(1 for e in log[estop:] if e["event"] == "frame") <= 2
+    # and once the link stopped commanding, no later frame was commanded
+    seqs = [e["seq"] for e in log if e["event"] == "frame"]
+    uncommanded = seqs.index(None) if None in seqs else len(seqs)
+    assert all(seq is None for seq in seqs[uncommanded:])
     assert log[-1]["outcome"] == "estop"
 
 
