@@ -683,10 +683,12 @@ def expected_mutual_information_naive(table) -> float:
 # --------------------------------------------------------------------------- label tables
 
 
-def pixel_tables_naive(pixel_words, reference, n_classes, word_labels, n_labels) -> np.ndarray:
-    """Twin of ``PixelTables(pixel_words, reference, n_classes).tables(word_labels, n_labels)``: each column's pixel map drawn, then counted."""
+def pixel_tables_naive(pixel_words, reference, n_classes, word_labels, n_labels, kept=None) -> np.ndarray:
+    """Twin of ``PixelTables(pixel_words, reference, n_classes).tables(word_labels, n_labels, kept)``: each
+    column's pixel map drawn, then its kept pixels counted."""
     out = np.zeros((word_labels.shape[1], n_labels, n_classes), np.int64)
     for r in range(word_labels.shape[1]):
         pixels = word_labels[:, r][pixel_words]
-        np.add.at(out[r], (pixels.ravel(), np.asarray(reference).ravel()), 1)
+        mask = np.ones(pixel_words.shape, bool) if kept is None else kept[:, r][pixel_words]
+        np.add.at(out[r], (pixels[mask], np.asarray(reference)[mask]), 1)
     return out

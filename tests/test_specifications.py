@@ -169,7 +169,8 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
     (folder / "specifications.csv").unlink()
     # every measure beside MI under each specification: the same pairs, the same decision
     found = pd.read_csv(folder / "specifications-found.csv", dtype={"seeds": str})
-    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall", "time_to_find"} and len(found) == 10
+    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall", "time_to_find", "mi_visited", "mi_unvisited"}
+    assert len(found) == 14
     for row in found.query("measure == 'mean_recall'").to_dict("records"):
         mi, _ = _pooled(folder, row["specification"])
         pairs = mi.pivot_table(index=["replicate", "restart"], columns="weight_function", values="mean_recall")

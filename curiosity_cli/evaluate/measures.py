@@ -51,12 +51,24 @@ class Checkpoint:
     first_step : (C,) int ndarray or None
         The step each human class was first reached (-1: never), as
         :func:`~curiosity_cli.label.classes.first_steps` records it; None for label files without it.
+    visited_batch, visited_human : ndarray or None
+        ``batch`` and ``human`` of only the pixels whose word lies in a cell the path had
+        visited (None where the label file has no such tables, or the map no labels).
     """
 
     length: int
     batch: np.ndarray
     human: np.ndarray | None
     first_step: np.ndarray | None
+    visited_batch: np.ndarray | None = None
+    visited_human: np.ndarray | None = None
+
+    def part(self, against: str, visited: bool) -> np.ndarray | None:
+        """The table against ``against`` ("human" or "batch") of the pixels the path visited, or of those it did not."""
+        whole, seen = getattr(self, against), getattr(self, f"visited_{against}")
+        if whole is None or seen is None:
+            return None
+        return seen if visited else whole - seen
 
 
 @dataclass(frozen=True)
@@ -154,6 +166,20 @@ def restricted_steps(first_step: np.ndarray, length: int) -> np.ndarray:
     return np.where((first_step >= 0) & (first_step < length), first_step, length).astype(np.float64)
 
 
+def _mi_of_part(visited: bool) -> Callable[[Checkpoint], dict]:
+    """``values`` of MI over the pixels the path visited (or those it did not); NaN where there are none."""
+    prefix = "mi_visited" if visited else "mi_unvisited"
+
+    def values(point: Checkpoint) -> dict:
+        row = {}
+        for against in AGAINST:
+            table = point.part(against, visited)
+            row[f"{prefix}_{against}"] = mutual_information(table) if table is not None and table.sum() else np.nan
+        return row
+
+    return values
+
+
 def _adjusted(point: Checkpoint) -> dict:
     # the topics Z_p gives some pixel: the chance correction counts those, not the model's K
     return {**_per_labelling(adjusted_mutual_information, "ami")(point), "topics_used": int((point.batch.sum(axis=1) > 0).sum())}
@@ -172,8 +198,16 @@ MEAN_RECALL = Measure("mean_recall", "mean recall", "", {"human": "mean_recall"}
 #: scale however many classes they miss.
 TIME_TO_FIND = Measure("time_to_find", "time to first find", "steps", {"human": "time_to_find"}, _time_to_find,
                        found=True, digits=1, lower_is_better=True)
+#: MI over the pixels whose word lies in a cell the path visited (words Φ_p holds), and over the rest: a walker
+#: whose model labels well only what it saw is told apart from one whose model carries to terrain it never saw.
+#: Each part has its own classes' entropy, so a part holding fewer classes bounds its MI lower.
+MI_VISITED = Measure("mi_visited", "MI where the path went", "bits",
+                     {"human": "mi_visited_human", "batch": "mi_visited_batch"}, _mi_of_part(True), found=True, digits=3)
+MI_UNVISITED = Measure("mi_unvisited", "MI where the path did not go", "bits",
+                       {"human": "mi_unvisited_human", "batch": "mi_unvisited_batch"}, _mi_of_part(False),
+                       found=True, digits=3)
 #: Every measure, in the order of their ``mi.csv`` columns.
-MEASURES = (MI, NMI, AMI, CLASSES_FOUND, MEAN_RECALL, TIME_TO_FIND)
+MEASURES = (MI, NMI, AMI, CLASSES_FOUND, MEAN_RECALL, TIME_TO_FIND, MI_VISITED, MI_UNVISITED)
 
 
 def measure_values(point: Checkpoint) -> dict:

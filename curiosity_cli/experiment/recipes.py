@@ -42,6 +42,10 @@ SELECTION_KEYS = {("explore", "weight_functions"), ("explore", "restarts")}
 #: order in which a GPU gives the CPU's bytes. The device is not in the recipe: a label
 #: file is the same bytes whichever device made it.
 LABEL_FORMAT = 3
+#: What a label file holds beside Z_p's tables, whose draws :data:`LABEL_FORMAT` covers: 2 since the
+#: tables of the pixels of the cells each path visited. Not in a study's record (:mod:`~curiosity_cli.study.record`):
+#: a record keeps tables, not label files, and one from before a measure says that it lacks it.
+LABEL_TABLES = 2
 #: Batch references, whose draws did not change with the label files'.
 BATCH_FORMAT = 1
 #: A human class counts as found in a visited cell when it covers at least this share
@@ -168,7 +172,7 @@ def label_recipe(run: str, batch: str, config: ExperimentConfig, human: str | No
     # the device is left out: cpu and cuda give the same bytes (topics/chains.py)
     label = {key: value for key, value in to_dict(config.label).items() if key not in ("check_restarts", "device")}
     inputs = {
-        "format": LABEL_FORMAT, "run": run, "batch": batch, "label": label,
+        "format": LABEL_FORMAT, "tables": LABEL_TABLES, "run": run, "batch": batch, "label": label,
         "class_share_percent": CLASS_SHARE_PERCENT, "human": human,
     }
     if is_checked(config, restart):

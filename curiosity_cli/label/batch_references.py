@@ -194,13 +194,13 @@ class WrittenBatch:
         self._path, self._digest, self._pixel_words, self._topics = Path(path), digest, pixel_words, topics
         self._tables = None
 
-    def tables(self, word_labels: np.ndarray, n_labels: int) -> np.ndarray:
+    def tables(self, word_labels: np.ndarray, n_labels: int, kept: np.ndarray | None = None) -> np.ndarray:
         """As :meth:`PixelTables.tables <curiosity_cli.label.pixel_tables.PixelTables.tables>`, once the file is there."""
         from curiosity_cli.label.pixel_tables import PixelTables
 
         if self._tables is None:
             self._tables = PixelTables(self._pixel_words, self._wait(), self._topics)
-        return self._tables.tables(word_labels, n_labels)
+        return self._tables.tables(word_labels, n_labels, kept)
 
     def _wait(self) -> np.ndarray:
         """Z_b's (H, W) pixel labels, once the file made from the recipe is there."""

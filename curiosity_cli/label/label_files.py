@@ -8,7 +8,10 @@
   restart below ``label.check_restarts`` also has ``placed_batch`` and ``placed_human``
   (:data:`SECOND_PREFIX`): the same tables for a second labelling chain from a placed
   start (:meth:`~curiosity_cli.topics.chains.FrozenChains.start`), which evaluation
-  compares with the first to check that Z_p has forgotten its start. For a map with
+  compares with the first to check that Z_p has forgotten its start. ``visited_batch``
+  and ``visited_human`` (:data:`VISITED_PREFIX`) are the first chain's tables of only
+  the pixels whose word lies in a cell the path had visited by each length (the words
+  Φ_p holds then); the rest of the map's are the whole tables less these. For a map with
   human labels also ``class_first_step`` ((C,) int32): the step at which the path first
   stood in a cell where class ``h`` covers at least ``CLASS_SHARE_PERCENT`` % of the
   pixels, -1 if never (:mod:`curiosity_cli.label.classes`); ``meta["class_share_percent"]``
@@ -41,6 +44,8 @@ NOT_LABELLED = "not labelled yet"
 EXAMPLE_LENGTHS = (80,)
 #: The prefix of the second chain's tables' names in a checked run's label file.
 SECOND_PREFIX = f"{SECOND_START}_"
+#: The prefix of the tables of only the pixels whose word lies in a cell the path visited.
+VISITED_PREFIX = "visited_"
 
 #: Where a label file's meta records the digest of its arrays.
 ARRAYS_KEY = "arrays_sha256"
@@ -81,7 +86,7 @@ def read_label_file(path: Path) -> tuple[dict, dict]:
         without one table per checkpoint length, or arrays that are not those it was
         written with (its meta's ``arrays_sha256``).
     """
-    tables = ("batch", "human", SECOND_PREFIX + "batch", SECOND_PREFIX + "human")
+    tables = tuple(prefix + against for prefix in ("", SECOND_PREFIX, VISITED_PREFIX) for against in ("batch", "human"))
     with open_npz(path) as npz:
         meta = read_meta(npz, LABEL_META_KEYS)
         written = {name: npz[name] for name in sorted(npz.files) if name != "meta"}  # each member decompressed once

@@ -47,22 +47,26 @@ class PixelTables:
         self._pixels = pixels.astype(np.int64)
         self._n_words = int(self._words.max()) + 1 if pairs.size else 0
 
-    def tables(self, word_labels: np.ndarray, n_labels: int) -> np.ndarray:
+    def tables(self, word_labels: np.ndarray, n_labels: int, kept: np.ndarray | None = None) -> np.ndarray:
         """(R, n_labels, n_classes) int64: for each column ``r`` of ``word_labels``, the table of its pixel map against the reference.
 
         ``tables(word_labels, n)[r]`` is ``contingency(word_labels[:, r][pixel_words],
-        reference, n, n_classes)``.
+        reference, n, n_classes)``; with ``kept``, of only the pixels whose word is kept
+        in column ``r`` (``kept[pixel_words, r]``).
 
         Parameters
         ----------
         word_labels : (N, R) int ndarray
             R labelings of the map's words, ``0 .. n_labels - 1``.
         n_labels : int
+        kept : (N, R) bool ndarray, optional
+            Which words' pixels each column's table counts; default all.
 
         Raises
         ------
         ParameterError
-            Fewer words than the pixels take labels from, or a label out of range.
+            Fewer words than the pixels take labels from, a label out of range, or
+            ``kept`` not of ``word_labels``' shape.
         """
         from curiosity_cli.label._table_kernels import pixel_tables_kernel
 
@@ -71,6 +75,15 @@ class PixelTables:
             raise ParameterError(f"word_labels: got shape {word_labels.shape}, expected (N >= {self._n_words}, R)")
         if word_labels.size and (word_labels.min() < 0 or word_labels.max() >= n_labels):
             raise ParameterError(f"word_labels: labels {word_labels.min()} .. {word_labels.max()}, expected 0 .. {n_labels - 1}")
-        out = np.zeros((word_labels.shape[1], n_labels, self.n_classes), np.int64)
-        pixel_tables_kernel(self._words, self._classes, self._pixels, word_labels, out)
-        return out
+        if kept is None:
+            out = np.zeros((word_labels.shape[1], n_labels, self.n_classes), np.int64)
+            pixel_tables_kernel(self._words, self._classes, self._pixels, word_labels, out)
+            return out
+        kept = np.asarray(kept, bool)
+        if kept.shape != word_labels.shape:
+            raise ParameterError(f"kept: got shape {kept.shape}, expected word_labels' {word_labels.shape}")
+        # a word left out takes an extra label, n_labels, whose row of each table is then dropped
+        dropped = np.where(kept, word_labels, n_labels)
+        out = np.zeros((word_labels.shape[1], n_labels + 1, self.n_classes), np.int64)
+        pixel_tables_kernel(self._words, self._classes, self._pixels, dropped, out)
+        return out[:, :n_labels]

@@ -56,7 +56,9 @@ from curiosity_cli.label.block_progress import BlockProgress, SweepCounter
 from curiosity_cli.label.batch_references import (
     BatchTask, WrittenBatch, batch_is_current, batch_task, compute_batch_references, write_batch,
 )
-from curiosity_cli.label.label_files import EXAMPLE_LENGTHS, NOT_LABELLED, SECOND_PREFIX, label_changes, write_labels
+from curiosity_cli.label.label_files import (
+    EXAMPLE_LENGTHS, NOT_LABELLED, SECOND_PREFIX, VISITED_PREFIX, label_changes, write_labels,
+)
 from curiosity_cli.label.shared_items import BATCH, SharedItems, label_key
 from curiosity_cli.label.sampling import path_seed
 from curiosity_cli.paths import DEFAULT_CACHE
@@ -228,6 +230,7 @@ def label_block(
 
     store, pixel_words, human, batch, cell_classes = arrays
     k = config.model.topics
+    word_cells = np.repeat(np.arange(store.n_cells), store.words_per_cell())
     chains = []  # (run index, array-name prefix: how the chain starts)
     for index, run in enumerate(runs):
         chains.append((index, ""))
@@ -253,13 +256,23 @@ def label_block(
             break
         began = time.perf_counter()
         j, active, labels = step
-        human_tables = None if human is None else human.tables(labels, k)
-        batch_tables = batch.tables(labels, k)
+        owners = [chains[c][0] for c in active]  # the run of each column
+        firsts = [column for column, c in enumerate(active) if not chains[c][1]]
+        # the first chains' tables again, of only the pixels whose word lies in a cell their path had visited
+        visited = np.stack([
+            visited_words(runs[owners[column]].path, lengths[owners[column]][j], word_cells, store.n_cells)
+            for column in firsts
+        ], axis=1) if firsts else None
+        for against, reference in (("human", human), ("batch", batch)):
+            if reference is None:
+                continue
+            for column, table in enumerate(reference.tables(labels, k)):
+                tables[owners[column]].setdefault(chains[active[column]][1] + against, []).append(table)
+            if firsts:
+                for column, table in zip(firsts, reference.tables(labels[:, firsts], k, visited)):
+                    tables[owners[column]].setdefault(VISITED_PREFIX + against, []).append(table)
         for column, c in enumerate(active):
             index, prefix = chains[c]
-            if human is not None:
-                tables[index].setdefault(prefix + "human", []).append(human_tables[column])
-            tables[index].setdefault(prefix + "batch", []).append(batch_tables[column])
             length = lengths[index][j]
             if not prefix and runs[index].meta["restart"] == 0 and (
                 length in EXAMPLE_LENGTHS or length == lengths[index][-1]
@@ -288,6 +301,16 @@ def label_meta(run_meta: dict, inputs: MapInputs, config: ExperimentConfig, huma
     if human:
         meta["class_share_percent"] = CLASS_SHARE_PERCENT
     return meta
+
+
+def visited_words(path: np.ndarray, length: int, word_cells: np.ndarray, n_cells: int) -> np.ndarray:
+    """(N,) bool ndarray: which words lie in a cell of ``path``'s first ``length`` steps (the words Φ_p holds then).
+
+    ``word_cells`` (N,) is each word's cell of the ``n_cells``, ``path`` (L,) the row-major cell of each step.
+    """
+    visited = np.zeros(n_cells, bool)
+    visited[np.asarray(path[:length], np.int64)] = True
+    return visited[word_cells]
 
 
 def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordStore, store_path: str) -> np.ndarray:

@@ -56,7 +56,8 @@ class RecordError(CuriosityError):
 
 def recipes(experiment: Experiment) -> dict:
     """What ``record.yaml`` records of an experiment's recipes: per map, its runs', batch reference's and
-    label files' inputs but those that tell one run from another; and the grid's walkers and restarts.
+    label files' inputs but those that tell one run from another and what label files hold (``tables``); and
+    the grid's walkers and restarts.
 
     Parameters
     ----------
@@ -76,7 +77,8 @@ def recipes(experiment: Experiment) -> dict:
         maps[name] = {
             "run": {key: value for key, value in run.items() if key not in ("weight_function", "restart")},
             "batch": experiment.batch_recipe(name).inputs,
-            "label": {key: value for key, value in label.items() if key not in ("run", "batch", "second_start")},
+            # what label files hold beside Z_p's draws ("tables") changes no recorded table
+            "label": {key: value for key, value in label.items() if key not in ("run", "batch", "second_start", "tables")},
         }
     grid = {"weight_functions": list(config.explore.weight_functions), "restarts": config.explore.restarts}
     return {"maps": maps, "grid": grid}

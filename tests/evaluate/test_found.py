@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from curiosity_cli.errors import ParameterError
+from curiosity_cli.evaluate.information import mutual_information
 from curiosity_cli.evaluate.found import found_effects, found_leads, missing_measures, summarise_found
 from curiosity_cli.evaluate.measures import MEASURES, Checkpoint, measure_named, measure_values
 from curiosity_cli.explore.weights import CEILINGS
@@ -34,6 +35,8 @@ def found_mi(lead: float, seed: int = 0, datasets=("a", "b", "c")) -> pd.DataFra
                     "classes_found": 3 + shared + noise + ahead, "classes": 6,
                     "mean_recall": 0.4 + 0.05 * (shared + noise + ahead), "replicate": 0,
                     "time_to_find": 40 + 5 * (shared + noise - ahead),  # sooner is better
+                    "mi_visited_human": 0.4 + 0.02 * (shared + noise), "mi_visited_batch": 0.6,
+                    "mi_unvisited_human": 0.3 + 0.02 * (shared + noise), "mi_unvisited_batch": 0.5,
                 })
     return pd.DataFrame(rows)
 
@@ -46,8 +49,9 @@ def test_a_planted_lead_on_what_a_path_finds_is_found_and_a_sham_one_is_not():
             rows = leads.loc[measure]
             assert (rows["beats_all"] & (rows["p_each_holm"] < 0.05)).all() == expected, (lead, measure)
             assert rows["walkers"].eq(3).all()  # the ceiling is not a walker
-        # AMI was left without a lead in both
-        assert not (leads.loc["ami"]["p_each_holm"] < 0.05).any()
+        # AMI and MI by part were left without a lead in both
+        for measure in ("ami", "mi_visited", "mi_unvisited"):
+            assert not (leads.loc[measure]["p_each_holm"] < 0.05).any(), measure
 
 
 def test_effects_are_the_paired_differences_with_their_intervals():
@@ -97,6 +101,24 @@ def test_a_checkpoint_gives_every_measure_column_in_order():
     assert np.isnan(unlabelled["mi_human"]) and np.isnan(unlabelled["classes_found"]) and np.isfinite(unlabelled["ami_batch"])
 
 
+def test_mi_where_the_path_went_and_where_it_did_not_is_taken_from_the_two_parts_of_the_map():
+    rng = np.random.default_rng(3)
+    seen_human, rest_human = rng.integers(0, 30, (4, 3)), rng.integers(0, 30, (4, 3))
+    seen_batch, rest_batch = rng.integers(0, 30, (4, 4)), rng.integers(0, 30, (4, 4))
+    point = Checkpoint(40, seen_batch + rest_batch, seen_human + rest_human, None, seen_batch, seen_human)
+    values = measure_values(point)
+    for against, seen, rest in (("human", seen_human, rest_human), ("batch", seen_batch, rest_batch)):
+        assert values[f"mi_visited_{against}"] == pytest.approx(mutual_information(seen))
+        assert values[f"mi_unvisited_{against}"] == pytest.approx(mutual_information(rest))
+    assert values["mi_human"] == pytest.approx(mutual_information(seen_human + rest_human))
+    # a path that visited every cell leaves no pixels elsewhere: no MI there, not 0 bits
+    whole = measure_values(Checkpoint(40, seen_batch, seen_human, None, seen_batch, seen_human))
+    assert np.isnan(whole["mi_unvisited_human"]) and np.isnan(whole["mi_unvisited_batch"])
+    # a label file without the visited tables gives neither part
+    older = measure_values(Checkpoint(40, seen_batch, seen_human, None))
+    assert all(np.isnan(older[c]) for c in ("mi_visited_human", "mi_unvisited_human", "mi_visited_batch"))
+
+
 def test_a_measure_is_named_or_the_names_are_listed():
     assert measure_named("ami").title == "AMI"
     with pytest.raises(ParameterError, match="measure: got 'auc', expected one of mi, nmi, ami"):
@@ -113,7 +135,7 @@ def test_a_study_counts_each_measures_leads_over_its_points_after_holm():
         ({"specification": "level"}, SimpleNamespace(found_effects=found_effects(found_mi(0.0, seed=2)), seeds=(0, 1))),
     ]
     table = found_curve_table(specifications)
-    assert len(table) == 5 * 2 * 3  # measures x specifications x maps
+    assert len(table) == 7 * 2 * 3  # measures x specifications x maps
     recall = table[table.measure == "mean_recall"].set_index(["specification", "dataset"])
     assert (recall.loc["ahead", "p_each_holm"] < 0.05).all() and not (recall.loc["level", "p_each_holm"] < 0.05).any()
     assert (recall["against"] == "human").all() and (recall["path_length"] == 80).all()

@@ -15,11 +15,14 @@ from typer.testing import CliRunner
 from curiosity_cli.cli import app
 from curiosity_cli.label.stage import LabelError, label_experiment
 from curiosity_cli.evaluate.stage import evaluate_experiment
+from curiosity_cli.evaluate.information import contingency, mutual_information
 from curiosity_cli.evaluate.tables import EvaluationError
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import Recipe
 from curiosity_cli.explore.grid import run_grid
 from curiosity_cli.explore.runs import read_run
+from curiosity_cli.label.sampling import pixel_words
+from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.words.store import load_store
 
 runner = CliRunner()
@@ -47,7 +50,8 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     mi = pd.read_csv(folder / "mi.csv")
     assert list(mi.columns) == [
         "dataset", "weight_function", "restart", "path_length", "mi_human", "mi_batch", "nmi_human", "nmi_batch",
-        "ami_human", "ami_batch", "topics_used", "classes_found", "classes", "mean_recall", "time_to_find", "seed", "replicate",
+        "ami_human", "ami_batch", "topics_used", "classes_found", "classes", "mean_recall", "time_to_find",
+        "mi_visited_human", "mi_visited_batch", "mi_unvisited_human", "mi_unvisited_batch", "seed", "replicate",
         "placed_mi_human", "placed_mi_batch", "distinct_cells", "revisit_steps", "boxed_in_steps",
     ]
     # label.check_restarts = 1: restart 0 of each walker is labelled a second time, from a placed start
@@ -124,6 +128,35 @@ def test_labels_record_the_classes_each_path_found(own_map, tmp_path):
                 assert row["mean_recall"].item() == pytest.approx(rows["recall"].mean())
     summary = pd.read_csv(folder / "classes_summary.csv")
     assert set(summary["measure"]) == {"classes_found", "mean_recall"} and (summary["classes"] == 2).all()
+
+
+@pytest.mark.slow
+def test_labels_hold_the_tables_of_the_pixels_each_path_visited(own_map, tmp_path):
+    config, folder = small_experiment(own_map, tmp_path)
+    label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1)
+    evaluate_experiment(folder)
+    mi = pd.read_csv(folder / "mi.csv")
+    store = load_store(tmp_path / "cache" / pd.read_csv(folder / "maps.csv")["store"].item())
+    words = pixel_words(store, (96, 128))
+    word_cells = np.repeat(np.arange(store.n_cells), store.words_per_cell())
+    human = load_map(str(own_map)).labels
+    for weight in config.explore.weight_functions:
+        path = read_run(ExperimentFolder(folder).run("own", weight, 0)).path
+        with np.load(ExperimentFolder(folder).label_file("own", weight, 0)) as npz:
+            visited, whole = npz["visited_human"], npz["human"]
+            assert "visited_batch" in npz.files and not any(name.startswith("placed_visited") for name in npz.files)
+        with np.load(ExperimentFolder(folder).example("own", weight, 0, 12)) as npz:
+            labels = npz["labels"]
+        # drawn from the example map: the pixels whose word lies in a cell of the path's 12 steps
+        seen = np.isin(word_cells[words], path[:12])
+        assert 0 < seen.sum() < seen.size
+        np.testing.assert_array_equal(visited[-1], contingency(labels[seen], human[seen], 8, 2))
+        np.testing.assert_array_equal(whole[-1] - visited[-1], contingency(labels[~seen], human[~seen], 8, 2))
+        assert visited[0].sum() < visited[-1].sum()  # 5 steps visit fewer cells than 12
+        row = mi[(mi.weight_function == weight) & (mi.restart == 0) & (mi.path_length == 12)]
+        assert row["mi_visited_human"].item() == pytest.approx(mutual_information(visited[-1]))
+        assert row["mi_unvisited_human"].item() == pytest.approx(mutual_information(whole[-1] - visited[-1]))
+    assert mi[["mi_visited_human", "mi_unvisited_human", "mi_visited_batch", "mi_unvisited_batch"]].notna().all().all()
 
 
 @pytest.mark.slow
@@ -240,7 +273,7 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
         assert section in report
     # every measure beside MI compared as MI is, from the same pairs
     found, effects = pd.read_csv(folder / "found_effects.csv"), pd.read_csv(folder / "effects.csv")
-    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall", "time_to_find"}
+    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall", "time_to_find", "mi_visited", "mi_unvisited"}
     nmi = found[(found["measure"] == "nmi")].drop(columns="measure").reset_index(drop=True)
     assert nmi[["dataset", "path_length", "against", "other", "n"]].equals(effects[["dataset", "path_length", "against", "other", "n"]])
     assert (mi_table := pd.read_csv(folder / "mi.csv"))["ami_human"].le(mi_table["nmi_human"] + 1e-12).all()

@@ -36,6 +36,29 @@ def test_tables_are_the_drawn_pixel_maps_counted(stride):
     assert got.dtype == np.int64 and got.sum() == labels.shape[1] * reference.size
 
 
+@pytest.mark.parametrize("stride", [1, 3])
+def test_kept_tables_count_only_the_pixels_of_each_columns_kept_words(stride):
+    shape = (13, 17)
+    store = _store(shape, stride)
+    rng = np.random.default_rng(10 + stride)
+    reference = rng.integers(0, 5, shape)
+    labels = rng.integers(0, 7, (store.words.size, 4)).astype(np.int16)
+    kept = rng.random(labels.shape) < 0.4
+    kept[:, 3] = False  # a column that keeps nothing counts nothing
+    words = pixel_words(store, shape)
+    tables = PixelTables(words, reference, 5)
+    got = tables.tables(labels, 7, kept)
+    np.testing.assert_array_equal(got, pixel_tables_naive(words, reference, 5, labels, 7, kept))
+    for r in range(labels.shape[1]):
+        mask = kept[:, r][words]
+        np.testing.assert_array_equal(got[r], contingency(labels[:, r][words][mask], reference[mask], 7, 5))
+    assert got[3].sum() == 0 and got[:3].sum(axis=(1, 2)).tolist() == kept[words].sum(axis=(0, 1))[:3].tolist()
+    # what the kept tables leave is the table of the other words' pixels
+    np.testing.assert_array_equal(tables.tables(labels, 7) - got, tables.tables(labels, 7, ~kept))
+    with pytest.raises(ParameterError, match=r"kept: got shape \(3, 4\), expected word_labels' "):
+        tables.tables(labels, 7, kept[:3])
+
+
 def test_pixel_words_name_the_word_each_pixel_takes_its_label_from():
     shape = (7, 11)
     store = _store(shape, 2)
