@@ -692,3 +692,37 @@ def pixel_tables_naive(pixel_words, reference, n_classes, word_labels, n_labels,
         mask = np.ones(pixel_words.shape, bool) if kept is None else kept[:, r][pixel_words]
         np.add.at(out[r], (pixels[mask], np.asarray(reference)[mask]), 1)
     return out
+
+
+# --------------------------------------------------------------------------- held-out log-likelihood
+# Twin of curiosity_cli/label/_heldout_kernels.py with the factors heldout.word_log2 gives it, from a
+# chain's topics rather than its counts.
+
+
+def heldout_log2_naive(state: NaiveModel, held: dict) -> list[float]:
+    """Twin of ``heldout.word_log2`` (``word_log2_kernel``) over ``held`` (cell -> held-out word ids), cells in order: for each word,
+    log2 Σ_k θ_ck φ_k(w), θ_c from the topics of the observed words (``state``) of c and its neighbours plus α,
+    φ from the frozen counts plus β, each a plain loop in float64."""
+    _, _, ncz = count_topics(state)
+    phi, k_topics, v = state.frozen, state.n_topics, state.vocabulary_size
+    totals = [sum(int(phi[w, k]) for w in range(v)) for k in range(k_topics)]
+    out = []
+    for c in sorted(held):
+        around = neighbourhood(state, ncz, c)
+        norm = sum(int(n) for n in around) + k_topics * state.alpha
+        for w in held[c]:
+            p = 0.0
+            for k in range(k_topics):
+                p += (int(around[k]) + state.alpha) / norm * (int(phi[w, k]) + state.beta) / (totals[k] + v * state.beta)
+            out.append(math.log2(p))
+    return out
+
+
+def heldout_sums_naive(scores, unvisited) -> tuple[float, float]:
+    """Twin of ``heldout_sums_kernel``: the scores added one by one in their order, all and the unvisited ones."""
+    total = part = 0.0
+    for score, outside in zip(np.asarray(scores).tolist(), np.asarray(unvisited).tolist()):
+        total += score
+        if outside:
+            part += score
+    return total, part

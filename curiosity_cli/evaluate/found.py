@@ -23,8 +23,9 @@ same statistics as MI's headline:
   with its CI and the paired Wilcoxon p, and the share of restarts that found the class by
   the length (``found`` in ``classes.csv``), each walker's.
 
-A measure whose columns ``mi.csv`` lacks (a table recorded before the measure existed)
-has no rows, and :func:`missing_measures` names it.
+``against`` is the labelling a measure is taken against, or ``words`` for one of no labelling (the held-out
+log-likelihood, :data:`~curiosity_cli.evaluate.measures.WORDS`). A measure whose columns ``mi.csv`` lacks (a table
+recorded before the measure existed) has no rows, and :func:`missing_measures` names it.
 """
 
 from __future__ import annotations

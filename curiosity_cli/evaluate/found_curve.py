@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from curiosity_cli.evaluate.headline import headline_length, lead_each
-from curiosity_cli.evaluate.measures import MEASURES, Measure
+from curiosity_cli.evaluate.measures import MEASURES, Measure, read_against
 from curiosity_cli.evaluate.multiplicity import adjusted_columns, with_adjusted_p
 from curiosity_cli.evaluate.specification_curve import VERSUS
 from curiosity_cli.evaluate.statistics import ALPHA
@@ -50,7 +50,8 @@ FOUND_CURVE_COLUMNS = (
 def found_curve_table(specifications: Sequence[tuple[Mapping[str, str], Pooled]]):
     """A row per measure, specification and map (module docstring), in the order given.
 
-    Against human labels, or Z_b on a map without them, as MI's curve.
+    Against human labels, or Z_b on a map without them, as MI's curve; a measure of no labelling against the
+    map's held-out words (:data:`~curiosity_cli.evaluate.measures.WORDS`).
 
     Parameters
     ----------
@@ -70,7 +71,7 @@ def found_curve_table(specifications: Sequence[tuple[Mapping[str, str], Pooled]]
         names += [k for k in labels if k not in names]
         effects = pooled.found_effects
         for (measure, dataset), block in effects.groupby(["measure", "dataset"], sort=False):
-            against = "human" if (block["against"] == "human").any() else "batch"
+            against = read_against(block["against"])
             block = block[block["against"] == against]
             length = headline_length(block["path_length"].unique())
             versus = block[block["path_length"] == length].set_index("other")

@@ -1,7 +1,8 @@
 """The table of measures: what a path found and how well its model labels the map, each declared once.
 
 A measure is a value per run and checkpoint, one ``mi.csv`` column for each labelling it
-is taken against (``human``: the map's human labels; ``batch``: Z_b). Its entry in
+is taken against (``human``: the map's human labels; ``batch``: Z_b), or one column
+against no labelling (:data:`WORDS`: the held-out log-likelihood of the map's words). Its entry in
 :data:`MEASURES` says how a checkpoint gives it (:class:`Checkpoint`), whether walkers
 are compared on it beside MI, whose headline has tables of its own, and how the report
 writes it. Every consumer loops over the table: the rows (:mod:`~curiosity_cli.evaluate.rows`),
@@ -34,6 +35,9 @@ from curiosity_cli.evaluate.information import (
 
 #: The labellings a measure is taken against, in the order of ``mi.csv``'s columns.
 AGAINST = ("human", "batch")
+#: What a measure of no labelling is taken against, in a table's ``against``: the map's words held out of the
+#: chains that score them (:mod:`curiosity_cli.label.heldout`).
+WORDS = "words"
 
 
 @dataclass(frozen=True)
@@ -54,6 +58,12 @@ class Checkpoint:
     visited_batch, visited_human : ndarray or None
         ``batch`` and ``human`` of only the pixels whose word lies in a cell the path had
         visited (None where the label file has no such tables, or the map no labels).
+    heldout_bits : (2,) float64 ndarray or None
+        The sum of log2 of each held-out word's probability under Φ_p, over every cell and
+        over the cells the path had not visited (:mod:`curiosity_cli.label.heldout`); None
+        where the label file has none.
+    heldout_words : (2,) int ndarray or None
+        The held-out words of those sums.
     """
 
     length: int
@@ -62,6 +72,8 @@ class Checkpoint:
     first_step: np.ndarray | None
     visited_batch: np.ndarray | None = None
     visited_human: np.ndarray | None = None
+    heldout_bits: np.ndarray | None = None
+    heldout_words: np.ndarray | None = None
 
     def part(self, against: str, visited: bool) -> np.ndarray | None:
         """The table against ``against`` ("human" or "batch") of the pixels the path visited, or of those it did not."""
@@ -84,7 +96,8 @@ class Measure:
     unit : str
         Of its values ("" for a share or an index).
     columns : mapping of str to str
-        Per labelling it is taken against (:data:`AGAINST`), its ``mi.csv`` column.
+        Per labelling it is taken against (:data:`AGAINST`), or :data:`WORDS` for a measure
+        of none, its ``mi.csv`` column.
     values : callable
         ``values(checkpoint)``: the row's values of ``columns`` (NaN where the checkpoint
         lacks what it needs), and of any column that says what they are out of.
@@ -180,6 +193,19 @@ def _mi_of_part(visited: bool) -> Callable[[Checkpoint], dict]:
     return values
 
 
+def _heldout(unvisited: bool) -> Callable[[Checkpoint], dict]:
+    """``values`` of the held-out log-likelihood per word, over every cell or the cells the path did not visit;
+    NaN where no word is held out there."""
+    name, part = ("heldout_unvisited", 1) if unvisited else ("heldout", 0)
+
+    def values(point: Checkpoint) -> dict:
+        if point.heldout_words is None or not point.heldout_words[part]:
+            return {name: np.nan}
+        return {name: float(point.heldout_bits[part] / point.heldout_words[part])}
+
+    return values
+
+
 def _adjusted(point: Checkpoint) -> dict:
     # the topics Z_p gives some pixel: the chance correction counts those, not the model's K
     return {**_per_labelling(adjusted_mutual_information, "ami")(point), "topics_used": int((point.batch.sum(axis=1) > 0).sum())}
@@ -206,8 +232,15 @@ MI_VISITED = Measure("mi_visited", "MI where the path went", "bits",
 MI_UNVISITED = Measure("mi_unvisited", "MI where the path did not go", "bits",
                        {"human": "mi_unvisited_human", "batch": "mi_unvisited_batch"}, _mi_of_part(False),
                        found=True, digits=3)
+#: The held-out log-likelihood by document completion: how well Φ_p predicts half of each cell's words given the
+#: other half, against no labelling; over every cell, and over the cells the path did not visit, whose words Φ_p
+#: never held. Every walker of a map is scored on the same held-out words.
+HELDOUT = Measure("heldout", "held-out log-likelihood", "bits/word", {WORDS: "heldout"}, _heldout(False),
+                  found=True, digits=3)
+HELDOUT_UNVISITED = Measure("heldout_unvisited", "held-out log-likelihood where the path did not go", "bits/word",
+                            {WORDS: "heldout_unvisited"}, _heldout(True), found=True, digits=3)
 #: Every measure, in the order of their ``mi.csv`` columns.
-MEASURES = (MI, NMI, AMI, CLASSES_FOUND, MEAN_RECALL, TIME_TO_FIND, MI_VISITED, MI_UNVISITED)
+MEASURES = (MI, NMI, AMI, CLASSES_FOUND, MEAN_RECALL, TIME_TO_FIND, MI_VISITED, MI_UNVISITED, HELDOUT, HELDOUT_UNVISITED)
 
 
 def measure_values(point: Checkpoint) -> dict:
@@ -216,6 +249,13 @@ def measure_values(point: Checkpoint) -> dict:
     for measure in MEASURES:
         row.update(measure.values(point))
     return row
+
+
+def read_against(present) -> str:
+    """The ``against`` a map's account of the measures reads, of those ``present`` in its rows: human labels where
+    the map has them, else Z_b, else :data:`WORDS` (a measure of no labelling alone)."""
+    present = set(present)
+    return next(against for against in (*AGAINST, WORDS) if against in present)
 
 
 def measure_named(name: str) -> Measure:

@@ -28,9 +28,24 @@ is none of ``path[0 .. t]`` (a candidate holding a new class always is).
   score is above any finite one, and two infinities tie. 0.5: the score does not tell
   what is new from what is merely unvisited; 1: it always ranks the new above the rest.
   Visited candidates are left out, since coverage already turns the walker away from them.
+  ``infinite_ties`` is the share of those pairs in which both scores are ``+inf`` (NaN
+  without pairs): each is counted ½, so an AUC near 0.5 made of them says the score could
+  not rank the pair at all, not that it ranked it at random.
+- ``auc_mixed`` (M1 against mixed texture): the same AUC, the same positives, with the
+  negatives restricted to the unvisited candidates of *mixed texture* whose classes the
+  path has all seen: at least two classes present and none of them new (``pairs_mixed``
+  its pairs; NaN without any). A candidate holding a new class lies mostly on a boundary
+  between classes, so it holds two textures, while most of ``auc``'s negatives hold one:
+  a score high on any heterogeneous cell, blind to what the path has seen, gets ``auc``
+  above 0.5. Against negatives as heterogeneous as the positives that score gets about
+  0.5, and only one that ranks the new first stays above it.
 - ``opportunity`` (M2), how often there was anything new to point at: the share of the
   scored moves (``moves``) with at least one candidate holding a new class. A score can
   only make a difference at such moves; a map whose classes lie in large patches gives few.
+  ``new_share`` is the same per candidate: the share of the scored candidates
+  (``candidates``, of moves ``0 .. L - 2``) holding a new class (NaN without any), which
+  does not grow with the candidates a move offers, so experiments with 8 and with 4
+  candidates per move compare on it.
 - ``gain`` (M3), did the walker act on it? At those moves, the chance the walker gave the
   candidates holding a new class (:func:`~curiosity_cli.explore.walker.move_probabilities`
   of its weights) less the chance stochastic coverage would have given them
@@ -43,17 +58,22 @@ is none of ``path[0 .. t]`` (a candidate holding a new class always is).
   counts when it holds any class), and the classes present in ``path[0 .. L - 1]``
   (:func:`~curiosity_cli.evaluate.information.classes_found`), the quantity that MI
   against the human labels rewards.
-- ``infinite_share`` and ``infinite_unseen`` (M5), what the score sees. The share of the
-  scored candidates (``candidates``, of moves ``0 .. L - 2``) whose topic perplexity is
-  infinite, and of those, the share holding at least one word id that none of
-  ``path[0 .. t]``'s cells holds (at the candidate's move ``t``). Under counts-only
+- ``infinite_share``, ``infinite_unseen`` and ``finite_unseen`` (M5), what the score sees.
+  The share of the scored candidates whose topic perplexity is infinite; of those, the
+  share holding at least one word id that none of ``path[0 .. t]``'s cells holds (at the
+  candidate's move ``t``); and the same share among the candidates whose topic perplexity
+  is finite, its base rate (each NaN without candidates to count). Under counts-only
   P(k | path) a candidate is infinitely surprising when its words' topics have never been
-  seen on the path; if most infinite candidates are those with unseen words, topic
-  perplexity's pointing is word novelty, which need not be class novelty.
+  seen on the path; if infinite candidates hold unseen words much more often than finite
+  ones do, topic perplexity's pointing is word novelty, which need not be class novelty.
+  ``infinite_unseen`` alone cannot say so: next to a short path most cells hold a word it
+  has not seen.
 
 Rows as :mod:`~curiosity_cli.evaluate.steering`'s: one per run and checkpoint length,
 none for a run that scored nothing (the planned walkers). :func:`summarise_mechanism`
-averages them over runs per map, walker and length.
+pools them over runs per map, walker and length, each with a 95 % interval over runs.
+Tables written before ``infinite_ties``, ``pairs_mixed``, ``auc_mixed``, ``new_share`` and
+``finite_unseen`` existed (:data:`ADDED_MEASURES`) are still summarised, without those.
 """
 
 from __future__ import annotations
@@ -73,13 +93,19 @@ if TYPE_CHECKING:
 RUN_COLUMNS = ("dataset", "weight_function", "restart", "replicate")
 #: The measures of a row (module docstring), in the order of its columns.
 MEASURES = (
-    "moves", "pairs", "auc", "opportunity", "gain", "new_class_cells", "classes_found", "candidates",
-    "infinite_share", "infinite_unseen",
+    "moves", "pairs", "auc", "infinite_ties", "pairs_mixed", "auc_mixed", "opportunity", "new_share", "gain",
+    "new_class_cells", "classes_found", "candidates", "infinite_share", "infinite_unseen", "finite_unseen",
 )
+#: The measures that tables written before them lack (issue 57): :func:`summarise_mechanism` gives them NaN there.
+ADDED_MEASURES = ("infinite_ties", "pairs_mixed", "auc_mixed", "new_share", "finite_unseen")
+#: The shares of pairs that :func:`summarise_mechanism` pools over every run's pairs, each with the column counting them.
+PAIR_WEIGHTED = {"auc": "pairs", "infinite_ties": "pairs", "auc_mixed": "pairs_mixed"}
 #: A mechanism table's columns (:func:`mechanism_rows`).
 MECHANISM_COLUMNS = (*RUN_COLUMNS, "path_length", *MEASURES)
-#: :func:`summarise_mechanism`'s columns: the means of :data:`MEASURES` over ``n`` runs.
-MECHANISM_SUMMARY_COLUMNS = ("dataset", "weight_function", "path_length", "n", *MEASURES)
+#: :func:`summarise_mechanism`'s columns: each of :data:`MEASURES` over ``n`` runs, then its 95 % interval.
+MECHANISM_SUMMARY_COLUMNS = (
+    "dataset", "weight_function", "path_length", "n", *(c for m in MEASURES for c in (m, f"{m}_low", f"{m}_high")),
+)
 #: The walkers whose own score is a column of ``candidates.csv``; any other is read under topic perplexity's.
 OWN_SCORES = {"topic-perplexity": "topic_perplexity", "word-perplexity": "word_perplexity"}
 #: The score of the walkers without one of their own.
@@ -132,24 +158,30 @@ class _Moves:
     ----------
     step : (S,) int64
         The scored moves, increasing.
-    wins, pairs : (S,) float64, (S,) int64
-        M1's wins and pairs of each move.
+    wins, pairs, infinite_ties : (S,) float64, (S,) int64, (S,) int64
+        M1's wins and pairs of each move, and its pairs whose two scores are ``+inf``.
+    wins_mixed, pairs_mixed : (S,) float64, (S,) int64
+        The same against the negatives of mixed texture.
     opportunity : (S,) bool
         Whether a candidate of the move holds a new class.
     gain : (S,) float64
         The walker's chance on those candidates less coverage's (NaN without an opportunity).
     candidate_step : (M,) int64
-    infinite, unseen : (M,) bool
-        Whether each candidate's topic perplexity is infinite, and (for those) whether it
-        holds a word id unseen on the path.
+    new, infinite, unseen : (M,) bool
+        Whether each candidate holds a new class, whether its topic perplexity is
+        infinite, and whether it holds a word id unseen on the path.
     """
 
     step: np.ndarray
     wins: np.ndarray
     pairs: np.ndarray
+    infinite_ties: np.ndarray
+    wins_mixed: np.ndarray
+    pairs_mixed: np.ndarray
     opportunity: np.ndarray
     gain: np.ndarray
     candidate_step: np.ndarray
+    new: np.ndarray
     infinite: np.ndarray
     unseen: np.ndarray
 
@@ -248,8 +280,8 @@ def mechanism_rows(
     -------
     list of dict
         Keys :data:`MECHANISM_COLUMNS`, a row per length in the order given (module
-        docstring); ``moves``, ``pairs``, ``new_class_cells``, ``classes_found`` and
-        ``candidates`` ints, the rest floats (NaN where undefined).
+        docstring); ``moves``, ``pairs``, ``pairs_mixed``, ``new_class_cells``,
+        ``classes_found`` and ``candidates`` ints, the rest floats (NaN where undefined).
 
     Raises
     ------
@@ -278,21 +310,28 @@ def mechanism_rows(
         made = moves.step <= length - 2
         scored = moves.candidate_step <= length - 2
         n_moves, n_candidates = int(made.sum()), int(scored.sum())
-        pairs = int(moves.pairs[made].sum())
+        pairs, pairs_mixed = int(moves.pairs[made].sum()), int(moves.pairs_mixed[made].sum())
         chances = made & moves.opportunity
-        infinite = scored & moves.infinite
+        infinite, finite = scored & moves.infinite, scored & ~moves.infinite
         reached = class_first[(class_first >= 0) & (class_first < length)]
         rows.append({
             **{key: run_info[key] for key in RUN_COLUMNS}, "path_length": length, "moves": n_moves, "pairs": pairs,
-            "auc": float(moves.wins[made].sum() / pairs) if pairs else np.nan,
-            "opportunity": float(chances.sum() / n_moves) if n_moves else np.nan,
+            "auc": _share(moves.wins[made].sum(), pairs),
+            "infinite_ties": _share(moves.infinite_ties[made].sum(), pairs),
+            "pairs_mixed": pairs_mixed, "auc_mixed": _share(moves.wins_mixed[made].sum(), pairs_mixed),
+            "opportunity": _share(chances.sum(), n_moves), "new_share": _share((scored & moves.new).sum(), n_candidates),
             "gain": float(moves.gain[chances].mean()) if chances.any() else np.nan,
             "new_class_cells": int(np.unique(reached).size), "classes_found": classes_found(class_first, length),
-            "candidates": n_candidates,
-            "infinite_share": float(infinite.sum() / n_candidates) if n_candidates else np.nan,
-            "infinite_unseen": float((infinite & moves.unseen).sum() / infinite.sum()) if infinite.any() else np.nan,
+            "candidates": n_candidates, "infinite_share": _share(infinite.sum(), n_candidates),
+            "infinite_unseen": _share((infinite & moves.unseen).sum(), infinite.sum()),
+            "finite_unseen": _share((finite & moves.unseen).sum(), finite.sum()),
         })
     return rows
+
+
+def _share(part, whole) -> float:
+    """``part / whole`` as a float, NaN when ``whole`` is 0."""
+    return float(part / whole) if whole else np.nan
 
 
 def _moves(
@@ -309,13 +348,19 @@ def _moves(
     seen = (class_first >= 0)[None, :] & (class_first[None, :] <= step[:, None])  # (M, C): on path[0 .. t]
     positive = (present[cell] & ~seen).any(axis=1)  # a class new to the path: never in a visited cell
     negative = unvisited & ~positive
-    steps, wins, pairs = step_auc(step, table[score_column], positive, negative)
+    score = table[score_column]
+    steps, wins, pairs = step_auc(step, score, positive, negative)
+    # not positive, so each of its two or more classes has been seen: as heterogeneous as a boundary, yet nothing new
+    mixed = negative & (present[cell].sum(axis=1) >= 2)
+    _, wins_mixed, pairs_mixed = step_auc(step, score, positive, mixed)
+    rows_of = np.searchsorted(steps, step)
+    at_infinity = score == np.inf
+    ties = [np.bincount(rows_of[at_infinity & side], minlength=steps.size) for side in (positive, negative)]
 
     opportunity = np.zeros(steps.size, bool)
     gain = np.full(steps.size, np.nan)
     with np.errstate(divide="ignore"):  # U = 0 (a lone visited cell under `others`): weight +inf, as the walker had it
         inverse = 1.0 / table["coverage"]
-    rows_of = np.searchsorted(steps, step)
     for i in np.unique(rows_of[positive]):
         at = np.flatnonzero(rows_of == i)
         new = positive[at]
@@ -324,18 +369,20 @@ def _moves(
         opportunity[i] = True
         gain[i] = float(walker[new].sum() - coverage[new].sum())
 
-    infinite = table["topic_perplexity"] == np.inf
-    unseen = np.zeros(step.size, bool)
-    if infinite.any():
-        word_ids, word_first = _first_word_steps(path, cell_words)
-        for m in np.flatnonzero(infinite):
-            words = _words(cell_words, int(cell[m]))
-            first = np.full(words.size, path.size)  # a word on no cell of the path: never seen
-            if word_ids.size:
-                at = np.minimum(np.searchsorted(word_ids, words), word_ids.size - 1)
-                first = np.where(word_ids[at] == words, word_first[at], first)
-            unseen[m] = bool(np.any(first > step[m]))
-    return _Moves(steps, wins, pairs, opportunity, gain, step, infinite, unseen)
+    # a candidate holds a word unseen at its move t when its cell's last word to reach the path came after t
+    word_ids, word_first = _first_word_steps(path, cell_words)
+    last_seen = np.full(present.shape[0], -1, np.int64)  # a cell without words holds nothing unseen
+    for c in np.unique(cell):
+        words = _words(cell_words, int(c))
+        first = np.full(words.size, path.size)  # a word on no cell of the path: never seen
+        if word_ids.size:
+            at = np.minimum(np.searchsorted(word_ids, words), word_ids.size - 1)
+            first = np.where(word_ids[at] == words, word_first[at], first)
+        last_seen[c] = first.max(initial=-1)
+    return _Moves(
+        steps, wins, pairs, ties[0] * ties[1], wins_mixed, pairs_mixed, opportunity, gain, step, positive,
+        table["topic_perplexity"] == np.inf, last_seen[cell] > step,
+    )
 
 
 def _first_word_steps(path: np.ndarray, cell_words: Callable[[int], np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -441,41 +488,111 @@ def _check_candidates(candidates, steps: int, n_cells: int, score_column: str) -
 
 
 def summarise_mechanism(table):
-    """The measures averaged over runs, per map, walker and path length.
+    """The measures pooled over runs, per map, walker and path length, each with a 95 % interval over runs.
+
+    ``auc``, ``infinite_ties`` and ``auc_mixed`` (:data:`PAIR_WEIGHTED`) are shares of
+    pairs, pooled over the runs' pairs: the wins (ties at infinity) of every run over the
+    pairs of every run, ``R = sum(w_i) / sum(p_i)`` with ``w_i`` the run's share times its
+    ``p_i`` pairs (``pairs``, or ``pairs_mixed`` for ``auc_mixed``), which is the mean of the
+    per-run shares weighted by their pairs, so that a run with 2 pairs counts 1/25 of one
+    with 50. Over the ``m`` runs with pairs, their interval is the linearised (delta-method)
+    interval of that ratio of means, clustered by run: ``R ± t * se`` with ``t`` the
+    97.5 % quantile of Student's t with ``m - 1`` degrees of freedom and
+    ``se = sqrt(sum((w_i - R p_i) ** 2) / (m (m - 1))) / mean(p_i)``, clipped to [0, 1].
+    Every other measure is the plain mean of the runs where it is defined, with the
+    Student-t interval of that mean over those ``m`` runs, ``mean ± t * s / sqrt(m)``
+    (``s`` their standard deviation, ``m - 1`` degrees of freedom). An interval is NaN
+    where fewer than 2 runs define the measure.
 
     Parameters
     ----------
     table : pandas.DataFrame
-        Rows of :func:`mechanism_rows` (columns :data:`MECHANISM_COLUMNS`).
+        Rows of :func:`mechanism_rows` (columns :data:`MECHANISM_COLUMNS`; ``restart`` and
+        ``replicate`` may be absent). A table written before :data:`ADDED_MEASURES`
+        existed may lack them, and so may some of its rows (NaN ``pairs_mixed``, which a
+        later table always counts), as when such a table is pooled with later ones.
 
     Returns
     -------
     pandas.DataFrame
         Columns :data:`MECHANISM_SUMMARY_COLUMNS`: a row per ``dataset``,
         ``weight_function`` and ``path_length`` in the order they first come (lengths
-        increasing); ``n`` the runs, each measure the mean of the runs where it is
-        defined (NaN where it is in none).
+        increasing); ``n`` the runs, each measure as above (NaN where no run defines it)
+        and its interval in ``<measure>_low`` and ``<measure>_high``. The measures of
+        :data:`ADDED_MEASURES` are NaN in a group where any run lacks them: a pool of the
+        runs that have them would be another set of runs than the other measures'.
 
     Raises
     ------
     ParameterError
-        ``table`` not a DataFrame, or without one of the columns.
+        ``table`` not a DataFrame, without one of the columns other than
+        :data:`ADDED_MEASURES`, or with a measure that is not a number.
     """
     import pandas as pd
 
     if not isinstance(table, pd.DataFrame):
         raise ParameterError(f"table: got {type(table).__name__}, expected a pandas DataFrame", parameter="table")
-    missing = [c for c in MECHANISM_COLUMNS if c != "restart" and c != "replicate" and c not in table.columns]
+    needed = [c for c in MECHANISM_COLUMNS if c not in ("restart", "replicate", *ADDED_MEASURES)]
+    missing = [c for c in needed if c not in table.columns]
     if missing:
         raise ParameterError(f"table: no column {missing[0]!r}; expected {', '.join(MECHANISM_COLUMNS)}", parameter="table")
     keys = ["dataset", "weight_function", "path_length"]
     if table.empty:
         return pd.DataFrame({c: [] for c in MECHANISM_SUMMARY_COLUMNS})
-    measures = table[keys + list(MEASURES)].astype({m: np.float64 for m in MEASURES})
+    values = {}
+    for m in MEASURES:
+        try:
+            values[m] = table[m].to_numpy(np.float64) if m in table.columns else np.full(len(table), np.nan)
+        except (TypeError, ValueError):
+            raise ParameterError(f"table: {m}: expected numbers", parameter="table") from None
+    recorded = ~np.isnan(values["pairs_mixed"])
     order = {k: list(dict.fromkeys(table[k])) for k in keys[:2]}
-    grouped = measures.groupby(keys, sort=False)
-    out = grouped[list(MEASURES)].mean().reset_index()  # NaN skipped: the mean of the runs that define it
-    out.insert(3, "n", grouped.size().to_numpy().astype(np.int64))
+    rows = []
+    for key, at in table.reset_index(drop=True).groupby(keys, sort=False).indices.items():
+        row = {**dict(zip(keys, key)), "n": at.size}
+        for m in MEASURES:
+            if m in ADDED_MEASURES and not recorded[at].all():
+                row.update({m: np.nan, f"{m}_low": np.nan, f"{m}_high": np.nan})
+            elif m in PAIR_WEIGHTED:
+                row[m], row[f"{m}_low"], row[f"{m}_high"] = _pooled_share(values[m][at], values[PAIR_WEIGHTED[m]][at])
+            else:
+                row[m], row[f"{m}_low"], row[f"{m}_high"] = _mean_interval(values[m][at])
+        rows.append(row)
+    out = pd.DataFrame(rows, columns=list(MECHANISM_SUMMARY_COLUMNS)).astype({"n": np.int64})
     rank = [out[k].map({v: i for i, v in enumerate(order[k])}) for k in keys[:2]]
     out = out.assign(_d=rank[0], _w=rank[1]).sort_values(["_d", "_w", "path_length"], kind="stable")
-    return out.drop(columns=["_d", "_w"]).reset_index(drop=True)[list(MECHANISM_SUMMARY_COLUMNS)]
+    return out.drop(columns=["_d", "_w"]).reset_index(drop=True)
+
+
+def _t_quantile(runs: int) -> float:
+    """Student's t quantile of a two-sided 95 % interval over ``runs`` runs."""
+    from scipy import stats
+
+    from curiosity_cli.evaluate.statistics import CONFIDENCE
+
+    return float(stats.t.ppf(0.5 + CONFIDENCE / 2, runs - 1))
+
+
+def _mean_interval(values: np.ndarray) -> tuple[float, float, float]:
+    """The mean of the runs' defined values (NaN none) and its Student-t interval (NaN under 2 runs)."""
+    values = values[~np.isnan(values)]
+    if values.size < 2:
+        return (float(values[0]) if values.size else np.nan), np.nan, np.nan
+    mean = float(values.mean())
+    half = _t_quantile(values.size) * float(values.std(ddof=1)) / np.sqrt(values.size)
+    return mean, mean - half, mean + half
+
+
+def _pooled_share(shares: np.ndarray, pairs: np.ndarray) -> tuple[float, float, float]:
+    """A share of pairs pooled over the runs with pairs (NaN none), and its delta-method interval (NaN under 2)."""
+    with_pairs = pairs > 0  # a run without pairs has no share, and adds nothing to either sum
+    pairs, wins = pairs[with_pairs], shares[with_pairs] * pairs[with_pairs]
+    if pairs.size == 0:
+        return np.nan, np.nan, np.nan
+    share = float(wins.sum() / pairs.sum())
+    if pairs.size < 2:
+        return share, np.nan, np.nan
+    runs = pairs.size
+    se = np.sqrt(np.sum((wins - share * pairs) ** 2) / (runs * (runs - 1))) / pairs.mean()
+    half = _t_quantile(runs) * float(se)
+    return share, max(share - half, 0.0), min(share + half, 1.0)

@@ -91,8 +91,9 @@ class Pooled:
         return _at_headline(revisits, dataset, walker)
 
     def mean_mechanism(self, dataset: str, walker: str, measure: str) -> float:
-        """The walker's mean of a ``mechanism.csv`` measure at 80 steps (the headline length) over every pooled
-        run (:mod:`~curiosity_cli.evaluate.mechanism`); NaN without."""
+        """The walker's ``mechanism.csv`` measure at 80 steps (the headline length) over every pooled run, as
+        :func:`~curiosity_cli.evaluate.mechanism.summarise_mechanism` pools it (an AUC over every run's pairs,
+        the rest means); NaN without."""
         return _at_headline(self.mechanism, dataset, walker, measure)
 
     def mean_steering(self, dataset: str, walker: str) -> float:

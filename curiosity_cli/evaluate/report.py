@@ -391,7 +391,7 @@ def _found_lead(row) -> str:
 def _found_section(evaluation: Evaluation) -> list[str]:
     """Per map: each walker's classes found, mean recall, NMI and AMI, and topic perplexity against each walker on them."""
     from curiosity_cli.evaluate.found import missing_measures
-    from curiosity_cli.evaluate.measures import MEASURES
+    from curiosity_cli.evaluate.measures import MEASURES, WORDS, read_against
 
     summary, effects, leads = evaluation.found_summary, evaluation.found_effects, evaluation.found_leads
     length = _found_length(summary)
@@ -409,7 +409,15 @@ def _found_section(evaluation: Evaluation) -> list[str]:
         "by chance (hypergeometric model, over the topics Z_p uses: `topics_used` in `mi.csv`); over a map's pixels "
         "that chance share is small, so AMI sits just below NMI. **Time to first find**: per class, the step the "
         "path first reached it, a class not reached by the length counting the length (censored there: the restricted "
-        "mean), averaged over classes; lower is better. Each walker: mean over restarts ± "
+        "mean), averaged over classes; lower is better. **MI where the path went** and **where it did not**: MI "
+        "over the pixels whose word lies in a cell the path had visited (words Φ_p holds) and over the rest of the "
+        "map, which tells a model that labels only what it saw from one that carries to unseen terrain (each part's "
+        "MI is bounded by the entropy of the classes it holds). **Held-out log-likelihood** (bits per word, against no "
+        "labelling): each cell's words split once per map into an observed half and a held-out half, the same for every "
+        "walker; with Φ_p frozen, a chain over the observed words gives each cell a topic mixture (the topics of its and "
+        "its neighbours' observed words, plus α), and each held-out word scores log2 of its probability under that "
+        "mixture of Φ_p's topics; over every cell, and over the cells the path did not visit, whose words Φ_p never "
+        "held (a uniform model scores log2(1/V)). Each walker: mean over restarts ± "
         f"{100 * CONFIDENCE:.0f} % CI half-width; topic perplexity minus each walker: mean paired difference "
         f"[{100 * CONFIDENCE:.0f} % CI], paired Wilcoxon p; \"leads each\": better than every walker with p < {ALPHA} against "
         "each (the intersection-union p), read after Holm's correction over the maps. Against human labels, or Z_b on "
@@ -423,8 +431,9 @@ def _found_section(evaluation: Evaluation) -> list[str]:
     summary = summary[summary["path_length"] == length]
     for dataset in dict.fromkeys(summary["dataset"]):
         block = summary[summary["dataset"] == dataset]
-        against = "human" if (block["against"] == "human").any() else "batch"
-        block = block[block["against"] == against]
+        against = read_against(block["against"])
+        read = [against, WORDS]  # a measure of no labelling beside those of the map's labelling
+        block = block[block["against"].isin(read)]
         measures = [m for m in shown if (block["measure"] == m.name).any()]
         classes = evaluation.mi.loc[evaluation.mi["dataset"] == dataset, "classes"].max()
         titles = [
@@ -437,12 +446,12 @@ def _found_section(evaluation: Evaluation) -> list[str]:
             rows = block[block["weight_function"] == weight].set_index("measure")
             lines.append(f"| {_label(weight)} | " + " | ".join(
                 _found_cell(rows.loc[m.name], m.digits) if m.name in rows.index else "" for m in measures) + " |")
-        versus = effects[(effects["dataset"] == dataset) & (effects["path_length"] == length) & (effects["against"] == against)]
+        versus = effects[(effects["dataset"] == dataset) & (effects["path_length"] == length) & effects["against"].isin(read)]
         for other in _order(versus["other"]):
             rows = versus[versus["other"] == other].set_index("measure")
             lines.append(f"| {HEADLINE_WEIGHT} {_MINUS} {other} | " + " | ".join(
                 _found_versus(rows.loc[m.name], m.digits) if m.name in rows.index else "" for m in measures) + " |")
-        lead = leads[(leads["dataset"] == dataset) & (leads["path_length"] == length) & (leads["against"] == against)]
+        lead = leads[(leads["dataset"] == dataset) & (leads["path_length"] == length) & leads["against"].isin(read)]
         if not lead.empty:
             rows = lead.set_index("measure")
             lines.append("| leads each | " + " | ".join(
@@ -621,7 +630,7 @@ def _revisits_section(revisits, lengths: list[int], config: ExperimentConfig) ->
 
 def _mechanism_section(mechanism, lengths: list[int]) -> list[str]:
     """Per map and walker at the headline's length (else the shortest), whether surprise pointed at what is new
-    (:mod:`~curiosity_cli.evaluate.mechanism`): the means over restarts of M1-M5."""
+    (:mod:`~curiosity_cli.evaluate.mechanism`): M1-M5 pooled over restarts, in two tables."""
     from curiosity_cli.evaluate.mechanism import summarise_mechanism
 
     if mechanism is None or mechanism.empty:
@@ -634,25 +643,58 @@ def _mechanism_section(mechanism, lengths: list[int]) -> list[str]:
     lines = [
         "## Does surprise point at what is new?",
         "",
-        f"Per map and walker, means over restarts at {length} steps (`mechanism.csv` has every run and length): "
-        "**M1** the within-step AUC of the walker's score (its own perplexity; topic perplexity's for walkers "
-        "without one) for the candidates holding a human class new to the path against the other unvisited "
-        "candidates (0.5: it cannot tell them apart); **M2** the share of moves with such a candidate; **M3** the "
-        "chance the walker put on them beyond stochastic coverage's, at those moves; **M4** the cells it entered "
-        "that held a class new to the path, and the classes it found; **M5** the share of its candidates with "
-        "infinite topic perplexity, and of those the share holding a word id the path had not seen.",
+        f"Per map and walker at {length} steps (`mechanism.csv` has every run and length). **M1** the within-step "
+        "AUC of the walker's score (its own perplexity; topic perplexity's for walkers without one) for the "
+        "candidates holding a human class new to the path against the other unvisited candidates (0.5: it cannot "
+        "tell them apart); **M2** the share of moves with such a candidate, and of candidates holding one; **M3** "
+        "the chance the walker put on them beyond stochastic coverage's, at those moves; **M4** the cells it "
+        "entered that held a class new to the path, and the classes it found; **M5** the share of its candidates "
+        "with infinite topic perplexity, and the share holding a word id the path had not seen among those and "
+        "among the finite ones. The AUCs and the ties are pooled over every restart's pairs (all wins over all "
+        "pairs), with a 95 % interval clustered by restart (delta method); the rest are means over restarts. "
+        "Empty: undefined, or not in a `mechanism.csv` written before the measure existed.",
         "",
-        "| map | walker | M1 AUC | M2 opportunity | M3 gain | M4 new-class cells | M4 classes found | M5 infinite "
-        "| M5 of those, unseen words |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "A candidate holding a new class mostly lies on a boundary and so holds two textures, while most of M1's "
+        "other candidates hold one: a score high on any mixed cell beats those without telling what is new. "
+        "**Against mixed texture** compares the same candidates only with unvisited ones holding two or more "
+        "classes, all seen before: near 0.5 there, M1's AUC is heterogeneity, not novelty. **Tied at ∞** is the "
+        "share of M1's pairs where both scores were infinite, each counted half a win: an AUC near 0.5 made of "
+        "them says the score could not rank at all. M2 per candidate compares experiments offering different "
+        "numbers of candidates per move.",
+        "",
+        "| map | walker | M1 AUC | M1 against mixed texture | M1 tied at ∞ | M2 moves | M2 candidates | M3 gain |",
+        "|---|---|---|---|---|---|---|---|",
     ]
-    for r in summary.to_dict("records"):
+    records = summary.to_dict("records")
+    for r in records:
         cells = [
-            number(r["auc"]), number(r["opportunity"]), number(r["gain"], 3), number(r["new_class_cells"], 1),
-            number(r["classes_found"], 1), number(r["infinite_share"]), number(r["infinite_unseen"]),
+            _with_interval(r, "auc"), _with_interval(r, "auc_mixed"), number(r["infinite_ties"]),
+            number(r["opportunity"]), number(r["new_share"]), number(r["gain"], 3),
+        ]
+        lines.append(f"| {r['dataset']} | {_label(r['weight_function'])} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "M5's unseen words among the finite candidates are the base rate for those among the infinite ones: next "
+        "to a short path most cells hold a word it has not seen, and only if the infinite ones hold one clearly "
+        "more often does infinite topic perplexity mark word novelty (which need not be class novelty).",
+        "",
+        "| map | walker | M4 new-class cells | M4 classes found | M5 infinite | M5 unseen words, infinite "
+        "| M5 unseen words, finite |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in records:
+        cells = [
+            number(r["new_class_cells"], 1), number(r["classes_found"], 1), number(r["infinite_share"]),
+            number(r["infinite_unseen"]), number(r["finite_unseen"]),
         ]
         lines.append(f"| {r['dataset']} | {_label(r['weight_function'])} | " + " | ".join(cells) + " |")
     return lines + [""]
+
+
+def _with_interval(row: Mapping, measure: str) -> str:
+    """A summary's measure with its 95 % interval in brackets; the interval left out where undefined."""
+    low, high = number(row[f"{measure}_low"]), number(row[f"{measure}_high"])
+    return number(row[measure]) + (f" [{low}, {high}]" if low and high else "")
 
 
 def number(value, digits: int = 2) -> str:

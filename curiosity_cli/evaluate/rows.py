@@ -44,8 +44,9 @@ def run_rows(
         The label file's ``meta``.
     arrays : dict of str to ndarray
         ``lengths`` (n,), ``batch`` (n, K, K), optionally ``human`` (n, K, C),
-        ``class_first_step`` (C,), the visited cells' ``visited_batch`` and ``visited_human``
-        and the second chain's ``placed_batch`` and ``placed_human``, as
+        ``class_first_step`` (C,), the visited cells' ``visited_batch`` and ``visited_human``,
+        the held-out log-likelihood's ``heldout_bits`` and ``heldout_words`` (n, 2) and the
+        second chain's ``placed_batch`` and ``placed_human``, as
         :func:`~curiosity_cli.label.stage.label_block` writes them.
     class_names : dict of int to str, optional
         The map's legend.
@@ -60,7 +61,7 @@ def run_rows(
     from curiosity_cli.evaluate.information import matched_recall, mutual_information
     from curiosity_cli.evaluate.measures import Checkpoint, measure_values
     from curiosity_cli.evaluate.revisits import REVISIT_COLUMNS, revisit_counts
-    from curiosity_cli.label.label_files import SECOND_PREFIX, VISITED_PREFIX
+    from curiosity_cli.label.label_files import HELDOUT_BITS, HELDOUT_WORDS, SECOND_PREFIX, VISITED_PREFIX
 
     human, batch = arrays.get("human"), arrays["batch"]
     first = arrays.get("class_first_step")
@@ -69,7 +70,8 @@ def run_rows(
     for i, length in enumerate(arrays["lengths"].tolist()):
         point = Checkpoint(
             length, batch[i], None if human is None else human[i], first,
-            *(arrays[name][i] if name in arrays else None for name in (VISITED_PREFIX + "batch", VISITED_PREFIX + "human")),
+            *(arrays[name][i] if name in arrays else None
+              for name in (VISITED_PREFIX + "batch", VISITED_PREFIX + "human", HELDOUT_BITS, HELDOUT_WORDS)),
         )
         row = {
             **run, "path_length": length, **measure_values(point),

@@ -33,7 +33,8 @@ against human labels (or, as a second curve, against Z_b):
   of its score for candidates holding a class new to the path, M2 the share of moves with
   such a candidate, M3 the chance it put on them beyond stochastic coverage, M5 the share
   of candidates with infinite perplexity (``auc``, ``opportunity``, ``gain``,
-  ``infinite_share``; means over the pooled runs). Every number is the pooled headline's
+  ``infinite_share``; over the pooled runs as :func:`~curiosity_cli.evaluate.mechanism.summarise_mechanism`
+  has them: the AUC every run's wins over every run's pairs, the rest means). Every number is the pooled headline's
 (:func:`~curiosity_cli.evaluate.headline.headline`, :func:`~curiosity_cli.evaluate.headline.with_uncertainty`);
 this module only puts them in rows, sorted by ratio, and counts.
 """

@@ -11,6 +11,8 @@ Written under ``results/<experiment>/``:
   :data:`~curiosity_cli.experiment.recipes.CLASS_SHARE_PERCENT`) of ``classes`` (the map's
   classes with pixels); ``mean_recall`` (mean per-class recall of Z_p under the best
   one-to-one topic-to-class matching, :func:`~curiosity_cli.evaluate.information.matched_recall`);
+  ``heldout`` and ``heldout_unvisited`` (bits per word: the held-out log-likelihood of the map's words
+  under Φ_p, over every cell and over the cells the path did not visit, :mod:`~curiosity_cli.label.heldout`);
   the run's ``seed`` and ``replicate`` (the experiment's seed, whose runs are paired by
   restart: :data:`~curiosity_cli.evaluate.statistics.PAIR_KEYS`); and the revisits of the path so far
   (:mod:`~curiosity_cli.evaluate.revisits`): ``distinct_cells``, ``revisit_steps``,
@@ -66,7 +68,8 @@ Written under ``results/<experiment>/``:
   and the pairs a 10 % lead would need; and the p of the lead and of the null reference
   adjusted for the number of maps (:func:`~curiosity_cli.evaluate.headline.with_adjusted`).
 - ``found_summary.csv``, ``found_effects.csv``, ``found_leads.csv``: every measure beside MI
-  (NMI, AMI, classes found, mean recall) per walker, topic perplexity against each other
+  (NMI, AMI, classes found, mean recall, time to first find, MI where the path went and where it did not,
+  held-out log-likelihood) per walker, topic perplexity against each other
   walker on it, and whether it leads each, with MI's statistics; ``found_classes.csv``: how
   soon it first reached each human class against each walker (:mod:`~curiosity_cli.evaluate.found`).
 - ``tables.json``: each table's size and SHA-256 and those of every file and map fact the

@@ -43,9 +43,11 @@ SELECTION_KEYS = {("explore", "weight_functions"), ("explore", "restarts")}
 #: file is the same bytes whichever device made it.
 LABEL_FORMAT = 3
 #: What a label file holds beside Z_p's tables, whose draws :data:`LABEL_FORMAT` covers: 2 since the
-#: tables of the pixels of the cells each path visited. Not in a study's record (:mod:`~curiosity_cli.study.record`):
-#: a record keeps tables, not label files, and one from before a measure says that it lacks it.
-LABEL_TABLES = 2
+#: tables of the pixels of the cells each path visited; 3 since the held-out log-likelihood of the map's
+#: words (:mod:`~curiosity_cli.label.heldout`: a chain per run over the observed half). Not in a study's record
+#: (:mod:`~curiosity_cli.study.record`): a record keeps tables, not label files, and one from before a
+#: measure says that it lacks it.
+LABEL_TABLES = 3
 #: Batch references, whose draws did not change with the label files'.
 BATCH_FORMAT = 1
 #: A human class counts as found in a visited cell when it covers at least this share

@@ -11,7 +11,11 @@
   compares with the first to check that Z_p has forgotten its start. ``visited_batch``
   and ``visited_human`` (:data:`VISITED_PREFIX`) are the first chain's tables of only
   the pixels whose word lies in a cell the path had visited by each length (the words
-  Φ_p holds then); the rest of the map's are the whole tables less these. For a map with
+  Φ_p holds then); the rest of the map's are the whole tables less these. ``heldout_bits``
+  ((n, 2) float64) and ``heldout_words`` ((n, 2) int64): the held-out log-likelihood of
+  the map's words under Φ_p (:mod:`curiosity_cli.label.heldout`), the sum of ``log2`` of
+  each held-out word's probability and the number of held-out words, over every cell
+  (column 0) and over the cells the path had not visited by each length (column 1). For a map with
   human labels also ``class_first_step`` ((C,) int32): the step at which the path first
   stood in a cell where class ``h`` covers at least ``CLASS_SHARE_PERCENT`` % of the
   pixels, -1 if never (:mod:`curiosity_cli.label.classes`); ``meta["class_share_percent"]``
@@ -46,6 +50,8 @@ EXAMPLE_LENGTHS = (80,)
 SECOND_PREFIX = f"{SECOND_START}_"
 #: The prefix of the tables of only the pixels whose word lies in a cell the path visited.
 VISITED_PREFIX = "visited_"
+#: The held-out log-likelihood's arrays: its bits and its words, over every cell and over the cells not visited.
+HELDOUT_BITS, HELDOUT_WORDS = "heldout_bits", "heldout_words"
 
 #: Where a label file's meta records the digest of its arrays.
 ARRAYS_KEY = "arrays_sha256"
@@ -83,21 +89,25 @@ def read_label_file(path: Path) -> tuple[dict, dict]:
         As :func:`~curiosity_cli.files.open_npz`.
     CorruptFileError
         The file cannot be read, lacks an array a label file has, has a table array
-        without one table per checkpoint length, or arrays that are not those it was
-        written with (its meta's ``arrays_sha256``).
+        without one table per checkpoint length (or held-out arrays not (n, 2)), or arrays
+        that are not those it was written with (its meta's ``arrays_sha256``).
     """
     tables = tuple(prefix + against for prefix in ("", SECOND_PREFIX, VISITED_PREFIX) for against in ("batch", "human"))
     with open_npz(path) as npz:
         meta = read_meta(npz, LABEL_META_KEYS)
         written = {name: npz[name] for name in sorted(npz.files) if name != "meta"}  # each member decompressed once
         arrays = {"lengths": written["lengths"], "batch": written["batch"]}  # a file without them is corrupt (KeyError)
-        arrays.update({name: written[name] for name in (*tables, "class_first_step") if name in written})
+        arrays.update({
+            name: written[name] for name in (*tables, HELDOUT_BITS, HELDOUT_WORDS, "class_first_step") if name in written
+        })
+        n = len(arrays["lengths"])
         for name in tables:
-            if name in arrays and (arrays[name].ndim != 3 or len(arrays[name]) != len(arrays["lengths"])):
+            if name in arrays and (arrays[name].ndim != 3 or len(arrays[name]) != n):
                 # raised inside open_npz: reported as a corrupt file, not as an IndexError later
-                raise ValueError(
-                    f"{name} has shape {arrays[name].shape}, expected one table for each of {len(arrays['lengths'])} lengths"
-                )
+                raise ValueError(f"{name} has shape {arrays[name].shape}, expected one table for each of {n} lengths")
+        for name in (HELDOUT_BITS, HELDOUT_WORDS):
+            if name in arrays and arrays[name].shape != (n, 2):
+                raise ValueError(f"{name} has shape {arrays[name].shape}, expected ({n}, 2): a row per length")
         if arrays_digest(written) != meta[ARRAYS_KEY]:
             raise ValueError("its tables are not those it was written with (altered since)")
     return meta, arrays

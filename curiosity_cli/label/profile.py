@@ -10,7 +10,9 @@ after the last block) and ``closing``. And per block, what its worker did: the `
 all its chains over every checkpoint) and so its ``work`` (word samples: chain sweeps x
 words), when it ``began`` (seconds after the stage started, by the wall clock), and its seconds
 ``reading`` (its map's arrays, made once per worker),
-``kernel`` (the chains' sweeps) and ``tables`` (contingency tables and example maps,
+``kernel`` (the label chains' sweeps, which ``chain_sweeps`` and ``work`` count), ``heldout``
+(the sweeps of the chains over each map's observed words and the held-out words' scores,
+:mod:`~curiosity_cli.label.heldout`) and ``tables`` (contingency tables and example maps,
 and any wait for a batch reference computed beside). And per batch reference computed
 beside the blocks, its ``seconds`` of sweeps and when it was ``written``.
 ``scripts/bench_label_profile.py`` reads it: how much of the stage the kernel's rate
@@ -64,7 +66,8 @@ class LabelProfile:
             yield item
 
     def block(self, chains: int, words: int, chain_sweeps: int, runs: int, dataset: str, seconds: dict) -> None:
-        """A block's work and its worker's seconds (``began``: its ``time.time()``; ``reading``, ``kernel``, ``tables``)."""
+        """A block's work and its worker's seconds (``began``: its ``time.time()``; ``reading``, ``kernel``, ``heldout``,
+        ``tables``)."""
         seconds = {**seconds, "began": seconds["began"] - self.wall_clock}
         self.blocks.append({
             "dataset": dataset, "runs": runs, "chains": chains, "words": words, "chain_sweeps": chain_sweeps,

@@ -28,6 +28,7 @@ import numpy as np
 
 from curiosity_cli.config import ModelConfig
 from curiosity_cli.errors import ParameterError
+from curiosity_cli.seeds import PATH_TAG
 from curiosity_cli.words.store import WordStore
 
 
@@ -63,18 +64,22 @@ def whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_coun
     return topic_model
 
 
-def map_chains(store: WordStore, model: ModelConfig, device: str = "cpu"):
+def map_chains(store: WordStore, model: ModelConfig, device: str = "cpu", kept: np.ndarray | None = None):
     """Frozen-Φ Gibbs chains over every word of a map (:class:`~curiosity_cli.topics.chains.FrozenChains`), none started.
 
     What Z_p is sampled on: the map's cells and neighbour table, each cell's words in
     the store's order, as :func:`whole_map_model` holds them; on ``device`` (``"cpu"`` or
-    ``"cuda"``, the same bytes).
+    ``"cuda"``, the same bytes). ``kept``, (N,) bool, keeps only those words (the
+    observed half of a held-out split, :mod:`~curiosity_cli.label.heldout`): every cell
+    and neighbour stays, a cell with none of its words kept is empty.
     """
     from curiosity_cli.topics.chains import FrozenChains
 
+    words, cells = store.words, np.repeat(np.arange(store.n_cells), store.words_per_cell())
+    if kept is not None:
+        words, cells = words[kept], cells[kept]
     return FrozenChains(
-        store.words, np.repeat(np.arange(store.n_cells), store.words_per_cell()),
-        store.grid.neighbour_table(model.spatial_neighbours), n_topics=model.topics,
+        words, cells, store.grid.neighbour_table(model.spatial_neighbours), n_topics=model.topics,
         vocabulary_size=store.vocabulary_size, alpha=model.alpha, beta=model.beta, device=device,
     )
 
@@ -127,8 +132,21 @@ def label_paths(
     labels : (N, len(chains)) int16 ndarray
         Their labels, each word of the store in the store's order.
     """
-    placed = [False] * len(paths) if placed is None else list(placed)
     chains = map_chains(store, model, device)
+    for j, active in advance_chains(
+        chains, paths, seeds, sweeps=sweeps, warm_sweeps=warm_sweeps, placed=placed, on_sweep=on_sweep,
+    ):
+        yield j, active, chains.ml_topics()
+
+
+def advance_chains(
+    chains, paths: Sequence[Sequence[np.ndarray]], seeds: Sequence[int], *, sweeps: int, warm_sweeps: int | None,
+    placed: Sequence[bool] | None = None, on_sweep=None,
+) -> Iterator[tuple[int, list[int]]]:
+    """Take :class:`~curiosity_cli.topics.chains.FrozenChains` through each path's checkpoints, as :func:`label_paths`
+    describes (its parameters), yielding ``(j, chains)`` once the paths with a ``j``-th checkpoint have swept at it:
+    the caller reads the chains' state then (their labels, their counts)."""
+    placed = [False] * len(paths) if placed is None else list(placed)
     active = list(range(len(paths)))
     for j in range(max(len(path) for path in paths)):
         still = [c for c in active if len(paths[c]) > j]
@@ -142,7 +160,7 @@ def label_paths(
         else:
             chains.start(phis, [(seeds[c] + j) % 2**64 for c in active], [placed[c] for c in active])
             chains.sweep(sweeps, on_sweep)
-        yield j, active, chains.ml_topics()
+        yield j, active
 
 
 def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1):
@@ -228,9 +246,7 @@ def pixel_words(store: WordStore, image_shape: tuple[int, int]) -> np.ndarray:
     return grid[np.ix_(nearest_row, nearest_col)]
 
 
-def path_seed(run_seed, *, second: bool = False) -> int:
-    """The seed of a run's labelling chain (``second``: of its checking chain), from the run's own seed entropy."""
-    from curiosity_cli.seeds import PATH_TAG, SECOND_CHAIN_TAG
-
-    tag = SECOND_CHAIN_TAG if second else PATH_TAG
+def path_seed(run_seed, tag: int = PATH_TAG) -> int:
+    """The seed of one of a run's chains, from the run's own seed entropy and ``tag``, a tag of
+    :mod:`curiosity_cli.seeds` (default its labelling chain's)."""
     return int(np.random.SeedSequence((*run_seed, tag)).generate_state(1, np.uint64)[0])

@@ -57,7 +57,8 @@ from curiosity_cli.label.batch_references import (
     BatchTask, WrittenBatch, batch_is_current, batch_task, compute_batch_references, write_batch,
 )
 from curiosity_cli.label.label_files import (
-    EXAMPLE_LENGTHS, NOT_LABELLED, SECOND_PREFIX, VISITED_PREFIX, label_changes, write_labels,
+    EXAMPLE_LENGTHS, HELDOUT_BITS, HELDOUT_WORDS, NOT_LABELLED, SECOND_PREFIX, VISITED_PREFIX, label_changes,
+    write_labels,
 )
 from curiosity_cli.label.shared_items import BATCH, SharedItems, label_key
 from curiosity_cli.label.sampling import path_seed
@@ -216,17 +217,22 @@ def label_block(
 
     The chains run on ``device``, a name in :data:`~curiosity_cli.topics.devices.DEVICES`
     (the same bytes on each). ``clock``, when given, gets the seconds spent in the chains'
-    sweeps (``kernel``) and in the tables and example maps made from their labels
-    (``tables``, with any wait for a Z_b computed beside). ``on_sweep(chains)`` is called
-    after each sweep of the chains (:mod:`~curiosity_cli.label.block_progress`).
+    sweeps (``kernel``), in the held-out chains' sweeps and scores (``heldout``) and in the
+    tables and example maps made from their labels (``tables``, with any wait for a Z_b
+    computed beside). ``on_sweep(chains)`` is called after each sweep of the label chains
+    (:mod:`~curiosity_cli.label.block_progress`).
 
     ``inputs`` names the map's files, ``arrays`` holds their contents; the runs were made
     from the map's current word store (:func:`label_experiment` checks). Their chains,
     and the second chain of each restart below ``label.check_restarts`` (from a placed
-    start), advance in lock-step (:func:`~curiosity_cli.label.sampling.label_paths`);
-    a run's labels depend only on the run, never on the runs labelled with it.
+    start), advance in lock-step (:func:`~curiosity_cli.label.sampling.label_paths`), and
+    so do the runs' chains over the observed half of the map's words, which score the
+    held-out half (:mod:`~curiosity_cli.label.heldout`); a run's labels and scores depend
+    only on the run, never on the runs labelled with it.
     """
+    from curiosity_cli.label.heldout import heldout_chains, heldout_sums, map_split
     from curiosity_cli.label.sampling import label_paths
+    from curiosity_cli.seeds import HELDOUT_CHAIN_TAG, PATH_TAG, SECOND_CHAIN_TAG
 
     store, pixel_words, human, batch, cell_classes = arrays
     k = config.model.topics
@@ -242,18 +248,29 @@ def label_block(
     examples = [{} for _ in runs]
     labelled = label_paths(
         store, config.model, [phis[index] for index, _ in chains],
-        [path_seed(runs[index].meta["seed"], second=bool(prefix)) for index, prefix in chains],
+        [path_seed(runs[index].meta["seed"], SECOND_CHAIN_TAG if prefix else PATH_TAG) for index, prefix in chains],
         placed=[bool(prefix) for _, prefix in chains], sweeps=config.label.sweeps, warm_sweeps=config.label.warm_sweeps,
         device=device, on_sweep=on_sweep,
     )
+    held = map_split(store, config.seed, inputs.name)
+    held_cells = word_cells[held]
+    # a chain per run over the observed words, stepped beside the label chains; its sweeps are not counted
+    # in the progress (a chain sweep there is one over the whole map), which they slow evenly
+    scored = heldout_chains(
+        store, config.model, held, phis, [path_seed(run.meta["seed"], HELDOUT_CHAIN_TAG) for run in runs],
+        sweeps=config.label.sweeps, warm_sweeps=config.label.warm_sweeps, device=device,
+    )
     clock = {} if clock is None else clock
-    clock.update(kernel=0.0, tables=0.0)
+    clock.update(kernel=0.0, tables=0.0, heldout=0.0)
     while True:
         began = time.perf_counter()
         step = next(labelled, None)  # the chains sweep when asked for the next checkpoint's labels
         clock["kernel"] += time.perf_counter() - began
         if step is None:
             break
+        began = time.perf_counter()
+        _, _, scores = next(scored)  # the same checkpoint, for the runs of the first chains, in order
+        clock["heldout"] += time.perf_counter() - began
         began = time.perf_counter()
         j, active, labels = step
         owners = [chains[c][0] for c in active]  # the run of each column
@@ -262,15 +279,19 @@ def label_block(
         visited = np.stack([
             visited_words(runs[owners[column]].path, lengths[owners[column]][j], word_cells, store.n_cells)
             for column in firsts
-        ], axis=1) if firsts else None
+        ], axis=1)
         for against, reference in (("human", human), ("batch", batch)):
             if reference is None:
                 continue
             for column, table in enumerate(reference.tables(labels, k)):
                 tables[owners[column]].setdefault(chains[active[column]][1] + against, []).append(table)
-            if firsts:
-                for column, table in zip(firsts, reference.tables(labels[:, firsts], k, visited)):
-                    tables[owners[column]].setdefault(VISITED_PREFIX + against, []).append(table)
+            for column, table in zip(firsts, reference.tables(labels[:, firsts], k, visited)):
+                tables[owners[column]].setdefault(VISITED_PREFIX + against, []).append(table)
+        for column, score in zip(firsts, scores):
+            index = owners[column]
+            bits, words = heldout_sums(score, ~visited_words(runs[index].path, lengths[index][j], held_cells, store.n_cells))
+            tables[index].setdefault(HELDOUT_BITS, []).append(bits)
+            tables[index].setdefault(HELDOUT_WORDS, []).append(words)
         for column, c in enumerate(active):
             index, prefix = chains[c]
             length = lengths[index][j]

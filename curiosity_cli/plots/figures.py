@@ -692,7 +692,8 @@ def save_figure(fig, stem: Path) -> list[Path]:
     """Write ``stem``.png and ``stem``.pdf atomically; returns both paths.
 
     A character the font lacks (an emoji in a legend's class name) is one note for both
-    files (:func:`~curiosity_cli.plots.missing_glyphs_noted`).
+    files (:func:`~curiosity_cli.plots.missing_glyphs_noted`). The PDF keeps the layout
+    the PNG was drawn with: the same panels in the same places, without a second layout pass.
     """
     paths = []
     with missing_glyphs_noted():
@@ -701,4 +702,5 @@ def save_figure(fig, stem: Path) -> list[Path]:
             with atomic_path(path) as tmp:
                 fig.savefig(tmp, dpi=_DPI, format=suffix[1:])
             paths.append(path)
+            fig.set_layout_engine("none")  # laid out by the first save
     return paths

@@ -68,7 +68,7 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
         Markdown lines.
     """
     from curiosity_cli.evaluate.found_curve import found_curve_lines, found_curve_table, measure_curve
-    from curiosity_cli.evaluate.measures import measure_named
+    from curiosity_cli.evaluate.measures import WORDS, measure_named
     from curiosity_cli.evaluate.specification_curve import VERSUS, curve_sentence, curve_table, joint_lines
     from curiosity_cli.evaluate.headline import HEADLINE_LENGTH
     from curiosity_cli.plots.specification_curve import write_specification_curve
@@ -136,8 +136,10 @@ def specification_lead(sweep: Sweep, folder: Path, treatments: Sequence[Treatmen
         if len(table):
             table = table.assign(label=[", ".join(map(str, v)) for v in table[names].itertuples(index=False)])
             figure = f"{FIGURE}-{measure}"
+            # a measure of no labelling (the held-out log-likelihood) is scored against the map's held-out words
+            against = "held-out words" if WORDS in measure_named(measure).columns else "human labels"
             write_specification_curve(
-                table, choices, folder / figure, label="label", datasets=datasets, against="human labels",
+                table, choices, folder / figure, label="label", datasets=datasets, against=against,
                 measure=measure_named(measure),
             )
             lines += [f"![specification curve, {measure_named(measure).title}]({figure}.png)", ""]

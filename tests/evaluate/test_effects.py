@@ -259,7 +259,7 @@ def test_the_report_leads_with_the_verdict_and_has_every_section(tmp_path):
     assert "| topic-perplexity | 2.90 ± 0.63 | 0.545 ± 0.022 |" in report
     assert "| topic-perplexity − lawnmower | +0.00 [+0.00, +0.00], p = 1.00 | +0.000 [+0.000, +0.000], p = 1.00 |" in report
     assert "| leads each | no (p = 1.00; Holm: p = 1.00) | no (p = 1.00; Holm: p = 1.00) |" in report
-    assert "Not in `mi.csv` (made before they existed; evaluate again): AMI, time to first find, MI where the path went, MI where the path did not go." in report
+    assert "Not in `mi.csv` (made before they existed; evaluate again): AMI, time to first find, MI where the path went, MI where the path did not go, held-out log-likelihood, held-out log-likelihood where the path did not go." in report
 
 
 def test_too_few_pairs_for_any_test_to_reach_p_005_are_said_plainly():

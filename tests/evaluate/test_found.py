@@ -37,6 +37,7 @@ def found_mi(lead: float, seed: int = 0, datasets=("a", "b", "c")) -> pd.DataFra
                     "time_to_find": 40 + 5 * (shared + noise - ahead),  # sooner is better
                     "mi_visited_human": 0.4 + 0.02 * (shared + noise), "mi_visited_batch": 0.6,
                     "mi_unvisited_human": 0.3 + 0.02 * (shared + noise), "mi_unvisited_batch": 0.5,
+                    "heldout": -7.0 + 0.1 * (shared + noise), "heldout_unvisited": -7.5 + 0.1 * (shared + noise),
                 })
     return pd.DataFrame(rows)
 
@@ -49,9 +50,11 @@ def test_a_planted_lead_on_what_a_path_finds_is_found_and_a_sham_one_is_not():
             rows = leads.loc[measure]
             assert (rows["beats_all"] & (rows["p_each_holm"] < 0.05)).all() == expected, (lead, measure)
             assert rows["walkers"].eq(3).all()  # the ceiling is not a walker
-        # AMI and MI by part were left without a lead in both
+        # AMI, MI by part and the held-out log-likelihood were left without a lead in both
         for measure in ("ami", "mi_visited", "mi_unvisited"):
             assert not (leads.loc[measure]["p_each_holm"] < 0.05).any(), measure
+        words = found_leads(found_effects(mi)).query("against == 'words'")
+        assert set(words["measure"]) == {"heldout", "heldout_unvisited"} and not (words["p_each_holm"] < 0.05).any()
 
 
 def test_effects_are_the_paired_differences_with_their_intervals():
@@ -119,6 +122,20 @@ def test_mi_where_the_path_went_and_where_it_did_not_is_taken_from_the_two_parts
     assert all(np.isnan(older[c]) for c in ("mi_visited_human", "mi_unvisited_human", "mi_visited_batch"))
 
 
+def test_the_held_out_log_likelihood_is_its_bits_per_word_over_all_cells_and_over_the_unvisited():
+    batch = np.eye(3, dtype=int) * 10
+    point = Checkpoint(40, batch, None, None, heldout_bits=np.array([-700.0, -300.0]), heldout_words=np.array([100, 40]))
+    values = measure_values(point)
+    assert (values["heldout"], values["heldout_unvisited"]) == (-7.0, -7.5)
+    # a path that visited every cell leaves no held-out word elsewhere: no likelihood there, not 0 bits
+    whole = measure_values(Checkpoint(40, batch, None, None, heldout_bits=np.array([-700.0, 0.0]),
+                                      heldout_words=np.array([100, 0])))
+    assert whole["heldout"] == -7.0 and np.isnan(whole["heldout_unvisited"])
+    older = measure_values(Checkpoint(40, batch, None, None))
+    assert np.isnan(older["heldout"]) and np.isnan(older["heldout_unvisited"])
+    assert measure_named("heldout").columns == {"words": "heldout"} and measure_named("heldout").unit == "bits/word"
+
+
 def test_a_measure_is_named_or_the_names_are_listed():
     assert measure_named("ami").title == "AMI"
     with pytest.raises(ParameterError, match="measure: got 'auc', expected one of mi, nmi, ami"):
@@ -135,7 +152,9 @@ def test_a_study_counts_each_measures_leads_over_its_points_after_holm():
         ({"specification": "level"}, SimpleNamespace(found_effects=found_effects(found_mi(0.0, seed=2)), seeds=(0, 1))),
     ]
     table = found_curve_table(specifications)
-    assert len(table) == 7 * 2 * 3  # measures x specifications x maps
+    assert len(table) == 9 * 2 * 3  # measures x specifications x maps
+    # a measure of no labelling is read against the map's held-out words
+    assert (table.loc[table.measure.str.startswith("heldout"), "against"] == "words").all()
     recall = table[table.measure == "mean_recall"].set_index(["specification", "dataset"])
     assert (recall.loc["ahead", "p_each_holm"] < 0.05).all() and not (recall.loc["level", "p_each_holm"] < 0.05).any()
     assert (recall["against"] == "human").all() and (recall["path_length"] == 80).all()

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import math
 from fractions import Fraction
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from scipy import stats
 
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.evaluate.mechanism import (
@@ -112,6 +114,87 @@ def test_infinite_topic_perplexity_and_the_word_ids_unseen_at_each_move():
     assert by_length[3]["infinite_unseen"] == pytest.approx(2 / 3)
     assert by_length[4]["infinite_share"] == 0.5
     assert by_length[4]["infinite_unseen"] == pytest.approx(3 / 5)
+
+
+def test_ties_at_infinity_new_candidates_and_unseen_words_among_the_finite_by_hand():
+    by_length = {r["path_length"]: r for r in rows()}
+    # ties: move 0 scores no infinity; move 1's 2 pairs (2 and 4 against 5) are all three infinite
+    assert math.isnan(by_length[1]["infinite_ties"])
+    assert [by_length[n]["infinite_ties"] for n in (2, 3, 4)] == [0.0, 0.5, 0.5]
+    word = {r["path_length"]: r["infinite_ties"] for r in rows(weight_function="word-perplexity", lengths=(4,))}
+    assert word == {4: 0.0}, "read under word perplexity, finite at move 1: no tie at infinity"
+    # new per candidate: move 0 has 4 of 3 candidates, move 1 has 2 and 4 of 4 (0 visited counts), move 2 none of 3
+    assert math.isnan(by_length[1]["new_share"])
+    assert [by_length[n]["new_share"] for n in (2, 3, 4)] == [pytest.approx(1 / 3), pytest.approx(3 / 7), 0.3]
+    # finite topic perplexity: move 0's 1 [1, 2], 3 [0, 2] and 4 [2, 5] each hold a word the start cell [0, 1] lacks
+    # (2 first seen at step 1); move 1's 0 [0, 1] and move 2's 1 [1, 2] hold none the path had not seen
+    assert math.isnan(by_length[1]["finite_unseen"])
+    assert [by_length[n]["finite_unseen"] for n in (2, 3, 4)] == [1.0, 0.75, 0.6]
+    # no candidate of mixed texture whose classes are all seen: 4 holds A and B, but B is new at moves 0 and 1
+    assert [by_length[n]["pairs_mixed"] for n in (1, 2, 3, 4)] == [0, 0, 0, 0]
+    assert all(math.isnan(by_length[n]["auc_mixed"]) for n in (1, 2, 3, 4))
+
+
+#: Classes A, B and C: a path [0, 1] has seen A and B; one move, whose candidates are scored by hand.
+MIXED_PRESENT = np.zeros((7, 3), bool)
+for _cell, _classes in {0: [0, 1], 1: [0], 2: [0, 2], 3: [2], 4: [0, 1], 5: [1], 6: [0, 1]}.items():
+    MIXED_PRESENT[_cell, _classes] = True
+MIXED_CANDIDATES = pd.DataFrame(
+    # cell 0 visited (no negative though mixed); 2 and 3 hold C, new; 4 and 6 mixed, all seen; 5 homogeneous
+    [(0, 0, INF, 0.0, 1.0), (0, 2, 1.0, 3.0, 1.0), (0, 3, 1.0, INF, 1.0), (0, 4, 1.0, 2.0, 1.0),
+     (0, 5, 1.0, 0.0, 1.0), (0, 6, 1.0, INF, 1.0)],
+    columns=["step", "cell", "coverage", "topic_perplexity", "weight"],
+)
+
+
+def test_the_auc_against_mixed_texture_by_hand():
+    row, = mechanism_rows(
+        RUN, np.array([0, 1]), MIXED_CANDIDATES, MIXED_PRESENT, lambda cell: np.zeros(0, np.int64), [2],
+    )
+    # against 4, 5 and 6: 2 (3) beats 4 (2) and 5 (0), is below 6 (inf): 2; 3 (inf) beats 4 and 5, ties 6: 2.5
+    assert (row["pairs"], row["auc"]) == (6, pytest.approx(4.5 / 6))
+    assert row["infinite_ties"] == pytest.approx(1 / 6), "3 against 6"
+    # against the mixed 4 and 6 only: 2 wins 1, 3 wins 1.5
+    assert (row["pairs_mixed"], row["auc_mixed"]) == (4, pytest.approx(2.5 / 4))
+    assert row["new_share"] == pytest.approx(2 / 6)
+    # no cell holds a word: none unseen, finite or not
+    assert (row["infinite_unseen"], row["finite_unseen"]) == (0.0, 0.0)
+
+
+def planted_run(score_of, moves: int = 300, seed: int = 0):
+    """A path that has seen A and B from its start, and at every move five unvisited candidates: one holding A and C
+    (a boundary: mixed, with C new), two holding A or B alone and two holding A and B (mixed, nothing new), each
+    scored ``score_of(classes present, holds a new class, uniform noise)``."""
+    rng = np.random.default_rng(seed)
+    kinds = [([0, 2], True), ([0], False), ([1], False), ([0, 1], False), ([0, 1], False)]
+    present = np.zeros((moves + 1 + len(kinds) * moves, 3), bool)
+    present[0, [0, 1]] = True
+    present[1 : moves + 1, 0] = True
+    table = []
+    for t in range(moves):
+        for k, (classes, new) in enumerate(kinds):
+            cell = moves + 1 + len(kinds) * t + k
+            present[cell, classes] = True
+            table.append((t, cell, 1.0, score_of(len(classes), new, rng.random()), 1.0))
+    candidates = pd.DataFrame(table, columns=["step", "cell", "coverage", "topic_perplexity", "weight"])
+    path = np.arange(moves + 1)
+    row, = mechanism_rows(RUN, path, candidates, present, lambda cell: np.zeros(0, np.int64), [moves + 1])
+    return row
+
+
+def test_a_score_high_on_any_mixed_cell_beats_homogeneous_ones_but_not_mixed_ones():
+    # heterogeneity and noise, blind to what the path has seen: the boundary beats the homogeneous candidates
+    # always and the mixed ones half the time, 0.75 over all; against the mixed ones alone, a coin
+    blind = planted_run(lambda classes, new, noise: classes + noise)
+    assert blind["auc"] == pytest.approx(0.75, abs=0.03) and blind["auc"] > 0.7
+    assert blind["auc_mixed"] == pytest.approx(0.5, abs=0.05)
+    assert (blind["pairs"], blind["pairs_mixed"]) == (4 * 300, 2 * 300)
+    # a score that ranks the new first, whatever the texture: above every other candidate in both
+    novelty = planted_run(lambda classes, new, noise: new + noise)
+    assert novelty["auc"] == novelty["auc_mixed"] == 1.0
+    # one that ranks the new first only most of the time keeps the mixed AUC high too
+    noisy = planted_run(lambda classes, new, noise: 0.6 * new + noise)
+    assert noisy["auc_mixed"] > 0.75 and abs(noisy["auc_mixed"] - noisy["auc"]) < 0.05
 
 
 def test_each_walker_is_read_under_its_own_score_and_the_others_under_topic_perplexitys():
@@ -242,7 +325,8 @@ def naive_rows(run, path, candidates, present, words, lengths) -> list[dict]:
     score = walker_score(run["weight_function"])
     out = []
     for length in lengths:
-        wins = pairs = moves = chances = infinite = unseen = n = 0
+        wins = pairs = ties = wins_mixed = pairs_mixed = moves = chances = new_candidates = 0
+        infinite = unseen = finite = finite_unseen = n = 0
         gains = []
         for t in range(length - 1):
             at = candidates[candidates["step"] == t]
@@ -254,11 +338,18 @@ def naive_rows(run, path, candidates, present, words, lengths) -> list[dict]:
             seen_words = {w for c in visited for w in words(c)}
             new = [bool(set(np.flatnonzero(present[c])) - seen_classes) for c in at["cell"]]
             other = [int(c) not in visited and not nw for c, nw in zip(at["cell"], new)]
+            mixed = [o and len(np.flatnonzero(present[c])) >= 2 for c, o in zip(at["cell"], other)]
             for s_i, n_i in zip(at[score], new):
-                for s_j, o_j in zip(at[score], other):
+                for s_j, o_j, m_j in zip(at[score], other, mixed):
+                    win = 1.0 if s_i > s_j else 0.5 if s_i == s_j else 0.0
                     if n_i and o_j:
                         pairs += 1
-                        wins += 1.0 if s_i > s_j else 0.5 if s_i == s_j else 0.0
+                        wins += win
+                        ties += s_i == s_j == INF
+                    if n_i and m_j:
+                        pairs_mixed += 1
+                        wins_mixed += win
+            new_candidates += sum(new)
             if any(new):
                 chances += 1
                 p, _ = move_probabilities(at["weight"].to_numpy())
@@ -267,9 +358,13 @@ def naive_rows(run, path, candidates, present, words, lengths) -> list[dict]:
                 gains.append(sum(pi - qi for pi, qi, nw in zip(p, q, new) if nw))
             for c, tp in zip(at["cell"], at["topic_perplexity"]):
                 n += 1
+                holds_unseen = any(w not in seen_words for w in words(c))
                 if tp == INF:
                     infinite += 1
-                    unseen += any(w not in seen_words for w in words(c))
+                    unseen += holds_unseen
+                else:
+                    finite += 1
+                    finite_unseen += holds_unseen
         met, entered = set(), 0
         for c in path[:length]:
             classes = set(np.flatnonzero(present[c]))
@@ -277,17 +372,21 @@ def naive_rows(run, path, candidates, present, words, lengths) -> list[dict]:
             met |= classes
         out.append({
             **run, "path_length": length, "moves": moves, "pairs": pairs, "auc": wins / pairs if pairs else np.nan,
-            "opportunity": chances / moves if moves else np.nan, "gain": np.mean(gains) if gains else np.nan,
+            "infinite_ties": ties / pairs if pairs else np.nan, "pairs_mixed": pairs_mixed,
+            "auc_mixed": wins_mixed / pairs_mixed if pairs_mixed else np.nan,
+            "opportunity": chances / moves if moves else np.nan, "new_share": new_candidates / n if n else np.nan,
+            "gain": np.mean(gains) if gains else np.nan,
             "new_class_cells": entered, "classes_found": len(met), "candidates": n,
             "infinite_share": infinite / n if n else np.nan, "infinite_unseen": unseen / infinite if infinite else np.nan,
+            "finite_unseen": finite_unseen / finite if finite else np.nan,
         })
     return out
 
 
 def random_run(rng: np.random.Generator, walker: str):
-    """A 6 x 6 map, 3 classes, a 40-step walk, its 8-neighbours as candidates, some scores tied or infinite."""
+    """A 6 x 6 map, 5 classes, a 40-step walk, its 8-neighbours as candidates, some scores tied or infinite."""
     side, steps = 6, 40
-    present = rng.random((side * side, 3)) < 0.25
+    present = rng.random((side * side, 5)) < 0.25
     store = {c: rng.integers(0, 30, rng.integers(0, 5)) for c in range(side * side)}
     path, rows_ = [int(rng.integers(side * side))], []
     for t in range(steps - 1):
@@ -299,7 +398,7 @@ def random_run(rng: np.random.Generator, walker: str):
         for g in around:
             visited = g in path
             topic = INF if rng.random() < 0.2 else float(rng.integers(1, 4))
-            word = float(rng.integers(1, 4))
+            word = INF if rng.random() < 0.2 else float(rng.integers(1, 4))
             coverage = INF if visited else float(rng.integers(1, 4))
             weight = 0.0 if visited else (INF if topic == INF and rng.random() < 0.5 else float(rng.integers(0, 4)))
             rows_.append((t, g, coverage, word, topic, weight))
@@ -323,6 +422,7 @@ def test_rows_against_their_slow_twin_on_random_walks(walker, seed):
         for key in MECHANISM_COLUMNS:
             assert g[key] == pytest.approx(w[key], nan_ok=True, abs=1e-12), (key, g["path_length"])
     assert got[-1]["pairs"] > 0 and got[-1]["infinite_share"] > 0
+    assert got[-1]["pairs_mixed"] > 0 and got[-1]["finite_unseen"] > 0
 
 
 # ---- reading a run, summarising, drawing --------------------------------------------------
@@ -361,6 +461,118 @@ def test_summary_means_each_measure_over_the_runs_that_define_it():
     with pytest.raises(ParameterError, match="^table: no column 'auc'") as error:
         summarise_mechanism(table.drop(columns="auc"))
     assert error.value.parameter == "table"
+
+
+def summary_table(runs: list[dict], **keys) -> pd.DataFrame:
+    """A mechanism table of runs given by their measures, the rest 1 (restarts 0, 1, ...)."""
+    return pd.DataFrame([
+        {**RUN, "path_length": 80, **{m: 1.0 for m in MECHANISM_COLUMNS[5:]}, "restart": i, **keys, **run}
+        for i, run in enumerate(runs)
+    ], columns=list(MECHANISM_COLUMNS))
+
+
+#: Three runs of one walker: 2 pairs all won, 50 pairs half won, none; pairs against mixed texture 1 won of 1,
+#: 3 of 10, none; one tie at infinity, in the first run.
+RUNS = [
+    {"pairs": 2, "auc": 1.0, "infinite_ties": 0.5, "pairs_mixed": 1, "auc_mixed": 1.0, "gain": 0.1},
+    {"pairs": 50, "auc": 0.5, "infinite_ties": 0.0, "pairs_mixed": 10, "auc_mixed": 0.3, "gain": 0.3},
+    {"pairs": 0, "auc": np.nan, "infinite_ties": np.nan, "pairs_mixed": 0, "auc_mixed": np.nan, "gain": np.nan},
+]
+
+
+def test_the_summarys_aucs_are_every_runs_wins_over_every_runs_pairs():
+    summary = summarise_mechanism(summary_table(RUNS))
+    assert list(summary.columns) == list(MECHANISM_SUMMARY_COLUMNS) and summary["n"].tolist() == [3]
+    row = summary.iloc[0]
+    # (2 + 25) / (2 + 50), not the runs' mean (1 + 0.5) / 2; a run without pairs adds nothing
+    assert row["auc"] == pytest.approx(float(Fraction(27, 52)))
+    assert row["infinite_ties"] == pytest.approx(float(Fraction(1, 52)))
+    assert row["auc_mixed"] == pytest.approx(float(Fraction(4, 11)))
+    # the delta method over the 2 runs with pairs, by hand: residuals 2 - 2 R = 50/52 and 25 - 50 R = -50/52,
+    # se = sqrt(2 (50/52)^2 / (2 * 1)) / 26 = 25/676, times Student's t with 1 degree of freedom
+    half = stats.t.ppf(0.975, 1) * 25 / 676
+    assert (row["auc_low"], row["auc_high"]) == pytest.approx((27 / 52 - half, 27 / 52 + half))
+    assert row["auc_low"] < row["auc"] < row["auc_high"]
+    # a plain mean's interval is Student's over the runs defining it: gain 0.1 and 0.3
+    assert row["gain"] == pytest.approx(0.2)
+    assert (row["gain_low"], row["gain_high"]) == pytest.approx(stats.t.interval(0.95, 1, loc=0.2, scale=0.1))
+    assert (row["moves_low"], row["moves_high"]) == (1.0, 1.0), "the same in every run: no spread"
+
+
+def test_with_equal_pairs_the_pooled_auc_and_its_interval_are_the_runs_mean_and_its_t_interval():
+    aucs = np.array([0.6, 0.65, 0.7, 0.72])
+    row = summarise_mechanism(summary_table([{"pairs": 10, "auc": a} for a in aucs])).iloc[0]
+    assert row["auc"] == pytest.approx(aucs.mean())
+    want = stats.t.interval(0.95, 3, loc=aucs.mean(), scale=stats.sem(aucs))
+    assert (row["auc_low"], row["auc_high"]) == pytest.approx(want)
+    # clipped to what a share can be
+    top = summarise_mechanism(summary_table([{"pairs": 10, "auc": a} for a in (0.9, 1.0)])).iloc[0]
+    assert top["auc_high"] == 1.0 and top["auc_low"] < 0.95
+
+
+def test_an_interval_needs_two_runs_that_define_the_measure():
+    one = summarise_mechanism(summary_table(RUNS[:1])).iloc[0]
+    assert one["auc"] == 1.0 and one["gain"] == pytest.approx(0.1)
+    assert all(math.isnan(one[f"{m}_{end}"]) for m in ("auc", "auc_mixed", "gain", "moves") for end in ("low", "high"))
+    # three runs, but only one with pairs or a gain
+    sparse = summarise_mechanism(summary_table([RUNS[0], RUNS[2], RUNS[2]])).iloc[0]
+    assert sparse["n"] == 3 and sparse["auc"] == 1.0 and math.isnan(sparse["auc_low"]) and math.isnan(sparse["gain_high"])
+    none = summarise_mechanism(summary_table(RUNS[2:])).iloc[0]
+    assert math.isnan(none["auc"]) and math.isnan(none["auc_mixed"]) and none["pairs"] == 0.0
+
+
+def test_a_table_from_before_the_new_measures_is_summarised_without_them():
+    from curiosity_cli.evaluate.mechanism import ADDED_MEASURES
+
+    new = summary_table(RUNS)
+    old = new.drop(columns=list(ADDED_MEASURES))
+    summary = summarise_mechanism(old)
+    assert list(summary.columns) == list(MECHANISM_SUMMARY_COLUMNS)
+    added = [f"{m}{end}" for m in ADDED_MEASURES for end in ("", "_low", "_high")]
+    assert summary[added].isna().all(axis=None), "nothing invented"
+    kept = [c for c in MECHANISM_SUMMARY_COLUMNS if c not in added]
+    pd.testing.assert_frame_equal(summary[kept], summarise_mechanism(new)[kept])
+    # pooled with a later table: the group whose runs do not all have them has none; a group of later runs has them
+    later = summary_table(RUNS, weight_function="word-perplexity")
+    mixed = summarise_mechanism(pd.concat([old, new.assign(restart=[3, 4, 5]), later], ignore_index=True))
+    assert mixed["n"].tolist() == [6, 3]
+    assert mixed.loc[0, added].isna().all() and mixed.loc[0, "auc"] == pytest.approx(float(Fraction(54, 104)))
+    assert mixed.loc[1, "auc_mixed"] == pytest.approx(float(Fraction(4, 11)))
+    with pytest.raises(ParameterError, match="^table: pairs: expected numbers") as error:
+        summarise_mechanism(new.assign(pairs="many"))
+    assert error.value.parameter == "table"
+
+
+def test_a_recorded_studys_tables_are_summarised_as_they_were_written():
+    from curiosity_cli.evaluate.mechanism import ADDED_MEASURES
+
+    recorded = sorted(Path(__file__).resolve().parents[2].glob("studies/*/seed-*/*/mechanism.csv"))
+    if not recorded:
+        pytest.skip("no recorded study in this checkout")
+    table = pd.read_csv(recorded[0])
+    summary = summarise_mechanism(table)
+    keys = ["dataset", "weight_function", "path_length"]
+    means = table.groupby(keys, sort=False)[["gain", "infinite_share"]].mean()
+    got = summary.set_index(keys).loc[means.index]
+    assert got["gain"].to_numpy() == pytest.approx(means["gain"].to_numpy(), nan_ok=True)
+    assert got["infinite_share"].to_numpy() == pytest.approx(means["infinite_share"].to_numpy(), nan_ok=True)
+    assert summary[list(ADDED_MEASURES)].isna().all(axis=None)
+
+
+def test_the_report_shows_the_new_measures_and_leaves_an_older_tables_empty():
+    from curiosity_cli.evaluate.mechanism import ADDED_MEASURES
+    from curiosity_cli.evaluate.report import _mechanism_section
+
+    table = pd.DataFrame(rows(lengths=(4,)) + rows(lengths=(4,), restart=3))
+    text = "\n".join(_mechanism_section(table, [4]))
+    assert text.startswith("## Does surprise point at what is new?") and "against mixed texture" in text
+    # two equal runs: AUC 0.625 with an interval of no width, ties 0.5, no mixed pair, 3 of 10 candidates new,
+    # unseen words in 3 of 5 infinite candidates and 3 of 5 finite ones
+    assert "| own | topic-perplexity | 0.62 [0.62, 0.62] |  | 0.50 | 0.67 | 0.30 | " in text
+    assert "| 0.50 | 0.60 | 0.60 |" in text
+    older = "\n".join(_mechanism_section(table.drop(columns=list(ADDED_MEASURES)), [4]))
+    assert "| own | topic-perplexity | 0.62 [0.62, 0.62] |  |  | 0.67 |  | " in older
+    assert "| 0.50 | 0.60 |  |" in older
 
 
 def _figure_table(ratio: bool) -> pd.DataFrame:

@@ -21,7 +21,7 @@ from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import Recipe
 from curiosity_cli.explore.grid import run_grid
 from curiosity_cli.explore.runs import read_run
-from curiosity_cli.label.sampling import pixel_words
+from curiosity_cli.label.sampling import map_chains, pixel_words
 from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.words.store import load_store
 
@@ -51,7 +51,8 @@ def test_label_and_evaluate_write_every_table(own_map, tmp_path):
     assert list(mi.columns) == [
         "dataset", "weight_function", "restart", "path_length", "mi_human", "mi_batch", "nmi_human", "nmi_batch",
         "ami_human", "ami_batch", "topics_used", "classes_found", "classes", "mean_recall", "time_to_find",
-        "mi_visited_human", "mi_visited_batch", "mi_unvisited_human", "mi_unvisited_batch", "seed", "replicate",
+        "mi_visited_human", "mi_visited_batch", "mi_unvisited_human", "mi_unvisited_batch", "heldout", "heldout_unvisited",
+        "seed", "replicate",
         "placed_mi_human", "placed_mi_batch", "distinct_cells", "revisit_steps", "boxed_in_steps",
     ]
     # label.check_restarts = 1: restart 0 of each walker is labelled a second time, from a placed start
@@ -157,6 +158,43 @@ def test_labels_hold_the_tables_of_the_pixels_each_path_visited(own_map, tmp_pat
         assert row["mi_visited_human"].item() == pytest.approx(mutual_information(visited[-1]))
         assert row["mi_unvisited_human"].item() == pytest.approx(mutual_information(whole[-1] - visited[-1]))
     assert mi[["mi_visited_human", "mi_unvisited_human", "mi_visited_batch", "mi_unvisited_batch"]].notna().all().all()
+
+
+@pytest.mark.slow
+def test_labels_hold_the_held_out_log_likelihood_of_one_split_every_walker_shares(own_map, tmp_path, monkeypatch):
+    import curiosity_cli.label.heldout as heldout
+
+    config, folder = small_experiment(own_map, tmp_path)
+    observed = []  # the words of each block's held-out chains
+
+    def chains_recorded(store, model, device="cpu", kept=None):
+        observed.append(kept.copy())
+        return map_chains(store, model, device, kept)
+
+    monkeypatch.setattr(heldout, "map_chains", chains_recorded)
+    label_experiment(config, folder, cache_dir=tmp_path / "cache", jobs=1, chains_per_block=1)  # a block per run
+    evaluate_experiment(folder)
+    mi = pd.read_csv(folder / "mi.csv")
+    store = load_store(tmp_path / "cache" / pd.read_csv(folder / "maps.csv")["store"].item())
+    held = heldout.map_split(store, config.seed, "own")
+    assert len(observed) == 8 and 0 < held.sum() < store.words.size
+    for words in observed:  # every walker's and restart's chains ran over the same observed half, never a held-out word
+        np.testing.assert_array_equal(words, ~held)
+    held_cells = np.repeat(np.arange(store.n_cells), store.words_per_cell())[held]
+    for weight in config.explore.weight_functions:
+        for restart in range(2):
+            path = read_run(ExperimentFolder(folder).run("own", weight, restart)).path
+            with np.load(ExperimentFolder(folder).label_file("own", weight, restart)) as npz:
+                bits, words, lengths = npz["heldout_bits"], npz["heldout_words"], npz["lengths"]
+            assert bits.dtype == np.float64 and words.dtype == np.int64 and bits.shape == words.shape == (2, 2)
+            rows = mi[(mi.weight_function == weight) & (mi.restart == restart)].set_index("path_length")
+            for j, length in enumerate(lengths.tolist()):
+                unvisited = ~np.isin(held_cells, path[:length])
+                assert words[j].tolist() == [held.sum(), unvisited.sum()]
+                assert rows.loc[length, "heldout"] == bits[j, 0] / words[j, 0]
+                assert rows.loc[length, "heldout_unvisited"] == bits[j, 1] / words[j, 1]
+    # Φ_p has seen some of the map's terrain: its words are predicted better than by a uniform model
+    assert (mi[["heldout", "heldout_unvisited"]] > np.log2(1 / store.vocabulary_size)).all().all()
 
 
 @pytest.mark.slow
@@ -273,7 +311,10 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
         assert section in report
     # every measure beside MI compared as MI is, from the same pairs
     found, effects = pd.read_csv(folder / "found_effects.csv"), pd.read_csv(folder / "effects.csv")
-    assert set(found["measure"]) == {"nmi", "ami", "classes_found", "mean_recall", "time_to_find", "mi_visited", "mi_unvisited"}
+    assert set(found["measure"]) == {
+        "nmi", "ami", "classes_found", "mean_recall", "time_to_find", "mi_visited", "mi_unvisited", "heldout",
+        "heldout_unvisited",
+    }
     nmi = found[(found["measure"] == "nmi")].drop(columns="measure").reset_index(drop=True)
     assert nmi[["dataset", "path_length", "against", "other", "n"]].equals(effects[["dataset", "path_length", "against", "other", "n"]])
     assert (mi_table := pd.read_csv(folder / "mi.csv"))["ami_human"].le(mi_table["nmi_human"] + 1e-12).all()
