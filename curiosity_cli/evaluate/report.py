@@ -374,7 +374,7 @@ def _found_length(found_summary) -> int | None:
 
 
 def _found_cell(row, digits: int) -> str:
-    return f"{row['mean']:.{digits}f} ± {(row['ci_high'] - row['ci_low']) / 2:.{digits}f}"
+    return f"{row['mean']:.{digits}f} ± {(row['ci_high'] - row['ci_low']) / 2:.{digits}f}".replace("-", _MINUS)
 
 
 def _found_versus(row, digits: int) -> str:
@@ -440,7 +440,8 @@ def _found_section(evaluation: Evaluation) -> list[str]:
             f"{m.title} (of {int(classes)})" if m.name == "classes_found" else f"{m.title} ({m.unit})" if m.unit else m.title
             for m in measures
         ]
-        lines += [f"**{dataset}** (against {_TARGETS[against]}):", "", "| | " + " | ".join(titles) + " |",
+        held_out = " and its held-out words" if any(WORDS in m.columns for m in measures) else ""
+        lines += [f"**{dataset}** (against {_TARGETS[against]}{held_out}):", "", "| | " + " | ".join(titles) + " |",
                   "|---|" + "---|" * len(measures)]
         for weight in _order(block["weight_function"]):
             rows = block[block["weight_function"] == weight].set_index("measure")

@@ -309,6 +309,8 @@ def test_the_commands_through_the_cli(own_map, tmp_path):
     assert "end at the same mean MI" in report
     for section in ("## Paired effect sizes", "## What each walker found at 12 steps"):
         assert section in report
+    # the held-out log-likelihood's columns are scored against the map's words, not its labels
+    assert "**own** (against Z_h and its held-out words):" in report
     # every measure beside MI compared as MI is, from the same pairs
     found, effects = pd.read_csv(folder / "found_effects.csv"), pd.read_csv(folder / "effects.csv")
     assert set(found["measure"]) == {
