@@ -40,8 +40,7 @@ def map_split(store: WordStore, experiment_seed: int, name: str) -> np.ndarray:
     map's name only (:data:`~curiosity_cli.seeds.SPLIT_TAG`)."""
     from curiosity_cli.seeds import SPLIT_TAG, name_key
 
-    word_cells = np.repeat(np.arange(store.n_cells), store.words_per_cell())
-    return split_words(word_cells, np.random.SeedSequence((experiment_seed, name_key(name), SPLIT_TAG)))
+    return split_words(store.word_cells(), np.random.SeedSequence((experiment_seed, name_key(name), SPLIT_TAG)))
 
 
 def split_words(word_cells: np.ndarray, seed: np.random.SeedSequence) -> np.ndarray:
@@ -98,8 +97,7 @@ def heldout_chains(
     scores : list of (H,) float64 ndarrays
         Per path of ``chains``, :func:`word_log2` of each held-out word, in the store's order.
     """
-    word_cells = np.repeat(np.arange(store.n_cells), store.words_per_cell())
-    words, cells = store.words[held], word_cells[held]
+    words, cells = store.words[held], store.word_cells()[held]
     chains = map_chains(store, model, device, kept=~held)
     for j, active in advance_chains(chains, paths, seeds, sweeps=sweeps, warm_sweeps=warm_sweeps):
         _, around = chains.counts()

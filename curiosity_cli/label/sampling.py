@@ -75,7 +75,7 @@ def map_chains(store: WordStore, model: ModelConfig, device: str = "cpu", kept: 
     """
     from curiosity_cli.topics.chains import FrozenChains
 
-    words, cells = store.words, np.repeat(np.arange(store.n_cells), store.words_per_cell())
+    words, cells = store.words, store.word_cells()
     if kept is not None:
         words, cells = words[kept], cells[kept]
     return FrozenChains(

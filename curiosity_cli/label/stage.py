@@ -236,7 +236,7 @@ def label_block(
 
     store, pixel_words, human, batch, cell_classes = arrays
     k = config.model.topics
-    word_cells = np.repeat(np.arange(store.n_cells), store.words_per_cell())
+    word_cells = store.word_cells()
     chains = []  # (run index, array-name prefix: how the chain starts)
     for index, run in enumerate(runs):
         chains.append((index, ""))
@@ -275,11 +275,10 @@ def label_block(
         j, active, labels = step
         owners = [chains[c][0] for c in active]  # the run of each column
         firsts = [column for column, c in enumerate(active) if not chains[c][1]]
-        # the first chains' tables again, of only the pixels whose word lies in a cell their path had visited
-        visited = np.stack([
-            visited_words(runs[owners[column]].path, lengths[owners[column]][j], word_cells, store.n_cells)
-            for column in firsts
-        ], axis=1)
+        # per first chain, the cells its path had visited: its tables again over their words' pixels, and its
+        # held-out words scored apart in the others
+        seen = [visited_cells(runs[owners[column]].path, lengths[owners[column]][j], store.n_cells) for column in firsts]
+        visited = np.stack([cells[word_cells] for cells in seen], axis=1)
         for against, reference in (("human", human), ("batch", batch)):
             if reference is None:
                 continue
@@ -287,11 +286,10 @@ def label_block(
                 tables[owners[column]].setdefault(chains[active[column]][1] + against, []).append(table)
             for column, table in zip(firsts, reference.tables(labels[:, firsts], k, visited)):
                 tables[owners[column]].setdefault(VISITED_PREFIX + against, []).append(table)
-        for column, score in zip(firsts, scores):
-            index = owners[column]
-            bits, words = heldout_sums(score, ~visited_words(runs[index].path, lengths[index][j], held_cells, store.n_cells))
-            tables[index].setdefault(HELDOUT_BITS, []).append(bits)
-            tables[index].setdefault(HELDOUT_WORDS, []).append(words)
+        for column, cells, score in zip(firsts, seen, scores):
+            bits, words = heldout_sums(score, ~cells[held_cells])
+            tables[owners[column]].setdefault(HELDOUT_BITS, []).append(bits)
+            tables[owners[column]].setdefault(HELDOUT_WORDS, []).append(words)
         for column, c in enumerate(active):
             index, prefix = chains[c]
             length = lengths[index][j]
@@ -324,14 +322,14 @@ def label_meta(run_meta: dict, inputs: MapInputs, config: ExperimentConfig, huma
     return meta
 
 
-def visited_words(path: np.ndarray, length: int, word_cells: np.ndarray, n_cells: int) -> np.ndarray:
-    """(N,) bool ndarray: which words lie in a cell of ``path``'s first ``length`` steps (the words Φ_p holds then).
+def visited_cells(path: np.ndarray, length: int, n_cells: int) -> np.ndarray:
+    """(n_cells,) bool ndarray: the cells of ``path``'s first ``length`` steps, whose words Φ_p holds then.
 
-    ``word_cells`` (N,) is each word's cell of the ``n_cells``, ``path`` (L,) the row-major cell of each step.
+    ``path`` (L,) is the row-major cell of each step.
     """
     visited = np.zeros(n_cells, bool)
     visited[np.asarray(path[:length], np.int64)] = True
-    return visited[word_cells]
+    return visited
 
 
 def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordStore, store_path: str) -> np.ndarray:

@@ -81,6 +81,10 @@ class WordStore:
         """(n_cells,) int64 ndarray of word counts."""
         return np.diff(self.cell_start)
 
+    def word_cells(self) -> np.ndarray:
+        """(N,) int64 ndarray: the cell of each word, in the store's order."""
+        return np.repeat(np.arange(self.n_cells), self.words_per_cell())
+
     def count_by_type(self) -> dict[str, int]:
         """Number of words of each kind."""
         return {
