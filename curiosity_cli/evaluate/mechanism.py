@@ -530,6 +530,8 @@ def summarise_mechanism(table):
     """
     import pandas as pd
 
+    from curiosity_cli.evaluate.statistics import mean_interval
+
     if not isinstance(table, pd.DataFrame):
         raise ParameterError(f"table: got {type(table).__name__}, expected a pandas DataFrame", parameter="table")
     needed = [c for c in MECHANISM_COLUMNS if c not in ("restart", "replicate", *ADDED_MEASURES)]
@@ -556,7 +558,8 @@ def summarise_mechanism(table):
             elif m in PAIR_WEIGHTED:
                 row[m], row[f"{m}_low"], row[f"{m}_high"] = _pooled_share(values[m][at], values[PAIR_WEIGHTED[m]][at])
             else:
-                row[m], row[f"{m}_low"], row[f"{m}_high"] = _mean_interval(values[m][at])
+                defined = values[m][at]
+                row[m], row[f"{m}_low"], row[f"{m}_high"] = mean_interval(defined[~np.isnan(defined)])
         rows.append(row)
     out = pd.DataFrame(rows, columns=list(MECHANISM_SUMMARY_COLUMNS)).astype({"n": np.int64})
     rank = [out[k].map({v: i for i, v in enumerate(order[k])}) for k in keys[:2]]
@@ -571,16 +574,6 @@ def _t_quantile(runs: int) -> float:
     from curiosity_cli.evaluate.statistics import CONFIDENCE
 
     return float(stats.t.ppf(0.5 + CONFIDENCE / 2, runs - 1))
-
-
-def _mean_interval(values: np.ndarray) -> tuple[float, float, float]:
-    """The mean of the runs' defined values (NaN none) and its Student-t interval (NaN under 2 runs)."""
-    values = values[~np.isnan(values)]
-    if values.size < 2:
-        return (float(values[0]) if values.size else np.nan), np.nan, np.nan
-    mean = float(values.mean())
-    half = _t_quantile(values.size) * float(values.std(ddof=1)) / np.sqrt(values.size)
-    return mean, mean - half, mean + half
 
 
 def _pooled_share(shares: np.ndarray, pairs: np.ndarray) -> tuple[float, float, float]:

@@ -231,15 +231,32 @@ def paired_difference(a: np.ndarray, b: np.ndarray, confidence: float = CONFIDEN
         Mean difference, lower and upper bound. The bounds are NaN for fewer than two
         pairs, and both the mean when every difference is the same.
     """
+    return mean_interval(np.asarray(a, np.float64) - np.asarray(b, np.float64), confidence)
+
+
+def mean_interval(values: np.ndarray, confidence: float = CONFIDENCE) -> tuple[float, float, float]:
+    """Mean of ``values`` and its Student-t confidence interval.
+
+    Parameters
+    ----------
+    values : (n,) float ndarray
+    confidence : float
+        Of the interval, in (0, 1).
+
+    Returns
+    -------
+    (float, float, float)
+        Mean, lower and upper bound: all NaN for no values, the bounds NaN for one.
+    """
     from scipy import stats
 
-    diff = np.asarray(a, np.float64) - np.asarray(b, np.float64)
-    if diff.size == 0:
+    values = np.asarray(values, np.float64)
+    if values.size == 0:
         return np.nan, np.nan, np.nan
-    mean = float(diff.mean())
-    if diff.size < 2:
+    mean = float(values.mean())
+    if values.size < 2:
         return mean, np.nan, np.nan
-    half = float(stats.t.ppf(0.5 + confidence / 2, diff.size - 1) * diff.std(ddof=1) / np.sqrt(diff.size))
+    half = float(stats.t.ppf(0.5 + confidence / 2, values.size - 1) * values.std(ddof=1) / np.sqrt(values.size))
     return mean, mean - half, mean + half
 
 
