@@ -4,7 +4,10 @@
 finishes; this does the same afterwards for every finished combination folder
 ``specification-NAME_seed-S`` of a study's results (``results/<study>-sweep/``): its
 tables, ``config.yaml``, ``provenance.yaml``, ``maps.csv`` and ``record.yaml`` go to
-``studies/<study>/seed-S/NAME/``. A combination already recorded is left as it is; one
+``studies/<study>/seed-S/NAME/``, with ``runs.csv`` (each run's path and Φ_p digests). A
+combination already recorded is left as it is, and its runs are checked against the
+record's: one computed again that explored other runs is named, and the exit code is 1
+(a folder recorded before ``runs.csv`` was kept cannot be checked, and is counted). One
 whose tables are not a current set (unfinished, or edited) is named and skipped.
 
     python scripts/record_study.py results/multiverse-sweep studies/multiverse
@@ -20,7 +23,7 @@ import tempfile
 from pathlib import Path
 
 from curiosity_cli.errors import CuriosityError
-from curiosity_cli.study.record import keep_experiment
+from curiosity_cli.study.record import RUNS, keep_experiment, same_runs
 
 COMBINATION = re.compile(r"^specification-(?P<specification>.+)_seed-(?P<seed>\d+)$")
 #: --smoke's study: one combination, two walkers of two restarts of 10 steps on the smallest map, one sweep.
@@ -32,25 +35,34 @@ SMOKE = [
 
 def record_study(results: Path, record: Path) -> int:
     """Record every finished combination of ``results`` in ``record`` (module docstring); return the exit code."""
-    recorded, kept, skipped = 0, 0, []
+    recorded, kept, unchecked, skipped, differ = 0, 0, 0, [], []
     for folder in sorted(p for p in results.iterdir() if p.is_dir()):
         match = COMBINATION.match(folder.name)
         if match is None:
             continue
         target = record / f"seed-{match['seed']}" / match["specification"]
-        if target.is_dir():
-            kept += 1
-            continue
         try:
+            if target.is_dir():
+                kept += 1
+                if not (target / RUNS).is_file():
+                    unchecked += 1
+                elif (difference := same_runs(target, folder)) is not None:
+                    differ.append(f"{folder.name}: {difference}")
+                continue
             keep_experiment(folder, target)
         except CuriosityError as exc:
             skipped.append(f"{folder.name}: {exc}")
             continue
         recorded += 1
-    print(f"recorded {recorded} combinations in {record} ({kept} were recorded already)")
+    print(
+        f"recorded {recorded} combinations in {record} ({kept} were recorded already: "
+        f"{kept - unchecked - len(differ)} explored the recorded runs, {unchecked} recorded without runs to check)"
+    )
     for line in skipped:
         print(f"skipped {line}", file=sys.stderr)
-    return 0
+    for line in differ:
+        print(f"not the recorded runs: {line}", file=sys.stderr)
+    return 1 if differ else 0
 
 
 def smoke_study(folder: Path) -> Path:

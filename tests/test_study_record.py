@@ -13,7 +13,7 @@ from test_sweep import sweep
 
 from curiosity_cli import api
 from curiosity_cli.errors import UsageError
-from curiosity_cli.study.record import RECORD_FILE, TABLES
+from curiosity_cli.study.record import RECORD_FILE, RUNS, TABLES, RecordError, run_fingerprints, same_runs
 
 #: One specification keeps the study small; the record's layout does not depend on how many.
 ONE = {"default": {}}
@@ -33,7 +33,7 @@ def test_a_study_keeps_its_seeds_takes_them_later_and_they_are_the_bytes_computi
     assert first.exit_code == 0, first.output
     assert _recorded(record) == ["seed-1/default", "seed-2/default"]
     for folder in record.glob("seed-*/default"):
-        assert sorted(p.name for p in folder.iterdir()) == sorted([*TABLES, RECORD_FILE]), "runs and labels not kept"
+        assert sorted(p.name for p in folder.iterdir()) == sorted([*TABLES, RUNS, RECORD_FILE]), "labels not kept"
     kept = yaml.safe_load((record / "seed-1" / "default" / RECORD_FILE).read_text())
     assert kept["recipes"]["grid"] == {"weight_functions": ["random-walk", "stochastic-coverage", "topic-perplexity"], "restarts": 2}
     assert set(kept["recipes"]["maps"]["own"]) == {"run", "batch", "label"}
@@ -61,6 +61,14 @@ def test_a_study_keeps_its_seeds_takes_them_later_and_they_are_the_bytes_computi
     for name in ("specifications.csv", "specifications-batch.csv"):
         assert (folder / name).read_bytes() == (computed / name).read_bytes(), f"{name}: the pooled curve"
 
+    # the record pins the runs a new measure would need: those computed again are the recorded ones, run by run
+    seed_1, again_1 = record / "seed-1" / "default", computed / "specification-default_seed-1"
+    assert same_runs(seed_1, again_1) is None
+    runs = run_fingerprints(again_1)
+    assert list(runs.columns) == ["dataset", "weight_function", "restart", "cells", "phi_80"]
+    assert len(runs) == 3 * 2 and runs["cells"].str.split().map(len).tolist() == [80] * 6
+    assert same_runs(record / "seed-2" / "default", again_1).startswith("own/random-walk/0: its path is not the recorded one")
+
 
 @pytest.mark.slow
 def test_a_record_made_otherwise_or_edited_is_refused_naming_the_difference_before_anything_runs(own_map, tmp_path):
@@ -77,10 +85,11 @@ def test_a_record_made_otherwise_or_edited_is_refused_naming_the_difference_befo
     )
     assert not (tmp_path / "other").exists(), "refused before anything is written"
 
-    mi = seed / "mi.csv"
-    mi.write_text(mi.read_text().replace(",", ";", 1))  # the same size: found by its digest
+    mi, table = seed / "mi.csv", (seed / "mi.csv").read_text()
+    mi.write_text(table.replace(",", ";", 1))  # the same size: found by its digest
     edited = sweep(config, tmp_path / "edited", "--record", str(record), "--sweep", "seed=1")
     assert edited.exit_code == 1 and f"Error: {mi}: not the table that was recorded (" in edited.output
+    mi.write_text(table)
 
     kept = (seed / RECORD_FILE).read_text()
     written = yaml.safe_load(kept)
@@ -91,6 +100,14 @@ def test_a_record_made_otherwise_or_edited_is_refused_naming_the_difference_befo
         assert refused.exit_code == 1, refused.output
         assert refused.output.strip().splitlines()[-1].startswith(f"Error: {seed}/{RECORD_FILE}: expected a mapping of tables")
     (seed / RECORD_FILE).write_text(kept)
+
+    # a folder recorded before runs.csv was kept is still taken: it has only no runs to check a recomputation against
+    (seed / RUNS).unlink()
+    (seed / RECORD_FILE).write_text(yaml.safe_dump({**written, "tables": {k: v for k, v in written["tables"].items() if k != RUNS}}))
+    older = sweep(config, tmp_path / "older", "--record", str(record), "--sweep", "seed=1")
+    assert older.exit_code == 0 and older.stderr.count("(taken from ") == 1, older.output
+    with pytest.raises(RecordError, match="recorded before runs were kept"):
+        same_runs(seed, tmp_path / "first" / "tiny-sweep" / "specification-default_seed-1")
 
     (seed / "headline.csv").unlink()
     missing = sweep(config, tmp_path / "missing", "--record", str(record), "--sweep", "seed=1")

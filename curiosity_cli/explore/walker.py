@@ -84,6 +84,18 @@ class SparseCounts:
         out[self.words, self.topics] = self.counts
         return out
 
+    def hash_into(self, digest) -> None:
+        """Feed the counts to a ``hashlib`` digest: words, topics and counts as int64, then the shape.
+
+        One spelling for every content key of Φ_p: a label file's key
+        (:func:`~curiosity_cli.label.shared_items.label_key`) and a study record's runs
+        (:mod:`~curiosity_cli.study.record`) read the same bytes, whatever integer types a
+        checkpoint was stored in.
+        """
+        for array in (self.words, self.topics, self.counts):
+            digest.update(np.ascontiguousarray(array, np.int64).tobytes())
+        digest.update(np.asarray(self.shape, np.int64).tobytes())
+
 
 @dataclass(frozen=True)
 class Exploration:

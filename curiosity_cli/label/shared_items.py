@@ -66,10 +66,7 @@ def label_key(recipe_inputs: dict, run_meta: dict, checkpoints: dict, path: np.n
     """
     digest = hashlib.sha256()
     for length in sorted(checkpoints):
-        counts = checkpoints[length]
-        for array in (counts.words, counts.topics, counts.counts):
-            digest.update(np.ascontiguousarray(array, np.int64).tobytes())
-        digest.update(np.asarray(counts.shape, np.int64).tobytes())
+        checkpoints[length].hash_into(digest)
     digest.update(np.ascontiguousarray(path, np.int64).tobytes())
     content = {key: run_meta[key] for key in ("seed", "restart", "weight_function", "checkpoints", "store", "n_topics")}
     inputs = {**{k: v for k, v in recipe_inputs.items() if k != "run"}, "run_content": content, "counts": digest.hexdigest()}

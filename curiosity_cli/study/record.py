@@ -11,6 +11,7 @@ study keeps a record (a config that declares specifications and sweeps nothing b
         mi.csv  steering.csv  mechanism.csv     per run: what pooling reads
         headline.csv  revisits.csv              per map: SWEEP.md's headline of that experiment
         config.yaml  provenance.yaml  maps.csv  how they were made (the experiment's own files)
+        runs.csv                                per run: its path and the SHA-256 of its Φ_p at each checkpoint
         record.yaml                             the tables' sizes and SHA-256, and the recipes below
 
 A recorded folder is taken only while it is what computing it now would make:
@@ -22,6 +23,15 @@ differ (another label setting, an image changed, a new label format) is refused 
 anything runs, naming the difference, and so is a table edited since it was recorded.
 Runs and label files are not kept, so a recorded seed is never labelled or evaluated
 again: computing it again elsewhere gives the same tables, byte for byte.
+
+A new measure needs the runs again (their Φ_p to label, their paths). ``runs.csv`` pins
+them: computing a recorded seed again explores the same runs (its recipes say so), and
+:func:`same_runs` checks that they are, path by path and Φ_p by Φ_p, before the new
+measure is read beside the record's. Φ_p itself is not kept: compressed, it is as large as
+a label file's tables (about 300 KB for a map's 40 runs at one checkpoint: some 20 MB for
+the positive control's three seeds and 80 MB for one seed of the multiverse), where
+``runs.csv`` is about 20 KB a map. Folders recorded before ``runs.csv`` existed are still
+taken; they have nothing to check a recomputation against.
 """
 
 from __future__ import annotations
@@ -30,6 +40,8 @@ import os
 import shutil
 from pathlib import Path
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
@@ -44,6 +56,8 @@ if TYPE_CHECKING:
 TABLES = (
     "mi.csv", "steering.csv", "mechanism.csv", "headline.csv", "revisits.csv", "config.yaml", "provenance.yaml", "maps.csv",
 )
+#: Each recorded run's path and Φ_p digests (module docstring); folders recorded before it existed lack it.
+RUNS = "runs.csv"
 #: What a recorded folder was made from (module docstring).
 RECORD_FILE = "record.yaml"
 #: The keys a study's record is filed by: its specification, then its seed.
@@ -151,13 +165,13 @@ class StudyRecord:
         tables = record.get("tables") if isinstance(record, dict) else None
         recorded = record.get("recipes") if isinstance(record, dict) else None
         # every table, each with its size and digest: a record that leaves one out would let it pass unchecked
-        whole = isinstance(tables, dict) and set(tables) == set(TABLES) and all(
+        whole = isinstance(tables, dict) and set(TABLES) <= set(tables) <= {*TABLES, RUNS} and all(
             isinstance(entry, dict) and {"size", "sha256"} <= set(entry) for entry in tables.values()
         )
         if not whole or not isinstance(recorded, dict) or not {"maps", "grid"} <= set(recorded):
             raise RecordError(
                 f"{where}/{RECORD_FILE}: expected a mapping of tables (the size and sha256 of each of "
-                f"{', '.join(TABLES)}) and recipes (maps, grid), as a record is written; {remedy}"
+                f"{', '.join(TABLES)}, and of {RUNS} if kept) and recipes (maps, grid), as a record is written; {remedy}"
             )
         if (change := changed(folder, tables)) is not None:
             path, why = change
@@ -185,7 +199,8 @@ class StudyRecord:
 
 
 def keep_experiment(experiment: Path, target: Path) -> Path:
-    """Copy an evaluated experiment's :data:`TABLES` to ``target`` with its ``record.yaml``; returns ``target``.
+    """Copy an evaluated experiment's :data:`TABLES` to ``target`` with its :data:`RUNS` and ``record.yaml``;
+    returns ``target``.
 
     As :meth:`StudyRecord.keep`, for any experiment folder (``scripts/record_study.py``).
     """
@@ -201,7 +216,8 @@ def keep_experiment(experiment: Path, target: Path) -> Path:
     try:
         for name in TABLES:
             shutil.copyfile(experiment / name, staging / name)
-        record = {"tables": records(staging, list(TABLES)), "recipes": recipes(opened)}
+        run_fingerprints(experiment).to_csv(staging / RUNS, index=False)
+        record = {"tables": records(staging, [*TABLES, RUNS]), "recipes": recipes(opened)}
         # the staging folder is renamed whole below: its files need no rename of their own
         (staging / RECORD_FILE).write_text(
             "# What the tables here were made from: curiosity reproduce --record takes them only while the\n"
@@ -216,6 +232,96 @@ def keep_experiment(experiment: Path, target: Path) -> Path:
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return target
+
+
+def run_fingerprints(experiment: Path):
+    """Every run of an experiment folder: its path and the digest of its Φ_p at each checkpoint.
+
+    Parameters
+    ----------
+    experiment : Path
+        An explored experiment folder.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per run, sorted by ``dataset``, ``weight_function``, ``restart``: ``cells``
+        (the path's cells, row-major, space-separated) and ``phi_<L>`` for each checkpoint
+        length ``L``: the SHA-256 of Φ_p after ``L`` steps
+        (:meth:`~curiosity_cli.explore.walker.SparseCounts.hash_into`).
+
+    Raises
+    ------
+    RunError
+        A run folder that is not whole (:func:`~curiosity_cli.explore.runs.read_run`).
+    """
+    import hashlib
+
+    import pandas as pd
+
+    from curiosity_cli.experiment.layout import ExperimentFolder
+    from curiosity_cli.explore.runs import read_run
+    from curiosity_cli.explore.walker import SparseCounts
+
+    rows = []
+    for folder in ExperimentFolder(experiment).run_folders():
+        run = read_run(folder)
+        row = {
+            "dataset": run.meta["dataset"], "weight_function": run.meta["weight_function"],
+            "restart": run.meta["restart"], "cells": " ".join(map(str, run.path)),
+        }
+        for length in run.meta["checkpoints"]:
+            digest = hashlib.sha256()
+            SparseCounts.of(run.phi(length)).hash_into(digest)
+            row[f"phi_{length}"] = digest.hexdigest()
+        rows.append(row)
+    return pd.DataFrame(rows).sort_values(["dataset", "weight_function", "restart"], ignore_index=True)
+
+
+def same_runs(recorded: Path, experiment: Path) -> str | None:
+    """Whether an experiment explored the runs a recorded folder pins: ``None`` when every run's path and Φ_p
+    are the recorded ones, else the first difference in words.
+
+    Parameters
+    ----------
+    recorded : Path
+        A recorded folder (``<record>/seed-<S>/<specification>``) with its :data:`RUNS`.
+    experiment : Path
+        The same combination computed again.
+
+    Raises
+    ------
+    RecordError
+        ``recorded`` has no :data:`RUNS` (recorded before it was kept), or it is not a table of runs.
+    """
+    import pandas as pd
+
+    path = Path(recorded) / RUNS
+    if not path.is_file():
+        raise RecordError(f"{display_path(path)}: not there; the folder was recorded before runs were kept")
+    try:
+        kept = pd.read_csv(path, dtype=str, keep_default_na=False)
+    except (ValueError, OSError) as exc:
+        raise RecordError(f"{display_path(path)}: unreadable ({exc})") from None
+    runs = ["dataset", "weight_function", "restart"]
+    if list(kept.columns[:4]) != [*runs, "cells"] or not all(name.startswith("phi_") for name in kept.columns[4:]):
+        raise RecordError(
+            f"{display_path(path)}: expected columns {', '.join(runs)}, cells, phi_<length>..., as a record writes"
+        )
+    now = run_fingerprints(experiment).astype(str)
+    if list(now.columns) != list(kept.columns):
+        return f"the runs have columns {', '.join(now.columns)}, the record {', '.join(kept.columns)}"
+    if len(now) != len(kept):
+        return f"{len(now)} runs, the record {len(kept)}"
+    if (other := np.flatnonzero((now[runs] != kept[runs]).any(axis=1))).size:
+        return f"run {'/'.join(now.loc[other[0], runs])} where the record has {'/'.join(kept.loc[other[0], runs])}"
+    for column in kept.columns[3:]:
+        differ = np.flatnonzero(now[column].to_numpy() != kept[column].to_numpy())
+        if differ.size:
+            run = "/".join(now.loc[differ[0], runs])
+            what = "path" if column == "cells" else f"Φ_p after {column.removeprefix('phi_')} steps"
+            return f"{run}: its {what} is not the recorded one ({differ.size} runs differ so)"
+    return None
 
 
 def _maps(combination: Combination, loaded: dict) -> dict:
