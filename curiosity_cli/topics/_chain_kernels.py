@@ -34,10 +34,12 @@ none of them reads a count another one changes: the GPU kernels
 (``_chain_kernels_cuda.py``) resample all cells of a colour at once and give these
 kernels' bytes.
 
-The sweep keeps every count as an integer and relies on ``ng[c] = ncz[c] + the sum of
-ncz over c's neighbours`` holding between cells (the start kernel makes it so, and every
-cell's pass keeps it): while a cell is resampled only its own words change its
-neighbourhood sum, so the change of ``ng[c]`` over the pass is its own counts' change.
+The sweep keeps every count in ``ncz`` and ``ng`` as an integer (a cell's pass holds its
+copy of ``ng[cell]`` as float32 holding the same integers, exact below 2**24, far more words
+than a neighbourhood holds) and relies on ``ng[c] = ncz[c] + the sum of ncz over c's
+neighbours`` holding between cells (the start kernel makes it so, and every cell's pass
+keeps it): while a cell is resampled only its own words change its neighbourhood sum, so
+the change of ``ng[c]`` over the pass is its own counts' change.
 ``scripts/bench_chain_kernel.py`` times the sweep against an earlier commit's, on the
 same inputs, and checks that the two leave the same bytes.
 
@@ -49,6 +51,22 @@ That pass waits on loading Φ rows and the tables, not on its chain of additions
 the chain in two made it slower too). Grouping words by id would not pay either: 44 % of
 words already repeat the word before, and 87 % find their row of ``phiw`` among the last 32
 distinct ones; merging 8 or 32 cells' words by id, each cell's in order, adds under 2 points.
+
+Where a word's time goes (aerial-mosaic, R = 16, about 560 cycles a word for the 16 chains,
+variants timed beside the kernel and dropped): the running sum is a chain of 64 dependent
+float32 additions per vector (about 190 cycles, which no byte-keeping change shortens); the
+rest is the draw after it (the search, the count changes, and the next word waiting on them).
+Misses are small: one fixed row of ``phiw`` for every word saves 15 %; prefetching the next
+cell's rows of ``ng`` and ``ncz`` (the ``_settle`` traffic), or ``_settle`` on one cached row,
+saves nothing, nor does a prefetch of the next words' ``phiw`` rows (6 % slower). The random
+numbers are vector code already; drawing a whole cell's uniforms before its words saves nothing.
+The table of counts in float32 (one table, no separate factors, each change one addition) with
+unsigned topic indices is 1.10x to 1.17x (11.4 to 11.5 against 12.6 to 13.4 ns a word-sample
+per chain, CPU time, interleaved against 5073e36; reef-mosaic 1.09x), the same bytes.
+Tried and left: the search without its early stop, or summing each block's eight comparisons as
+a tree or into two accumulators (the search waits on a chain of 64 integer additions): LLVM
+then vectorises across topics or relinks the sums into one chain, 1.2x to 3x slower; taking the
+next word out of the counts before the search instead of after the draw: no change.
 """
 
 from __future__ import annotations
@@ -103,8 +121,8 @@ def _count(cell, k, r, ncz, ng, table):
 @njit
 def _last_positive(phiw, w, r, counts, alpha):
     """The last topic whose weight ``phiw[w, k, r] * (float32(counts[k, r]) + alpha)`` is positive in chain ``r``
-    (``counts``: (K, R) neighbourhood sums, the word left out): the draw when rounding left the target at or past
-    the total."""
+    (``counts``: (K, R) neighbourhood sums, the word left out, integers or float32 holding integers): the draw
+    when rounding left the target at or past the total."""
     k = phiw.shape[1] - 1
     while k > 0 and phiw[w, k, r] * (np.float32(counts[k, r]) + alpha) <= 0:
         k -= 1
@@ -155,13 +173,15 @@ def sweep_chains_kernel(cells, cell_first, cell_count, words, topics, phiw, ncz,
     ``keys`` is a tuple, so the number of chains is known when compiling: the loops over
     chains become vector code, and the per-chain sums live in registers (stack arrays).
     A cell's pass works on its own copy of the cell's neighbourhood sums ``ng[cell]``
-    (the only counts it reads: its neighbours are of other colours) in stack tables
-    (:func:`~curiosity_cli.topics._intrinsics.stack_table`): the integers, and beside
-    them each one's factor ``float32(n) + alpha``, brought up to date with each count
-    change, so that a weight is one product of two loads. Each word is taken out of the
+    (the only counts it reads: its neighbours are of other colours) in a stack table
+    (:func:`~curiosity_cli.topics._intrinsics.stack_table`) of float32 holding the
+    integers exactly (below 2**24, so ``n - 1`` and ``n + 1`` are exact too): a weight's
+    factor ``n + alpha`` is then the same float32 as ``float32(n) + alpha``, and each
+    count change is one float addition to one table. Each word is taken out of the
     counts before its weights and counted at its new topic after the draw (exact
-    leave-one-out). One pass over the topics makes the running sums and keeps them;
-    the draw counts, per chain, the sums at or below its target, eight topics at a time,
+    leave-one-out); the topics index the table as unsigned integers, which numba does
+    not check for negative (wrapped) indices. One pass over the topics makes the running
+    sums and keeps them; the draw counts, per chain, the sums at or below its target, eight topics at a time,
     and stops once every chain's sum has passed its target (the sums never decrease).
     After the cell, :func:`_settle` writes its counts back.
     """
@@ -173,29 +193,23 @@ def sweep_chains_kernel(cells, cell_first, cell_count, words, topics, phiw, ncz,
     total = stack_array(keys, np.float32)
     targets = stack_array(keys, np.float32)
     chosen = stack_array(keys, np.int32)
-    counts = stack_table(MAX_TOPICS, keys, np.int32)  # ng[cell], the word being drawn left out
-    factors = stack_table(MAX_TOPICS, keys, np.float32)  # float32(counts) + alpha
+    counts = stack_table(MAX_TOPICS, keys, np.float32)  # ng[cell] as exact float32 integers, the drawn word left out
     running = stack_table(MAX_TOPICS, keys, np.float32)  # the running sums of the weights
     for j in range(cells.shape[0]):
         cell = cells[j]
         for k in range(n_topics):
             for r in range(n_chains):
-                n = ng[cell, k, r]
-                counts[k, r] = n
-                factors[k, r] = np.float32(n) + alpha
+                counts[k, r] = np.float32(ng[cell, k, r])
         for r in range(n_chains):
             states[r] = stream_start(keys[r], counter, cell)
         for i in range(cell_first[cell], cell_first[cell] + cell_count[cell]):
             w = words[i]
             for r in range(n_chains):
-                old = topics[i, r]
-                n = counts[old, r] - 1
-                counts[old, r] = n
-                factors[old, r] = np.float32(n) + alpha
+                counts[np.uint64(topics[i, r]), r] -= 1  # unsigned: an index never negative, never wrapped
                 total[r] = 0
             for k in range(n_topics):
                 for r in range(n_chains):
-                    total[r] += phiw[w, k, r] * factors[k, r]
+                    total[r] += phiw[w, k, r] * (counts[k, r] + alpha)
                     running[k, r] = total[r]
             for r in range(n_chains):
                 states[r], bits = next_state(states[r])
@@ -212,10 +226,7 @@ def sweep_chains_kernel(cells, cell_first, cell_count, words, topics, phiw, ncz,
             for r in range(n_chains):
                 topics[i, r] = chosen[r]
             for r in range(n_chains):
-                new = chosen[r]
-                n = counts[new, r] + 1
-                counts[new, r] = n
-                factors[new, r] = np.float32(n) + alpha
+                counts[np.uint64(chosen[r]), r] += 1
         _settle(cell, counts, ncz, ng, table, n_topics, n_chains)
 
 
@@ -246,12 +257,13 @@ def _count_at_or_below(running, targets, chosen, n_topics, n_chains):
 
 @njit(inline="always")
 def _settle(cell, counts, ncz, ng, table, n_topics, n_chains):
-    """After a pass over ``cell`` that kept only its copy ``counts`` of ``ng[cell]`` current: the change is the
-    cell's own words' (its neighbours are of other colours, unchanged meanwhile), so it goes to ``ng[cell]``,
-    to the cell's own counts ``ncz[cell]`` and to every neighbour's sum. ``counts`` is left holding the change."""
+    """After a pass over ``cell`` that kept only its copy ``counts`` of ``ng[cell]`` current (float32 holding
+    integers): the change is the cell's own words' (its neighbours are of other colours, unchanged meanwhile),
+    so it goes to ``ng[cell]``, to the cell's own counts ``ncz[cell]`` and to every neighbour's sum.
+    ``counts`` is left holding the change."""
     for k in range(n_topics):
         for r in range(n_chains):
-            change = counts[k, r] - ng[cell, k, r]
+            change = np.int32(counts[k, r]) - ng[cell, k, r]
             counts[k, r] = change
             ng[cell, k, r] += change
             ncz[cell, k, r] += change
@@ -260,7 +272,7 @@ def _settle(cell, counts, ncz, ng, table, n_topics, n_chains):
         if d >= 0:
             for k in range(n_topics):
                 for r in range(n_chains):
-                    ng[d, k, r] += counts[k, r]
+                    ng[d, k, r] += np.int32(counts[k, r])
 
 
 @njit

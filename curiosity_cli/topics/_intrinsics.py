@@ -9,9 +9,9 @@ round-robin; with one of the two cores also running another process, 10 % faster
 length, the number of chains, is known when compiling; on the stack they live in vector
 registers, where a heap array kept them in memory (30 against 60 ns a sample at 16
 chains, when the two were first compared). :func:`stack_table` is its two-dimensional
-kin, ``rows`` (a constant) by ``len(like)``: the lock-step sweep keeps a cell's counts,
-their float32 factors and the running sums there (all topics by all chains), so the
-compiler knows no other array aliases them.
+kin, ``rows`` (a constant) by ``len(like)``: the lock-step sweep keeps a cell's counts
+and the running sums there (all topics by all chains), so the compiler knows no other
+array aliases them.
 
 (A software prefetch of the next word's row of the word-topic counts lived here too; once
 the sampler stopped waiting on its own stores it gained nothing, on one thread or two. Nor
