@@ -56,7 +56,8 @@ MAX_SWEEPS = 100_000  # Gibbs sweeps of a labelling chain or of the batch refere
 MAX_CANDIDATE_SWEEPS = 1_000  # passes over a candidate's temporary labels
 
 #: The walkers a config may name in ``explore.weight_functions``, in the order reports list
-#: them: the paper's four weight functions in its order, the lawnmower, then the ceilings.
+#: them: the paper's four weight functions in its order, the lawnmower, the ceilings, then the
+#: validation walkers (:data:`VALIDATION_WALKERS`).
 #: The one list of walkers: names are the config's vocabulary, checked here under every
 #: entry point without importing the explore stage;
 #: :data:`curiosity_cli.explore.weights.WEIGHT_FUNCTIONS` gives each its walker, in this order.
@@ -68,7 +69,17 @@ WALKER_NAMES = (
     "lawnmower",
     "scattered-cells",
     "compact-block",
+    "oracle-0.1",
+    "oracle-0.2",
+    "oracle-0.3",
+    "sham",
 )
+#: Walkers that test the measures, not curiosity (issue 58): oracles with a planted advantage (they read the
+#: map's truth, so they run only on maps with labels) and a sham that steers on information-free scores. Never
+#: compared in the paper's verdict (:mod:`curiosity_cli.explore.weights`).
+VALIDATION_WALKERS = ("oracle-0.1", "oracle-0.2", "oracle-0.3", "sham")
+#: The walkers that read a map's truth (its human labels), so that their runs' recipes hold the labels' digest.
+READS_TRUTH = ("oracle-0.1", "oracle-0.2", "oracle-0.3")
 
 #: The paper's own walkers (its four weight functions): what a specification curve compares.
 PAPER_WALKERS = ("random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity")

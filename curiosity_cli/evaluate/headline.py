@@ -16,7 +16,7 @@ from curiosity_cli.evaluate.multiplicity import adjusted_columns, intersection_u
 from curiosity_cli.evaluate.statistics import (
     ALPHA, paired_blocks, paired_difference, wilcoxon_p, wilcoxon_pair_p,
 )
-from curiosity_cli.explore.weights import CEILINGS
+from curiosity_cli.explore.weights import CEILINGS, in_verdict
 
 #: The path length the paper reads its headline at (about a map's width); a map without
 #: that checkpoint is read at its longest one below it (:func:`headline_length`).
@@ -44,7 +44,8 @@ def versus_pairs(block):
 
 
 def paired_effects(mi, tests=None, measure: Measure = MI):
-    """Topic perplexity against each other walker on a measure (MI unless told), paired by restart (ceilings left out).
+    """Topic perplexity against each other walker on a measure (MI unless told), paired by restart (ceilings and
+    validation walkers left out).
 
     Per (dataset, path length, against, other walker): ``n`` pairs, the two means over
     those pairs, the mean paired difference with its 95 % Student-t CI
@@ -119,7 +120,7 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None, agains
     for one map alone; :func:`with_adjusted` corrects it for the family of maps); the better ceiling, its MI and topic perplexity's share of it (no
     ceiling runs: empty and NaN); and the paper's ratio for the map the dataset stands
     in for (``stands_in_for``: dataset name to paper map name; datasets without one get
-    no paper ratio). Ceilings are never the next best.
+    no paper ratio). Ceilings and validation walkers are never the next best.
     """
     import pandas as pd
 
@@ -134,7 +135,7 @@ def headline(summary, tests, stands_in_for: dict[str, str], effects=None, agains
         read = against or ("human" if (block["against"] == "human").any() else "batch")
         means = block[block["against"] == read].set_index("weight_function")["mean"]
         ceilings = means[means.index.isin(CEILINGS)]
-        walkers = means[~means.index.isin(CEILINGS)]
+        walkers = means[[in_verdict(name) for name in means.index]]
         if HEADLINE_WEIGHT not in walkers or len(walkers) < 2:
             continue
         ours = walkers[HEADLINE_WEIGHT]

@@ -10,7 +10,7 @@ neighbour's coverage potential ``U``, word and topic perplexity, the walker's we
 walker records both perplexities, even one that does not use them) and the map's human
 labels. A human class is *present* in a cell when it covers at least
 :data:`~curiosity_cli.experiment.recipes.CLASS_SHARE_PERCENT` % of its pixels
-(:func:`~curiosity_cli.label.classes.classes_present`, as the label stage has it).
+(:func:`~curiosity_cli.maps.cell_classes.classes_present`, as the label stage has it).
 
 A path of length ``L`` visits ``path[0 .. L - 1]``; its move ``t`` goes from ``path[t]`` to
 ``path[t + 1]``, and the candidates of that move are the rows with ``step == t``
@@ -136,16 +136,16 @@ def class_presence(cell_pixels: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     cell_pixels : (n_cells, C) integer ndarray
-        Pixels of each class in each cell (:func:`~curiosity_cli.label.classes.cell_class_pixels`).
+        Pixels of each class in each cell (:func:`~curiosity_cli.maps.cell_classes.cell_class_pixels`).
 
     Returns
     -------
     (n_cells, C) bool ndarray
-        :func:`~curiosity_cli.label.classes.classes_present` at
+        :func:`~curiosity_cli.maps.cell_classes.classes_present` at
         :data:`~curiosity_cli.experiment.recipes.CLASS_SHARE_PERCENT`.
     """
     from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT
-    from curiosity_cli.label.classes import classes_present
+    from curiosity_cli.maps.cell_classes import classes_present
 
     return classes_present(cell_pixels, CLASS_SHARE_PERCENT)
 
@@ -291,7 +291,7 @@ def mechanism_rows(
         ``1 .. L``, a NaN score, ``cell_words`` not giving integer arrays.
     """
     from curiosity_cli.evaluate.information import classes_found
-    from curiosity_cli.label.classes import first_steps
+    from curiosity_cli.maps.cell_classes import first_steps
 
     run_info = _check_run_info(run_info)
     present = _check_present(present)

@@ -24,7 +24,7 @@ from curiosity_cli.evaluate.statistics import ALPHA, CONFIDENCE, CONVERGENCE_TOL
 from curiosity_cli.evaluate.stage import Evaluation
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT
-from curiosity_cli.explore.weights import CEILINGS, WEIGHT_FUNCTIONS
+from curiosity_cli.explore.weights import CEILINGS, WEIGHT_FUNCTIONS, in_verdict
 from curiosity_cli.files import atomic_path
 
 # the paper: "For short path lengths (40 steps or less), we do not see any statistical difference"
@@ -195,7 +195,7 @@ def _no_verdict(summary, dataset: str) -> str:
     block = summary[summary["dataset"] == dataset]
     if headline_length(block["path_length"].unique()) is None:
         return f"{dataset}: no verdict: no checkpoint of {HEADLINE_LENGTH} steps or fewer."
-    walkers = set(block["weight_function"]) - set(CEILINGS)
+    walkers = {name for name in block["weight_function"] if in_verdict(name)}
     if HEADLINE_WEIGHT not in walkers:
         return f"{dataset}: no verdict: {HEADLINE_WEIGHT} was not run."
     return f"{dataset}: no verdict: no other walker to compare with."

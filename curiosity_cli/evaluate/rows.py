@@ -203,7 +203,7 @@ def _surroundings(experiment: Experiment, dataset: str, cache_dir: Path | None) 
     """A map's human classes present per cell ((n_cells, C) bool, C = 0 without labels) and
     its words per cell (the word store's ``cell_words``), for :func:`~curiosity_cli.evaluate.mechanism.mechanism_rows`."""
     from curiosity_cli.evaluate.mechanism import class_presence
-    from curiosity_cli.label.classes import map_class_pixels
+    from curiosity_cli.maps.cell_classes import map_class_pixels
     from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.paths import DEFAULT_CACHE
     from curiosity_cli.words.extract import extract_words

@@ -3,7 +3,8 @@ tests and effects between walkers, and whether two labelling chains have met.
 
 Runs of two walkers are paired by :data:`PAIR_KEYS`: the same start cell and streams of one
 seed's experiment. Ceilings (:data:`~curiosity_cli.explore.weights.CEILINGS`) are not
-walkers and take no part in the tests.
+walkers, and the validation walkers test the measures, not curiosity: neither takes part in
+the tests (:func:`walkers_only`).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from curiosity_cli.evaluate.measures import MI, Measure
-from curiosity_cli.explore.weights import CEILINGS
+from curiosity_cli.explore.weights import in_verdict
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -121,8 +122,9 @@ def label_convergence(mi):
 
 
 def walkers_only(mi):
-    """The rows of walkers: ceilings (:data:`~curiosity_cli.explore.weights.CEILINGS`) left out."""
-    return mi[~mi["weight_function"].isin(CEILINGS)]
+    """The rows of the walkers the verdict compares (:func:`~curiosity_cli.explore.weights.in_verdict`): ceilings
+    and validation walkers left out."""
+    return mi[mi["weight_function"].map(in_verdict).astype(bool)]
 
 
 def paired_blocks(mi, measure: Measure = MI):

@@ -102,7 +102,9 @@ class Experiment:
     def run_recipe(self, dataset: str, weight_function: str, restart: int) -> Recipe:
         """What a run of the grid must have been made from, given the config and the map now."""
         facts = self.maps[dataset]
-        return run_recipe(self.config, dataset, facts.store, facts.vocabulary_hashes, weight_function, restart)
+        return run_recipe(
+            self.config, dataset, facts.store, facts.vocabulary_hashes, weight_function, restart, facts.labels_digest
+        )
 
     def batch_recipe(self, dataset: str) -> Recipe:
         """What a map's batch reference must have been made from now."""

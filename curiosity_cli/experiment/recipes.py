@@ -30,7 +30,7 @@ import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from curiosity_cli.config import ExperimentConfig
+from curiosity_cli.config import READS_TRUTH, ExperimentConfig
 from curiosity_cli.config_yaml import to_dict
 
 #: Where a file's meta (``run.json``, an ``.npz``'s ``meta``) holds its recipe.
@@ -140,21 +140,27 @@ def _in_words(keys: tuple, old, new) -> str:
 
 def run_recipe(
     config: ExperimentConfig, dataset: str, store: str, vocabulary_hashes: list[str], weight_function: str, restart: int,
+    human: str | None = None,
 ) -> Recipe:
     """What one run's numbers depend on.
 
     ``store`` is the file name of the map's word store, which hashes the image's pixels,
     the word settings and the vocabularies. The start cell and the seed entropy follow
-    from the map, the experiment seed and the restart.
+    from the map, the experiment seed and the restart. A walker that reads the map's truth
+    (:data:`~curiosity_cli.config.READS_TRUTH`) depends on the digest of its ``human``
+    labels and the share that makes a class present, too; no other walker's recipe holds them.
     """
     explore = {
         key: value for key, value in config.explore.run_settings().items() if ("explore", key) not in SELECTION_KEYS
     }
-    return Recipe({
+    inputs = {
         "store": store, "vocabulary_hashes": vocabulary_hashes, "dataset": dataset,
         "weight_function": weight_function, "restart": restart, "seed": config.seed,
         "model": to_dict(config.model), "explore": explore,
-    })
+    }
+    if weight_function in READS_TRUTH:
+        inputs["truth"] = {"human": human, "class_share_percent": CLASS_SHARE_PERCENT}
+    return Recipe(inputs)
 
 
 def batch_recipe(config: ExperimentConfig, store: str, vocabulary_hashes: list[str]) -> Recipe:

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from curiosity_cli.config import ExperimentConfig
+from curiosity_cli.config import READS_TRUTH, ExperimentConfig
 from curiosity_cli.config_yaml import saved_yaml
 from curiosity_cli.errors import RERUN, ConfigError, CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
@@ -52,6 +52,7 @@ from curiosity_cli.experiment.maps import StoreInfo, prepare_stores
 from curiosity_cli.experiment.recipes import RECIPE_KEY, Recipe, first_of
 from curiosity_cli.experiment.wholeness import FILES_KEY, records
 from curiosity_cli.experiment.saved_config import check_saved_config
+from curiosity_cli.explore.weights import stream_name
 from curiosity_cli.workers import Workers
 from curiosity_cli.files import atomic_path, check_inside, display_path
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS, experiment_root
@@ -124,10 +125,16 @@ def plan_runs(config: ExperimentConfig, stores: dict[str, StoreInfo]) -> list[Ru
                 f"explore.path_length: got {config.explore.path_length} steps, but {dataset} has only {n_cells} "
                 f"cells ({grid.rows} x {grid.cols}); use fewer steps or a smaller cell width"
             )
+        reading = [w for w in config.explore.weight_functions if w in READS_TRUTH]
+        if reading and stores[entry].facts.labels_digest is None:
+            raise ConfigError(
+                f"explore.weight_functions: {reading[0]} reads a map's human labels, and {dataset} has none; "
+                "run it on maps with labels"
+            )
         starts = start_cells(config.seed, dataset, n_cells, config.explore.restarts)
         for restart, start in enumerate(starts):
             for weight_function in config.explore.weight_functions:
-                seed = (config.seed, name_key(dataset), name_key(weight_function), restart)
+                seed = (config.seed, name_key(dataset), name_key(stream_name(weight_function)), restart)
                 tasks.append(RunTask(dataset, weight_function, restart, int(start), seed, str(stores[entry].path)))
     return tasks
 
@@ -233,8 +240,9 @@ def run_grid(
             shipped = {}  # loky workers load the stores from the cache themselves
             if workers.ships:
                 shipped = {path: workers.ship_file(path, load_store) for path in sorted({t.store_path for t in todo})}
+            truths = map_truths(config, {t.dataset for t in todo if t.weight_function in READS_TRUTH})
             computed = workers.compute(
-                compute_run, todo, args=lambda task: (config, shipped.get(task.store_path)),
+                compute_run, todo, args=lambda task: (config, shipped.get(task.store_path), truths.get(task.dataset)),
                 key=lambda task: f"explore-{task.dataset}/{task.weight_function}/restart-{task.restart:03d}",
             )
             with computed as results:
@@ -265,11 +273,28 @@ def _load_store(path: str):
     return load_store(Path(path))
 
 
-def compute_run(task: RunTask, config: ExperimentConfig, store=None, *, threads: int = 1):
+def map_truths(config: ExperimentConfig, datasets: set[str]) -> dict[str, np.ndarray]:
+    """The classes present in each cell of each map named in ``datasets`` (by name), for the walkers that read
+    a map's truth: (n_cells, C) bool ndarrays (:func:`~curiosity_cli.maps.cell_classes.classes_present` at the share
+    that counts a class found)."""
+    from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT
+    from curiosity_cli.maps.cell_classes import classes_present, map_class_pixels
+    from curiosity_cli.maps.map_data import load_map
+
+    truths = {}
+    for entry in config.datasets:
+        map_data = load_map(entry)
+        if map_data.config.name in datasets:
+            truths[map_data.config.name] = classes_present(map_class_pixels(map_data), CLASS_SHARE_PERCENT)
+    return truths
+
+
+def compute_run(task: RunTask, config: ExperimentConfig, store=None, truth=None, *, threads: int = 1):
     """Compute one run in a worker: ``(Exploration, seconds)``.
 
     ``store`` is the map's :class:`WordStore` when it was shipped to the worker (Dask);
-    without it the worker loads ``task.store_path`` once.
+    without it the worker loads ``task.store_path`` once. ``truth``: the classes present in
+    each cell, for a walker that reads them (:func:`map_truths`).
     """
     import numba
 
@@ -279,7 +304,7 @@ def compute_run(task: RunTask, config: ExperimentConfig, store=None, *, threads:
     started = time.perf_counter()
     exploration = explore(
         _load_store(task.store_path) if store is None else store, task.weight_function, task.start_cell,
-        model=config.model, settings=config.explore, seed=task.seed,
+        model=config.model, settings=config.explore, seed=task.seed, truth=truth,
     )
     return exploration, time.perf_counter() - started
 

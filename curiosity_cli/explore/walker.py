@@ -21,7 +21,9 @@ Each step ``t`` (0-based) of a run of ``path_length`` steps, with the walker in 
 4. **Move** to a neighbour drawn with probability proportional to its weight
    (:func:`move_probabilities`: NaN counts as 0, infinite weights take every chance
    among themselves); if no weight is left positive the draw is uniform, and the step
-   is counted as a fallback.
+   is counted as a fallback. A validation walker (:mod:`curiosity_cli.explore.weights`) moves
+   by its own rule: an oracle may replace its base walker's move by one to a candidate
+   holding a class the path has not seen; the sham weighs candidates by other cells' scores.
 
 A planned walker (:class:`~curiosity_cli.explore.weights.Plan`: the lawnmower and the
 ceilings) skips steps 3 and 4: its cells are drawn when it starts, from the same move
@@ -42,7 +44,7 @@ import numpy as np
 
 from curiosity_cli.config import COVERAGE_READINGS, ExploreConfig, ModelConfig
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, Plan, coverage_potential
+from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, Oracle, Plan, Sham, repelled, coverage_potential
 from curiosity_cli.topics.map_model import map_topic_model
 from curiosity_cli.words.store import WordStore
 
@@ -188,6 +190,7 @@ def explore(
     model: ModelConfig,
     settings: ExploreConfig,
     seed,
+    truth: np.ndarray | None = None,
 ) -> Exploration:
     """Run one exploration path (module docstring) and return its records and checkpoints.
 
@@ -206,7 +209,11 @@ def explore(
         Path length, checkpoints, refinement budget and the reading of eq. 8.
     seed : int or sequence of int
         Entropy for :class:`numpy.random.SeedSequence`; the topic model and the moves
-        draw from two streams spawned from it.
+        draw from two streams spawned from it, a validation walker's own draws from a
+        third (an oracle's coins; the sham's permutation).
+    truth : (n_cells, C) bool ndarray, optional
+        The classes present in each cell (:func:`~curiosity_cli.maps.cell_classes.classes_present`):
+        what an oracle (:class:`~curiosity_cli.explore.weights.Oracle`) reads; required for one.
 
     Returns
     -------
@@ -215,10 +222,11 @@ def explore(
     Raises
     ------
     ParameterError
-        An unknown weight function, a start cell off the grid, a single-cell map, or a
-        weight function returning the wrong shape or negative weights.
+        An unknown weight function, a start cell off the grid, a single-cell map, an oracle
+        without ``truth`` of a row per cell, or a weight function returning the wrong shape
+        or negative weights.
     """
-    from curiosity_cli.topics.perplexity import topic_perplexity, word_perplexity
+    from curiosity_cli.topics.perplexity import word_perplexity
 
     if weight_function not in WEIGHT_FUNCTIONS:
         raise ParameterError(
@@ -230,8 +238,17 @@ def explore(
         raise ParameterError("store: the map has a single cell, so there is nowhere to move")
     if not 0 <= int(start_cell) < n_cells:
         raise ParameterError(f"start_cell: got {start_cell}, expected 0 .. {n_cells - 1}")
-    model_seed, move_seed = np.random.SeedSequence(seed).spawn(2)
+    if isinstance(walker, Oracle) and (truth is None or np.shape(truth)[0] != n_cells):
+        raise ParameterError(
+            f"truth: expected the classes present in each of the map's {n_cells} cells for {weight_function!r}, "
+            "which reads the map's human labels"
+        )
+    # spawn(3)'s first two children are spawn(2)'s: the paper's walkers draw as they always did
+    model_seed, move_seed, own_seed = np.random.SeedSequence(seed).spawn(3)
     rng = np.random.default_rng(move_seed)
+    own = np.random.default_rng(own_seed)
+    seen = np.zeros(np.shape(truth)[1], bool) if isinstance(walker, Oracle) else None
+    other_cell = own.permutation(n_cells) if isinstance(walker, Sham) else None
     topic_model = map_topic_model(store, model, int(model_seed.generate_state(1, np.uint64)[0]))
     neighbours = store.grid.neighbour_table(settings.candidates)
 
@@ -251,6 +268,8 @@ def explore(
     cell = int(start_cell) if planned is None else int(planned[0])
     for step in range(length):
         path[step] = cell
+        if seen is not None:
+            seen |= truth[cell]
         if visits[cell] == 0:
             first_visit[step] = True
             topic_model.add_cell(cell, store.cell_words(cell), time=step)
@@ -276,25 +295,54 @@ def explore(
                 cells, visited, visits[visited], store.grid, settings.coverage, settings.min_d2
             ),
             word_perplexity=np.array([word_perplexity(topic_model, store.cell_words(g)) for g in cells]),
-            topic_perplexity=np.array([
-                topic_perplexity(
-                    topic_model, store.cell_words(g), g, context=settings.candidate_context,
-                    sweeps=settings.candidate_sweeps, labels=settings.candidate_labels,
-                    words_in_model=settings.candidate_words, path_topics=settings.path_topics,
-                )
-                for g in cells
-            ]),
+            topic_perplexity=_perplexities(topic_model, store, cells, settings),
         )
         boxed_in[step] = bool(np.all(visits[cells] > 0))
         # every candidate's potential is then ∞, leaving nothing to weigh: eq. 8's limit is their own visit counts
         if boxed_in[step] and COVERAGE_READINGS[settings.coverage].infinite_when_visited:
             candidates = dataclasses.replace(candidates, coverage=visits[cells].astype(np.float64))
-        weights = _weights(walker, weight_function, candidates)
-        choice, fallback[step] = draw_move(weights, rng)
+        if isinstance(walker, Oracle):
+            weights, choice, fallback[step] = _oracle_move(walker, candidates, truth[cells] & ~seen, rng, own)
+        else:
+            if isinstance(walker, Sham):
+                weights = repelled(_perplexities(topic_model, store, other_cell[cells], settings), candidates.coverage)
+            else:
+                weights = _weights(walker, weight_function, candidates)
+            choice, fallback[step] = draw_move(weights, rng)
         scored.append((step, candidates, weights, choice))
         cell = int(cells[choice])
 
     return _records(path, first_visit, words_sampled, log_likelihood, fallback, boxed_in, scored, checkpoints)
+
+
+def _perplexities(topic_model, store: WordStore, cells: np.ndarray, settings: ExploreConfig) -> np.ndarray:
+    """(n,) float64 ndarray: eq. 12 of each of ``cells``' words under the model, under the run's readings."""
+    from curiosity_cli.topics.perplexity import topic_perplexity
+
+    return np.array([
+        topic_perplexity(
+            topic_model, store.cell_words(g), g, context=settings.candidate_context, sweeps=settings.candidate_sweeps,
+            labels=settings.candidate_labels, words_in_model=settings.candidate_words, path_topics=settings.path_topics,
+        )
+        for g in cells
+    ])
+
+
+def _oracle_move(oracle: Oracle, candidates: Candidates, new: np.ndarray, rng, own) -> tuple[np.ndarray, int, bool]:
+    """An oracle's step: ``(weights, choice, fell back)``.
+
+    Its base walker's move is drawn first from the move stream, so that the stream
+    advances as the base walker's does; then one coin from the oracle's own stream, and
+    when it falls below P and some candidate holds a new class (``new``: (n, C) bool, the
+    classes each candidate holds that the path has not seen), a move uniform among those
+    candidates replaces it. The weights recorded are the ones the move was drawn from.
+    """
+    weights = _weights(WEIGHT_FUNCTIONS[oracle.base], oracle.base, candidates)
+    choice, fell_back = draw_move(weights, rng)
+    holds_new = new.any(axis=1)
+    if own.random() < oracle.share and holds_new.any():
+        return holds_new.astype(np.float64), int(own.choice(np.flatnonzero(holds_new))), False
+    return weights, choice, fell_back
 
 
 def _weights(weight_function, name: str, candidates: Candidates) -> np.ndarray:

@@ -37,6 +37,24 @@ mission, a path compared with the weight functions; and the two **ceilings**
 ``scattered-cells`` and ``compact-block``, models learned from cells chosen without
 walking, which say what any walker could hope for and are reported apart (:data:`CEILINGS`).
 
+Last, the **validation walkers** (:data:`~curiosity_cli.config.VALIDATION_WALKERS`), which
+test whether a measure sees an effect where one must exist and none where none does
+(issue 58). They are run beside the paper's walkers and compared with stochastic coverage,
+never in the paper's verdict (:func:`in_verdict`):
+
+- ``oracle-P`` (:class:`Oracle`, P = 0.1, 0.2, 0.3): stochastic coverage's walk, on its
+  streams (the same model and moves), with a planted advantage: at each step, with
+  probability P it moves uniformly among the candidates that hold a class the path has
+  not yet seen (a human class on at least 10 % of a cell's pixels, the rule that counts a
+  class found), when there is one. It reads the map's truth, so it runs only on maps with
+  human labels.
+- ``sham`` (:class:`Sham`): steers as hard as topic perplexity, on scores that carry no
+  information about the candidate: each candidate ``g`` weighs
+  ``TopicPerplexity(π(g)) / U(g)``, the score of another cell ``π(g)`` under the run's
+  model, with ``π`` a permutation of the map's cells drawn when the run starts. Its
+  scores have topic perplexity's spread at every step (the same function of the same
+  model, on real cells), so no strength needs tuning; what they say about ``g`` is nothing.
+
 To add a walker, write ``def my_walker(candidates: Candidates) -> np.ndarray`` here (or
 a plan, ``my_walker = Plan(...)``) and put its name, ``my-walker``, in
 :data:`curiosity_cli.config.WALKER_NAMES`, the one list of walkers: configs can then name
@@ -53,7 +71,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from curiosity_cli.maps.cell_grid import SquareGrid
-from curiosity_cli.config import COVERAGE_READINGS, WALKER_NAMES
+from curiosity_cli.config import COVERAGE_READINGS, READS_TRUTH, VALIDATION_WALKERS, WALKER_NAMES
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.explore import plans
 
@@ -98,15 +116,15 @@ def stochastic_coverage_weights(candidates: Candidates) -> np.ndarray:
 
 def word_perplexity_weights(candidates: Candidates) -> np.ndarray:
     """Drawn to cells whose words the model finds surprising, repelled by visited ones (eq. 9)."""
-    return _repelled(candidates.word_perplexity, candidates.coverage)
+    return repelled(candidates.word_perplexity, candidates.coverage)
 
 
 def topic_perplexity_weights(candidates: Candidates) -> np.ndarray:
     """Drawn to cells whose topics are rare on the path so far, repelled by visited ones (eq. 10)."""
-    return _repelled(candidates.topic_perplexity, candidates.coverage)
+    return repelled(candidates.topic_perplexity, candidates.coverage)
 
 
-def _repelled(surprise: np.ndarray, coverage: np.ndarray) -> np.ndarray:
+def repelled(surprise: np.ndarray, coverage: np.ndarray) -> np.ndarray:
     """``surprise / U``, and 0 where ``U`` is infinite (a visited candidate under the literal
     reading), however surprising the candidate: even an infinite perplexity (counts-only
     P(k | path)) does not undo the literal reading's ban on stepping back."""
@@ -134,9 +152,30 @@ lawnmower = Plan(plans.lawnmower)
 scattered_cells = Plan(plans.scattered_cells, ceiling=True)
 compact_block = Plan(plans.compact_block, ceiling=True)
 
+
+@dataclass(frozen=True)
+class Oracle:
+    """A validation walker with a planted advantage (module docstring).
+
+    Attributes
+    ----------
+    share : float
+        P, the chance at each step of moving to a candidate holding a class new to the path.
+    """
+
+    share: float
+
+    #: The walker whose streams and moves it takes: with no new class in reach, it is this walker.
+    base = "stochastic-coverage"
+
+
+@dataclass(frozen=True)
+class Sham:
+    """A validation walker that steers on information-free scores (module docstring)."""
+
 #: Every walker by the name configs use, in the order of :data:`curiosity_cli.config.WALKER_NAMES`
-#: (the paper's four weight functions, the lawnmower baseline, the ceilings).
-WEIGHT_FUNCTIONS: dict[str, WeightFunction | Plan] = {
+#: (the paper's four weight functions, the lawnmower baseline, the ceilings, the validation walkers).
+WEIGHT_FUNCTIONS: dict[str, WeightFunction | Plan | Oracle | Sham] = {
     "random-walk": random_walk_weights,
     "stochastic-coverage": stochastic_coverage_weights,
     "word-perplexity": word_perplexity_weights,
@@ -144,12 +183,32 @@ WEIGHT_FUNCTIONS: dict[str, WeightFunction | Plan] = {
     "lawnmower": lawnmower,
     "scattered-cells": scattered_cells,
     "compact-block": compact_block,
+    "oracle-0.1": Oracle(0.1),
+    "oracle-0.2": Oracle(0.2),
+    "oracle-0.3": Oracle(0.3),
+    "sham": Sham(),
 }
 if tuple(WEIGHT_FUNCTIONS) != WALKER_NAMES:  # the config's vocabulary and the walkers are one list
     raise ImportError(f"explore.weights: walkers {tuple(WEIGHT_FUNCTIONS)} are not config.WALKER_NAMES {WALKER_NAMES}")
+if tuple(n for n, w in WEIGHT_FUNCTIONS.items() if isinstance(w, (Oracle, Sham))) != VALIDATION_WALKERS:
+    raise ImportError(f"explore.weights: the validation walkers are not config.VALIDATION_WALKERS {VALIDATION_WALKERS}")
 
 #: Names of the runs that are ceilings, not walkers: reported apart, never the "next best".
 CEILINGS: tuple[str, ...] = tuple(n for n, w in WEIGHT_FUNCTIONS.items() if isinstance(w, Plan) and w.ceiling)
+if tuple(n for n, w in WEIGHT_FUNCTIONS.items() if isinstance(w, Oracle)) != READS_TRUTH:
+    raise ImportError(f"explore.weights: the oracles are not config.READS_TRUTH {READS_TRUTH}")
+
+
+def in_verdict(name: str) -> bool:
+    """Whether topic perplexity is compared with this walker in the paper's verdict (its next best, its
+    leads): every walker but the ceilings and the validation walkers."""
+    return name not in CEILINGS and name not in VALIDATION_WALKERS
+
+
+def stream_name(name: str) -> str:
+    """The walker whose random streams a run of ``name`` draws from: an oracle's base walker's, else its own."""
+    walker = WEIGHT_FUNCTIONS.get(name)
+    return walker.base if isinstance(walker, Oracle) else name
 
 
 def _literal(n: np.ndarray, d2: np.ndarray, min_d2: float | None) -> np.ndarray:

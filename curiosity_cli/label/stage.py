@@ -192,7 +192,7 @@ class _DenseCheckpoints(Sequence):
 def _map_references(entry: str) -> tuple:
     """A map's (human labels or None, number of classes, image shape, class pixels per cell or None)."""
     from curiosity_cli.maps.map_data import load_map
-    from curiosity_cli.label.classes import map_class_pixels
+    from curiosity_cli.maps.cell_classes import map_class_pixels
 
     map_data = load_map(entry)
     return map_data.labels, map_data.n_classes, map_data.image.shape[:2], map_class_pixels(map_data)
@@ -340,7 +340,7 @@ def class_first_steps(path: np.ndarray, cell_classes: np.ndarray, store: WordSto
     LabelError
         The map's grid (``cell_classes``, from its cell width) is not the word store's.
     """
-    from curiosity_cli.label.classes import classes_present, first_steps
+    from curiosity_cli.maps.cell_classes import classes_present, first_steps
 
     if cell_classes.shape[0] != store.n_cells:
         raise LabelError(

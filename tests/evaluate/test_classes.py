@@ -11,7 +11,7 @@ import pytest
 from curiosity_cli.config import LabelConfig
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.evaluate.information import classes_found, matched_recall, mean_recall
-from curiosity_cli.label.classes import cell_class_pixels, classes_present, first_steps
+from curiosity_cli.maps.cell_classes import cell_class_pixels, classes_present, first_steps
 from curiosity_cli.label.label_files import NOT_LABELLED, label_changes, write_labels
 from curiosity_cli.evaluate.rows import run_rows
 from curiosity_cli.experiment.layout import ExperimentFolder

@@ -42,12 +42,18 @@ def test_a_grid_writes_every_run_with_its_config_seeds_and_provenance(own_map, t
     config = grid_config(own_map, weight_functions=tuple(weights.WEIGHT_FUNCTIONS))  # every walker and ceiling
     summary = run_grid(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
     folder = tmp_path / "grid"
-    assert (summary.ran, summary.skipped, summary.failed) == (14, 0, [])
+    assert (summary.ran, summary.skipped, summary.failed) == (2 * len(weights.WEIGHT_FUNCTIONS), 0, [])
     assert load_config(folder / "config.yaml") == config
     provenance = yaml.safe_load((folder / "provenance.yaml").read_text())
     assert provenance["seed"] == 0 and len(provenance["git_commit"]) in (40, len("unknown"))
     plan = pd.read_csv(folder / "runs.csv")
-    assert len(plan) == 14 and set(plan.weight_function) == set(weights.WEIGHT_FUNCTIONS)
+    assert len(plan) == 2 * len(weights.WEIGHT_FUNCTIONS) and set(plan.weight_function) == set(weights.WEIGHT_FUNCTIONS)
+    # an oracle draws from stochastic coverage's streams, and its recipe holds the truth it read
+    seeds = plan.set_index(["weight_function", "restart"])["seed"]
+    assert seeds["oracle-0.2", 1] == seeds["stochastic-coverage", 1] != seeds["sham", 1]
+    oracle = read_run(ExperimentFolder(folder).run("own", "oracle-0.2", 1)).meta["recipe"]["inputs"]
+    assert oracle["truth"]["class_share_percent"] == 10 and len(oracle["truth"]["human"]) == 16
+    assert "truth" not in read_run(ExperimentFolder(folder).run("own", "sham", 1)).meta["recipe"]["inputs"]
     # paired design: every walker starts restart r from the same cell
     assert plan.groupby("restart")[["start_row", "start_col"]].nunique().eq(1).all().all()
     run = read_run(ExperimentFolder(folder).run("own", "topic-perplexity", 1))
@@ -59,6 +65,16 @@ def test_a_grid_writes_every_run_with_its_config_seeds_and_provenance(own_map, t
     assert mower.path[0] == run.path[0] and (np.abs(np.diff(np.divmod(mower.path, 8))).sum(axis=0) == 1).all()
     block = read_run(ExperimentFolder(folder).run("own", "compact-block", 1))
     assert block.path[0] == run.path[0]
+
+
+def test_an_oracle_is_refused_on_a_map_without_human_labels_before_any_run(own_map, tmp_path):
+    text = yaml.safe_load(own_map.read_text())
+    del text["labels"], text["legend"]
+    own_map.write_text(yaml.safe_dump(text))
+    config = grid_config(own_map, weight_functions=("stochastic-coverage", "oracle-0.1"))
+    with pytest.raises(ConfigError, match="^explore.weight_functions: oracle-0.1 reads a map's human labels, and own has none"):
+        run_grid(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    assert not (tmp_path / "grid" / "runs").exists()
 
 
 def test_start_cells_are_shared_and_do_not_depend_on_the_number_of_restarts():

@@ -14,14 +14,21 @@ from curiosity_cli.explore import weights
 from curiosity_cli.explore.walker import explore
 
 
-def run(store, weight_function="topic-perplexity", start=9, seed=(1,), **explore_settings):
+def run(store, weight_function="topic-perplexity", start=9, seed=(1,), truth=None, **explore_settings):
     config = small_config(**explore_settings)
-    return explore(store, weight_function, start, model=config.model, settings=config.explore, seed=seed)
+    return explore(store, weight_function, start, model=config.model, settings=config.explore, seed=seed, truth=truth)
+
+
+def two_region_truth() -> np.ndarray:
+    """(48, 2) bool: the classes present in each cell of :func:`two_region_store`, its two halves."""
+    right = np.zeros((6, 8), bool)
+    right[:, 4:] = True
+    return np.stack([~right.ravel(), right.ravel()], axis=1)
 
 
 @pytest.mark.parametrize("name", [n for n in weights.WEIGHT_FUNCTIONS if n not in weights.CEILINGS])
 def test_paths_step_between_4_neighbours_and_never_leave_the_map(name):
-    e = run(two_region_store(), name, path_length=40, checkpoints=(40,))
+    e = run(two_region_store(), name, path_length=40, checkpoints=(40,), truth=two_region_truth())
     rows, cols = np.divmod(e.path, 8)
     assert ((rows >= 0) & (rows < 6) & (cols >= 0) & (cols < 8)).all()
     assert (np.abs(np.diff(rows)) + np.abs(np.diff(cols)) == 1).all()
@@ -201,3 +208,55 @@ def test_topic_perplexity_walkers_linger_on_a_rare_stripe_more_than_coverage_wal
             near[name].append(np.mean(np.abs(e.path % 24 - 12) <= 1))
     coverage, topic = np.mean(near["stochastic-coverage"]), np.mean(near["topic-perplexity"])
     assert topic > coverage + 0.01, (topic, coverage)
+
+
+def test_an_oracle_with_no_new_class_in_reach_walks_stochastic_coverage_s_walk_on_its_streams():
+    store, one_class = two_region_store(), np.ones((48, 1), bool)
+    coverage = run(store, "stochastic-coverage", path_length=30, checkpoints=(30,))
+    for name in ("oracle-0.1", "oracle-0.3"):
+        oracle = run(store, name, path_length=30, checkpoints=(30,), truth=one_class)
+        np.testing.assert_array_equal(oracle.path, coverage.path)
+        np.testing.assert_array_equal(oracle.weight, coverage.weight)
+        np.testing.assert_array_equal(oracle.checkpoints[30].dense(), coverage.checkpoints[30].dense())
+    with pytest.raises(ParameterError, match="^truth: expected the classes present in each of the map's 48 cells"):
+        run(store, "oracle-0.2", truth=None)
+
+
+def test_an_oracle_moves_to_a_new_class_with_its_chance_and_otherwise_as_its_base_walker():
+    from curiosity_cli.explore.walker import _oracle_move
+
+    candidates = weights.Candidates(
+        cells=np.arange(4), coverage=np.array([1.0, 2.0, 4.0, np.inf]), word_perplexity=np.ones(4),
+        topic_perplexity=np.ones(4),
+    )
+    new = np.array([[False, False], [False, True], [False, False], [True, True]])
+    base = weights.stochastic_coverage_weights(candidates)
+    draws, overrides = 4000, 0
+    rng, own, twin = (np.random.default_rng(s) for s in (1, 2, 1))
+    for _ in range(draws):
+        expected = int(twin.choice(4, p=base / base.sum()))  # the base walker's draw, from the same move stream
+        weights_used, choice, fell_back = _oracle_move(weights.Oracle(0.3), candidates, new, rng, own)
+        assert not fell_back
+        if weights_used.tolist() == [0.0, 1.0, 0.0, 1.0]:
+            overrides += 1
+            assert choice in (1, 3), "uniform among the candidates holding a class new to the path"
+        else:
+            np.testing.assert_array_equal(weights_used, base)
+            assert choice == expected
+    # 0.3 of the steps, within a binomial 99.9 % band (about +- 0.024)
+    assert abs(overrides / draws - 0.3) < 3.3 * np.sqrt(0.3 * 0.7 / draws)
+    none_new = _oracle_move(weights.Oracle(1.0), candidates, np.zeros((4, 2), bool), rng, own)
+    np.testing.assert_array_equal(none_new[0], base)
+
+
+def test_the_sham_weighs_each_candidate_by_another_cell_s_score_from_a_permutation_fixed_for_the_run(monkeypatch):
+    from curiosity_cli.explore import walker
+
+    # a score that names its cell: the sham's weights then say which cell stood in for each candidate
+    monkeypatch.setattr(walker, "_perplexities", lambda model, store, cells, settings: cells + 1.0)
+    seed, store = (3,), two_region_store()
+    sham, topic = run(store, "sham", seed=seed), run(store, "topic-perplexity", seed=seed)
+    other = np.random.default_rng(np.random.SeedSequence(seed).spawn(3)[2]).permutation(store.n_cells)
+    for e, cells in ((sham, other[sham.candidate_cell]), (topic, topic.candidate_cell)):
+        np.testing.assert_array_equal(e.weight, weights.repelled(cells + 1.0, e.coverage))
+    assert not np.array_equal(other, np.arange(store.n_cells))

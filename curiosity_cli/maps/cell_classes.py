@@ -1,5 +1,9 @@
-"""Which human classes a path's cells touched, and at which step: recorded in a run's label
-file (``class_first_step``), from the pixels of each class in each cell of the map.
+"""Which human classes each cell of a map holds, and which a path's cells touched at which step.
+
+The label stage records the first step of each class in a run's label file
+(``class_first_step``); the mechanism measures read which classes a candidate held; the
+oracles (:mod:`curiosity_cli.explore.weights`) read the same classes to steer. Here, in the
+maps stage beneath them all, so that each reads one rule.
 """
 
 from __future__ import annotations
