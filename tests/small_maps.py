@@ -149,3 +149,22 @@ def write_own_map(folder: Path) -> Path:
     path = folder / "own.yaml"
     path.write_text(yaml.safe_dump(config, sort_keys=False))
     return path
+
+
+#: A tiny generated map's model: 8 x 10 cells, 2 background topics, 2 rare ones in 1-cell patches, disjoint words.
+TINY_GENERATE = {
+    "seed": 1, "rows": 8, "cols": 10, "vocabulary": 60, "support": 10, "beta": 1.0, "background_topics": 2,
+    "rare_topics": 2, "patches_per_topic": 2, "patch_cells": 1, "patch_gap": 1, "overlap": 0.0,
+}
+
+
+def write_generated_map(folder: Path, **generate) -> Path:
+    """A tiny generated map's YAML in ``folder`` (:data:`TINY_GENERATE`, ``generate`` keys changed), cells of 8 px
+    with a word every 2 px (16 per cell); returns its path."""
+    config = {
+        "name": "tiny-generated", "cell_width": 8, "word_stride": 2, "licence": "CC0",
+        "generate": {**TINY_GENERATE, **generate},
+    }
+    path = folder / "tiny-generated.yaml"
+    path.write_text(yaml.safe_dump(config, sort_keys=False))
+    return path

@@ -69,8 +69,11 @@ def test_datasets_list_shows_the_maps():
     lines = result.stdout.splitlines()
     assert lines[0].split()[:3] == ["name", "size", "(px)"]
     rows = {line.split()[0]: line for line in lines[2:]}
-    assert sorted(rows) == ["aerial-mosaic", "geonrw-essen", "rare-patches", "reef-mosaic", "sentinel-coast", "zurich-zh17"]
-    assert "embedded" in rows["reef-mosaic"]
+    assert sorted(rows) == [
+        "aerial-mosaic", "geonrw-essen", "planted-disjoint", "planted-shared", "rare-patches", "reef-mosaic",
+        "sentinel-coast", "zurich-zh17",
+    ]
+    assert "embedded" in rows["reef-mosaic"] and "generated" in rows["planted-shared"]
     assert "1024 x 1024" in rows["aerial-mosaic"] and "4096 (64 x 64)" in rows["aerial-mosaic"]
     assert "2500 x 2500" in rows["reef-mosaic"] and "6241 (79 x 79)" in rows["reef-mosaic"]
     assert "992 x 992" in rows["geonrw-essen"] and "3844 (62 x 62)" in rows["geonrw-essen"]

@@ -60,18 +60,25 @@ def test_quick_config_is_the_real_map_with_ten_restarts():
 def test_every_dataset_config_loads(name):
     config = load_dataset_config(CONFIG_DIR / "datasets" / f"{name}.yaml")
     assert config.name == name
-    if config.fetch is None:
+    if config.generate is not None:  # drawn, no files
+        assert config.image is None and config.labels is None
+    elif config.fetch is None:
         assert config.image.is_file() and config.labels.is_file() and config.legend.is_file()
     else:  # made on first use, in the user's cache
         assert config.image.name == "image.png" and config.labels.name == "labels.png"
-    # every map stands in for one of the paper's, but the positive control, which stands in for none
-    assert config.stands_in_for in ("Montreal1", "Montreal2", "SouthBellairs") or name == "rare-patches"
+    # every map stands in for one of the paper's, but the controls (the positive control, the generated maps)
+    controls = ("rare-patches", "planted-disjoint", "planted-shared")
+    assert config.stands_in_for in ("Montreal1", "Montreal2", "SouthBellairs") or name in controls
 
 
-def test_the_embedded_and_fetched_datasets_are_registered():
-    assert dataset_names() == ["aerial-mosaic", "geonrw-essen", "rare-patches", "reef-mosaic", "sentinel-coast", "zurich-zh17"]
-    fetched = [n for n in dataset_names() if load_dataset_config(CONFIG_DIR / "datasets" / f"{n}.yaml").fetch]
-    assert fetched == ["zurich-zh17"]
+def test_the_embedded_fetched_and_generated_datasets_are_registered():
+    assert dataset_names() == [
+        "aerial-mosaic", "geonrw-essen", "planted-disjoint", "planted-shared", "rare-patches", "reef-mosaic",
+        "sentinel-coast", "zurich-zh17",
+    ]
+    configs = {n: load_dataset_config(CONFIG_DIR / "datasets" / f"{n}.yaml") for n in dataset_names()}
+    assert [n for n, c in configs.items() if c.fetch] == ["zurich-zh17"]
+    assert [n for n, c in configs.items() if c.generate] == ["planted-disjoint", "planted-shared"]
 
 
 def test_overrides_apply_on_top_and_parse_yaml_values():

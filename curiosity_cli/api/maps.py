@@ -26,7 +26,7 @@ class DatasetRow(NamedTuple):
     cell_width: int
     grid: tuple[int, int] | None  # (rows, cols) of cells
     classes: int | None
-    pixels: str  # embedded, cached, or fetched on first use
+    pixels: str  # embedded, cached, fetched on first use, or generated
     source: str
     licence: str
 
@@ -44,7 +44,10 @@ def list_datasets() -> list[DatasetRow]:
     rows = []
     for name in dataset_names():
         config = load_dataset_config(dataset_path(name))
-        pixels = "embedded" if config.fetch is None else ("cached" if is_fetched(config.fetch) else "fetched on first use")
+        if config.generate is not None:
+            pixels = "generated"
+        else:
+            pixels = "embedded" if config.fetch is None else ("cached" if is_fetched(config.fetch) else "fetched on first use")
         if config.fetch is None or pixels == "cached":
             map_data = load_map(name)
             size, classes = map_data.image.shape[:2], len(map_data.legend)

@@ -75,7 +75,10 @@ def show(
             f"{m.config.name}: {m.image.shape[0]} x {m.image.shape[1]} px, {m.config.cell_width} px cells "
             f"({rows} x {cols} = {rows * cols}), words every {m.config.word_stride} px"
         )
-        typer.echo(f"  image: {m.rendering.describe()}")
+        if m.config.generate is not None:
+            typer.echo("  image: the truth in the legend's colours; the words are drawn from `generate:`, not seen")
+        else:
+            typer.echo(f"  image: {m.rendering.describe()}")
         for key in ("crop", "image"):
             if key in notes:
                 typer.echo(f"  made from: {notes[key]}")

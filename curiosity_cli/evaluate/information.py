@@ -6,7 +6,7 @@ label map per run, and MI, entropies, NMI and the per-class recall of a one-to-o
 topic-to-class matching all follow from it exactly.
 
 Classes found (:func:`classes_found`, from the first steps a label file records,
-:mod:`curiosity_cli.label.classes`) say which human classes a path's cells touched
+:mod:`curiosity_cli.maps.cell_classes`) say which human classes a path's cells touched
 within a length: evidence about the path itself, independent of what the model learned
 from it.
 """
@@ -193,6 +193,6 @@ def mean_recall(table: np.ndarray) -> float:
 
 
 def classes_found(first_step: np.ndarray, length: int) -> int:
-    """How many classes a path reached within its first ``length`` steps, from :func:`~curiosity_cli.label.classes.first_steps`."""
+    """How many classes a path reached within its first ``length`` steps, from :func:`~curiosity_cli.maps.cell_classes.first_steps`."""
     first_step = np.asarray(first_step)
     return int(np.count_nonzero((first_step >= 0) & (first_step < length)))

@@ -54,7 +54,7 @@ class Checkpoint:
         Against the human classes; None for a map without labels.
     first_step : (C,) int ndarray or None
         The step each human class was first reached (-1: never), as
-        :func:`~curiosity_cli.label.classes.first_steps` records it; None for label files without it.
+        :func:`~curiosity_cli.maps.cell_classes.first_steps` records it; None for label files without it.
     visited_batch, visited_human : ndarray or None
         ``batch`` and ``human`` of only the pixels whose word lies in a cell the path had
         visited (None where the label file has no such tables, or the map no labels).
@@ -168,7 +168,7 @@ def restricted_steps(first_step: np.ndarray, length: int) -> np.ndarray:
     Parameters
     ----------
     first_step : (C,) int ndarray
-        As :func:`~curiosity_cli.label.classes.first_steps` records them (step 0 is the start cell).
+        As :func:`~curiosity_cli.maps.cell_classes.first_steps` records them (step 0 is the start cell).
     length : int
 
     Returns

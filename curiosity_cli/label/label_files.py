@@ -18,7 +18,7 @@
   (column 0) and over the cells the path had not visited by each length (column 1). For a map with
   human labels also ``class_first_step`` ((C,) int32): the step at which the path first
   stood in a cell where class ``h`` covers at least ``CLASS_SHARE_PERCENT`` % of the
-  pixels, -1 if never (:mod:`curiosity_cli.label.classes`); ``meta["class_share_percent"]``
+  pixels, -1 if never (:mod:`curiosity_cli.maps.cell_classes`); ``meta["class_share_percent"]``
   records the share.
 - ``labels/<dataset>/examples/<weight function>-restart-<NNN>-<length>.npz``: the pixel
   label map Z_p (``labels``, (H, W) int16) of restart 0 at the :data:`EXAMPLE_LENGTHS` and

@@ -29,7 +29,7 @@ import numpy as np
 from curiosity_cli.config import ModelConfig
 from curiosity_cli.errors import ParameterError
 from curiosity_cli.seeds import PATH_TAG
-from curiosity_cli.words.store import WordStore
+from curiosity_cli.words.store import PIXEL_KINDS, WordStore
 
 
 def whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_counts=None):
@@ -210,9 +210,9 @@ def pixel_labels(store: WordStore, word_labels: np.ndarray, image_shape: tuple[i
 def pixel_words(store: WordStore, image_shape: tuple[int, int]) -> np.ndarray:
     """The word whose label each pixel of the map takes.
 
-    Its texton words sit on a regular grid every ``stride`` pixels from (0, 0); each pixel
-    takes its nearest texton word (ties go to the upper and left one; of two texton words
-    at one place, the later in the store).
+    Its texton words (a generated map's words) sit on a regular grid every ``stride``
+    pixels from (0, 0); each pixel takes its nearest texton word (ties go to the upper
+    and left one; of two texton words at one place, the later in the store).
 
     Parameters
     ----------
@@ -230,9 +230,9 @@ def pixel_words(store: WordStore, image_shape: tuple[int, int]) -> np.ndarray:
     ParameterError
         The store has no texton words, or they leave a ``stride`` x ``stride`` block of the map without one.
     """
-    texton = next((t for t in store.types if t.kind == "texton"), None)
+    texton = next((t for t in store.types if t.kind in PIXEL_KINDS), None)
     if texton is None:
-        raise ParameterError("store: has no texton words to label pixels with")
+        raise ParameterError("store: has no texton (or generated) words to label pixels with")
     stride = int(store.params.get("stride", 1))
     rows, cols = image_shape
     is_texton = (store.words >= texton.offset) & (store.words < texton.offset + texton.size)

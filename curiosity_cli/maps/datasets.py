@@ -2,7 +2,8 @@
 
 A dataset YAML (schema: :class:`DatasetConfig`) gives a map's image, its human labels and
 their legend, and the grid it is cut into; a fetched map's names ``fetch:`` instead
-(:mod:`curiosity_cli.maps.fetched`).
+(:mod:`curiosity_cli.maps.fetched`), and a generated map's ``generate:``, the generative
+model its words are drawn from (:mod:`curiosity_cli.maps.generative_spec`), instead of files.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from pathlib import Path
 
 from curiosity_cli.errors import ConfigError
 from curiosity_cli.files import display_path, resolved
+from curiosity_cli.maps.generative_spec import GenerativeSpec
 from curiosity_cli.paths import SHIPPED_CONFIGS
 from curiosity_cli.schema import NAME_PATTERN, Raw, build, spec
 from curiosity_cli.yamlfile import read_yaml, shown
@@ -27,7 +29,9 @@ class DatasetConfig:
 
     ``image`` is required unless ``fetch`` names a map made on first use from a pinned
     source archive (:mod:`curiosity_cli.maps.fetched`); then image, labels and legend are the
-    files it makes. Every key with a default may be left out of the YAML.
+    files it makes. A generated map gives ``generate`` and none of the image's keys
+    (:data:`IMAGE_KEYS`): its words are drawn one every ``word_stride`` px, its truth is the
+    generating topics. Every key with a default may be left out of the YAML.
     """
 
     name: str = spec(file_name=True)
@@ -44,8 +48,11 @@ class DatasetConfig:
     source: str = spec(default="")
     licence: str = spec(default="")
     stands_in_for: str | None = spec(default=None)
+    generate: GenerativeSpec | None = spec(default=None)
 
 
+#: The keys of a map made from an image, which a generated map leaves out.
+IMAGE_KEYS = ("image", "labels", "legend", "fetch", "bands", "stretch", "size")
 
 
 def load_dataset_config(path: str | Path) -> DatasetConfig:
@@ -67,7 +74,16 @@ def load_dataset_config(path: str | Path) -> DatasetConfig:
     raw = Raw(str(resolved(path)))
     raw.merge(read_yaml(path, "dataset file"), str(resolved(path)))
     config = build(DatasetConfig, raw.data, (), raw)
-    if config.fetch is not None:
+    if config.generate is not None:
+        given = [key for key in IMAGE_KEYS if key in raw.data]
+        if given:
+            raise ConfigError(f"{where}: {given[0]}: a generated map draws its words and truth; leave {given[0]} out")
+        from curiosity_cli.maps.generated import generation_problem  # numpy: not for the CLI's help
+
+        problem = generation_problem(config.generate, config.cell_width, config.word_stride)
+        if problem is not None:
+            raise ConfigError(f"{where}: {problem[0]}: {problem[1]}")
+    elif config.fetch is not None:
         if config.fetch not in FETCHED_MAPS:
             raise ConfigError(
                 f"{where}: fetch: got {shown(config.fetch)}, expected one of {', '.join(sorted(FETCHED_MAPS))}"
@@ -77,7 +93,9 @@ def load_dataset_config(path: str | Path) -> DatasetConfig:
             raise ConfigError(f"{where}: {given[0]}: a fetched map's files are made on first use; leave {given[0]} out")
         config = dataclasses.replace(config, **fetched_files(config.fetch))
     elif config.image is None:
-        raise ConfigError(f"{where}: image: missing key; expected the path of the map's image")
+        raise ConfigError(
+            f"{where}: image: missing key; expected the path of the map's image (or `generate:`, a generated map's model)"
+        )
     problem = stride_problem(config.word_stride, config.cell_width)
     if problem is not None:
         raise ConfigError(f"{where}: word_stride: {problem}")

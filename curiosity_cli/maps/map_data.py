@@ -1,5 +1,7 @@
 """A map loaded from its dataset YAML (:mod:`curiosity_cli.maps.datasets` finds it): its image,
-human labels and legend, and the digest of its labels (:func:`load_map`).
+human labels and legend, and the digest of its labels (:func:`load_map`). A generated map's
+are drawn (:mod:`curiosity_cli.maps.generated`): its truth as labels, the truth in the
+legend's colours as its image.
 
 Loading checks everything a later stage would trip over, and says what is wrong in one
 line naming the file.
@@ -157,6 +159,8 @@ def load_map(name_or_path: str | Path, *, announce=_to_stderr) -> MapData:
     yaml_path = dataset_path(name_or_path)
     config = load_dataset_config(yaml_path)
     where = display_path(yaml_path)
+    if config.generate is not None:
+        return _generated_map(config)
     if config.fetch is None:
         return _read_map(config, where)
     _fetch(config.fetch, where, announce)
@@ -177,8 +181,21 @@ def _fetch(name: str, where: str, announce, *, force: bool = False) -> None:
     try:
         ensure_fetched(name, announce=announce, force=force)
     except DatasetError as exc:
-        embedded = [n for n in dataset_names() if load_dataset_config(dataset_path(n)).fetch is None]
-        raise DatasetError(f"{where}: {exc}; the embedded maps {', '.join(embedded)} need no network") from None
+        local = [n for n in dataset_names() if load_dataset_config(dataset_path(n)).fetch is None]
+        raise DatasetError(f"{where}: {exc}; the embedded and generated maps {', '.join(local)} need no network") from None
+
+
+def _generated_map(config: DatasetConfig) -> MapData:
+    """The map a ``generate:`` section draws: its truth as labels and image (:mod:`curiosity_cli.maps.generated`)."""
+    from curiosity_cli.maps.generated import generate_map
+
+    drawn = generate_map(config.generate, config.cell_width, config.word_stride)
+    legend = tuple(
+        MapClass(class_id, name, colour, description) for class_id, (name, colour, description) in enumerate(drawn.legend)
+    )
+    # the image is made here in 8-bit RGB: nothing to stretch
+    rendering = Rendering(bands=(0, 1, 2), dtype="uint8", low=None, high=None, percentiles=None)
+    return MapData(config=config, image=drawn.image, labels=drawn.labels, legend=legend, rendering=rendering)
 
 
 def _read_map(config: DatasetConfig, where: str) -> MapData:

@@ -8,7 +8,7 @@ import numpy as np
 
 from curiosity_cli.maps.map_data import MapData
 from curiosity_cli.files import atomic_path
-from curiosity_cli.words.store import WordStore
+from curiosity_cli.words.store import PIXEL_KINDS, WordStore
 
 # Side, in cells, of the close-up window shown in the third panel.
 _CLOSE_UP_CELLS = 6
@@ -45,10 +45,11 @@ def write_word_density(map_data: MapData, store: WordStore, path: Path) -> None:
     top, left = (rows // 2) * cw, (cols // 2) * cw
     side = _CLOSE_UP_CELLS * cw
     inside = (store.rows >= top) & (store.rows < top + side) & (store.cols >= left) & (store.cols < left + side)
-    orb = next(t for t in store.types if t.kind == "orb")
-    texton = next(t for t in store.types if t.kind == "texton")
+    # a generated map's words take the textons' place, and it has no ORB words
+    orb = next((t for t in store.types if t.kind == "orb"), None)
+    texton = next(t for t in store.types if t.kind in PIXEL_KINDS)
     is_texton = (store.words >= texton.offset) & (store.words < texton.offset + texton.size)
-    is_orb = store.words < orb.offset + orb.size
+    is_orb = store.words < orb.offset + orb.size if orb is not None else np.zeros(store.words.shape, bool)
     canvas = np.full((side, side), np.nan)
     sel = inside & is_texton
     canvas[store.rows[sel] - top, store.cols[sel] - left] = store.words[sel]

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from curiosity_cli.maps.cell_grid import SquareGrid
+from curiosity_cli.maps.generated import voronoi_regions
 from curiosity_cli.checks import check_float, check_int
 from curiosity_cli.errors import ParameterError
 
@@ -192,23 +193,6 @@ def planted_lda(
     return PlantedCorpus(words=words, cell_start=cell_start, topics=topics, phi=phi, theta=theta)
 
 
-def voronoi_regions(rows: int, cols: int, n_regions: int, rng: np.random.Generator) -> np.ndarray:
-    """Cut a ``rows x cols`` grid into the Voronoi cells of ``n_regions`` random seed cells.
-
-    Every cell joins the region of its nearest seed (Euclidean distance between cell
-    centres; ties go to the lower region id). Each region is contiguous (a Voronoi cell
-    is convex, and it contains its own seed), and none is empty.
-
-    Returns
-    -------
-    (rows * cols,) int32 ndarray
-        Region id of each cell, row-major.
-    """
-    grid = SquareGrid(rows, cols)
-    seeds = rng.choice(grid.n_cells, size=n_regions, replace=False)
-    return np.argmin(grid.squared_distances(np.arange(grid.n_cells), seeds), axis=1).astype(np.int32)
-
-
 def planted_map(
     rows: int,
     cols: int,
@@ -225,7 +209,7 @@ def planted_map(
     """A spatially smooth map: contiguous regions, each with its own topic mixture.
 
     The grid is cut into the Voronoi regions of ``n_regions`` random seed cells (see
-    :func:`voronoi_regions`). Topics are ``Φ_k ~ Dirichlet(β)``. Region ``r`` has a main
+    :func:`~curiosity_cli.maps.generated.voronoi_regions`). Topics are ``Φ_k ~ Dirichlet(β)``. Region ``r`` has a main
     topic (distinct regions get distinct main topics while ``n_regions <= n_topics``)
     with weight drawn uniformly from ``main_weight``, and gives the rest of its weight to
     one other topic; every cell of the region draws its words from that mixture. With few

