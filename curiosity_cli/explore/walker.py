@@ -44,7 +44,10 @@ import numpy as np
 
 from curiosity_cli.config import COVERAGE_READINGS, ExploreConfig, ModelConfig
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.explore.weights import WEIGHT_FUNCTIONS, Candidates, Oracle, Plan, Sham, repelled, coverage_potential
+from curiosity_cli.explore.weights import (
+    WEIGHT_FUNCTIONS, Candidates, Oracle, Plan, Sham, coverage_potential, repelled, stochastic_coverage_weights,
+    topic_perplexity_weights,
+)
 from curiosity_cli.topics.map_model import map_topic_model
 from curiosity_cli.words.store import WordStore
 
@@ -210,7 +213,7 @@ def explore(
     seed : int or sequence of int
         Entropy for :class:`numpy.random.SeedSequence`; the topic model and the moves
         draw from two streams spawned from it, a validation walker's own draws from a
-        third (an oracle's coins; the sham's permutation).
+        third (an oracle's coins; the sham's translation).
     truth : (n_cells, C) bool ndarray, optional
         The classes present in each cell (:func:`~curiosity_cli.maps.cell_classes.classes_present`):
         what an oracle (:class:`~curiosity_cli.explore.weights.Oracle`) reads; required for one.
@@ -248,7 +251,7 @@ def explore(
     rng = np.random.default_rng(move_seed)
     own = np.random.default_rng(own_seed)
     seen = np.zeros(np.shape(truth)[1], bool) if isinstance(walker, Oracle) else None
-    other_cell = own.permutation(n_cells) if isinstance(walker, Sham) else None
+    stand_in = walker.stand_ins(store.grid, own) if isinstance(walker, Sham) else None
     topic_model = map_topic_model(store, model, int(model_seed.generate_state(1, np.uint64)[0]))
     neighbours = store.grid.neighbour_table(settings.candidates)
 
@@ -305,7 +308,7 @@ def explore(
             weights, choice, fallback[step] = _oracle_move(walker, candidates, truth[cells] & ~seen, rng, own)
         else:
             if isinstance(walker, Sham):
-                weights = repelled(_perplexities(topic_model, store, other_cell[cells], settings), candidates.coverage)
+                weights = _sham_weights(walker, candidates, _perplexities(topic_model, store, stand_in[cells], settings))
             else:
                 weights = _weights(walker, weight_function, candidates)
             choice, fallback[step] = draw_move(weights, rng)
@@ -343,6 +346,28 @@ def _oracle_move(oracle: Oracle, candidates: Candidates, new: np.ndarray, rng, o
     if own.random() < oracle.share and holds_new.any():
         return holds_new.astype(np.float64), int(own.choice(np.flatnonzero(holds_new))), False
     return weights, choice, fell_back
+
+
+def _sham_weights(sham: Sham, candidates: Candidates, scores: np.ndarray) -> np.ndarray:
+    """The sham's weights ``scores^γ / U``: ``scores`` are its stand-ins' topic perplexities, and ``γ`` in
+    ``[0, max_exponent]`` is found by bisection so that the move's total-variation distance from stochastic
+    coverage's is topic perplexity's on these candidates (or as near as the largest exponent comes)."""
+    coverage_only, _ = move_probabilities(stochastic_coverage_weights(candidates))
+
+    def distance(weights: np.ndarray) -> float:
+        return 0.5 * float(np.abs(move_probabilities(weights)[0] - coverage_only).sum())
+
+    def steered(exponent: float) -> np.ndarray:
+        with np.errstate(over="ignore"):  # an overflow is +inf: every chance among the highest, as its limit
+            return repelled(scores**exponent, candidates.coverage)
+
+    target = distance(topic_perplexity_weights(candidates))
+    low, high = 0.0, sham.max_exponent
+    if distance(steered(high)) > target:
+        for _ in range(40):  # the exponent to 64 / 2^40: far below any change of a step's chances that matters
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if distance(steered(middle)) < target else (low, middle)
+    return steered(high)
 
 
 def _weights(weight_function, name: str, candidates: Candidates) -> np.ndarray:

@@ -249,14 +249,44 @@ def test_an_oracle_moves_to_a_new_class_with_its_chance_and_otherwise_as_its_bas
     np.testing.assert_array_equal(none_new[0], base)
 
 
-def test_the_sham_weighs_each_candidate_by_another_cell_s_score_from_a_permutation_fixed_for_the_run(monkeypatch):
+def test_the_sham_weighs_each_candidate_by_its_stand_in_s_score_steering_as_hard_as_topic_perplexity(monkeypatch):
     from curiosity_cli.explore import walker
 
     # a score that names its cell: the sham's weights then say which cell stood in for each candidate
-    monkeypatch.setattr(walker, "_perplexities", lambda model, store, cells, settings: cells + 1.0)
+    monkeypatch.setattr(walker, "_perplexities", lambda model, store, cells, settings: cells + 2.0)
     seed, store = (3,), two_region_store()
-    sham, topic = run(store, "sham", seed=seed), run(store, "topic-perplexity", seed=seed)
-    other = np.random.default_rng(np.random.SeedSequence(seed).spawn(3)[2]).permutation(store.n_cells)
-    for e, cells in ((sham, other[sham.candidate_cell]), (topic, topic.candidate_cell)):
-        np.testing.assert_array_equal(e.weight, weights.repelled(cells + 1.0, e.coverage))
-    assert not np.array_equal(other, np.arange(store.n_cells))
+    sham = run(store, "sham", seed=seed, path_length=40, checkpoints=(40,))
+    stand_in = weights.Sham().stand_ins(store.grid, np.random.default_rng(np.random.SeedSequence(seed).spawn(3)[2]))
+    steps = 0
+    for step in np.unique(sham.candidate_step):
+        at = sham.candidate_step == step
+        cells, coverage, weight = sham.candidate_cell[at], sham.coverage[at], sham.weight[at]
+        open_ = np.isfinite(coverage)
+        if open_.sum() < 2:
+            continue
+        # weight * U is the stand-in's score to one power on every open candidate
+        exponents = np.log(weight[open_] * coverage[open_]) / np.log(stand_in[cells[open_]] + 2.0)
+        np.testing.assert_allclose(exponents, exponents[0], rtol=1e-9)
+        candidates = weights.Candidates(cells, coverage, np.ones(cells.size), cells + 2.0)
+        assert distance(weight, candidates) == pytest.approx(
+            distance(weights.topic_perplexity_weights(candidates), candidates), abs=1e-9
+        )
+        steps += 1
+    assert steps >= 20
+
+
+def distance(weight: np.ndarray, candidates) -> float:
+    """A step's total-variation distance from stochastic coverage's, as steering.csv measures it."""
+    from curiosity_cli.explore.walker import move_probabilities
+
+    coverage_only = move_probabilities(weights.stochastic_coverage_weights(candidates))[0]
+    return 0.5 * float(np.abs(move_probabilities(weight)[0] - coverage_only).sum())
+
+
+def test_the_sham_s_translation_moves_every_cell_by_one_offset_at_least_a_quarter_of_the_map_away():
+    grid, rng = two_region_store().grid, np.random.default_rng(0)  # 6 x 8 cells: 2 cells or more
+    for _ in range(50):
+        stand_in = weights.Sham().stand_ins(grid, rng)
+        assert np.array_equal(np.sort(stand_in), np.arange(grid.n_cells)), "a permutation of the cells"
+        (dr, dc), = {((t // 8 - c // 8) % 6, (t % 8 - c % 8) % 8) for c, t in enumerate(stand_in)}
+        assert np.hypot(min(dr, 6 - dr), min(dc, 8 - dc)) >= 2
