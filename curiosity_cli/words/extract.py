@@ -145,11 +145,8 @@ def extract_words(
     types = recipe.types
     params = _params(map_data, words, stride, cell_width)
     path = store_path(cache_dir, params, types)
-    if path.is_file() and not force:
-        try:
-            return Extraction(load_store(path), path, reused=True, seconds={})
-        except CorruptFileError as exc:  # a cache: make it again
-            note(f"{exc}; extracting the words again")
+    if (cached := None if force else _cached(path, "extracting")) is not None:
+        return cached
 
     start = time.perf_counter()
     grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY)
@@ -189,12 +186,21 @@ def _drawn(map_data: MapData, stride: int | None, cell_width: int | None, cache_
                 parameter=name,
             )
     path = store_path(cache_dir, drawn_params(map_data), drawn_types(map_data))
-    if path.is_file() and not force:
-        try:
-            return Extraction(load_store(path), path, reused=True, seconds={})
-        except CorruptFileError as exc:  # a cache: make it again
-            note(f"{exc}; drawing the words again")
+    if (cached := None if force else _cached(path, "drawing")) is not None:
+        return cached
     start = time.perf_counter()
     store = draw_store(map_data)
     save_store(store, path)
     return Extraction(store, path, reused=False, seconds={"total": time.perf_counter() - start})
+
+
+def _cached(path: Path, making: str) -> Extraction | None:
+    """The store cached at ``path``, or None when there is none; a corrupt one is noted (``making`` the words
+    again, as the caller will) and not used: it is a cache."""
+    if not path.is_file():
+        return None
+    try:
+        return Extraction(load_store(path), path, reused=True, seconds={})
+    except CorruptFileError as exc:
+        note(f"{exc}; {making} the words again")
+        return None
