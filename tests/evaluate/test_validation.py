@@ -78,3 +78,16 @@ def test_a_run_two_experiments_share_is_taken_once_and_only_when_both_give_it_th
     with pytest.raises(EvaluationError, match="^results/validation and results/validation-sham: run planted/"
                        "stochastic-coverage/0/0 has other values in each"):
         merge_runs({"results/validation": oracles, "results/validation-sham": edited})
+
+
+def test_the_kept_validation_gives_its_table_again_from_its_kept_runs():
+    from pathlib import Path
+
+    kept = Path(__file__).resolve().parents[2] / "studies" / "validation"
+    names = ["validation", *(f"validation-sham-{m}" for m in ("planted-disjoint", "planted-shared", "rare-patches"))]
+    table = validation_table(merge_runs({n: pd.read_csv(kept / f"{n}-mi.csv") for n in names}), 80)
+    pd.testing.assert_frame_equal(table, pd.read_csv(kept / "validation.csv"), check_dtype=False)
+    passes = table[table["validated"]]
+    assert set(passes.loc[passes["measure"] == "time_to_find", "dataset"]) == {
+        "planted-disjoint", "planted-shared", "rare-patches"
+    }
