@@ -73,11 +73,12 @@ def load_dataset_config(path: str | Path) -> DatasetConfig:
     where = display_path(path)
     raw = Raw(str(resolved(path)))
     raw.merge(read_yaml(path, "dataset file"), str(resolved(path)))
+    # before the keys are built: an image a generated map names is refused as named, not as a file not there
+    given = [key for key in IMAGE_KEYS if key in raw.data] if isinstance(raw.data, dict) and "generate" in raw.data else []
+    if given:
+        raise ConfigError(f"{where}: {given[0]}: a generated map draws its words and truth; leave {given[0]} out")
     config = build(DatasetConfig, raw.data, (), raw)
     if config.generate is not None:
-        given = [key for key in IMAGE_KEYS if key in raw.data]
-        if given:
-            raise ConfigError(f"{where}: {given[0]}: a generated map draws its words and truth; leave {given[0]} out")
         from curiosity_cli.maps.generated import generation_problem  # numpy: not for the CLI's help
 
         problem = generation_problem(config.generate, config.cell_width, config.word_stride)

@@ -143,6 +143,7 @@ def _refusal(tmp_path, **changes) -> str:
     ({"generate.colour": "red"}, "generate.colour: unknown key; expected one of seed, rows, cols"),
     ({"generate": [1, 2]}, "generate: got [1, 2] (list), expected a mapping of keys"),
     ({"size": [64, 80]}, "size: a generated map draws its words and truth; leave size out"),
+    ({"image": "not-there.png"}, "image: a generated map draws its words and truth; leave image out"),
     ({"word_stride": 3}, "word_stride: got 3 with cells of 8 px, expected a divisor of the cell width"),
     ({"generate.vocabulary": 30}, "generate.vocabulary: got 30, expected at least 40: 2 background topics x 10 words "
      "and 2 rare topics x 10 words of their own (0 shared with the background at overlap 0)"),
