@@ -39,6 +39,7 @@ from curiosity_cli.evaluate.information import (
 from curiosity_cli.evaluate.statistics import mean_interval
 from curiosity_cli.label.pixel_tables import PixelTables
 from curiosity_cli.label.sampling import label_paths, pixel_words
+from curiosity_cli.maps.generated import cell_classes
 from curiosity_cli.maps.map_data import load_map
 from curiosity_cli.paths import DEFAULT_CACHE
 from curiosity_cli.topics.map_model import map_topic_model
@@ -103,7 +104,7 @@ def check_map(entry: str, config, args) -> pd.DataFrame:
     if max(args.ks) > generate.rare_topics or max(args.ks) >= args.cells:
         raise SystemExit(f"--ks: got {args.ks}, expected at most {generate.rare_topics} rare classes and below --cells")
     store = extract_words(map_data, config.words, cache_dir=DEFAULT_CACHE).store
-    classes = map_data.labels[:: map_data.config.cell_width, :: map_data.config.cell_width].ravel()
+    classes = cell_classes(generate)
     tables = PixelTables(pixel_words(store, map_data.image.shape[:2]), map_data.labels, map_data.n_classes)
     runs, counts = [], []
     for seed in range(args.seeds):

@@ -240,7 +240,8 @@ def run_grid(
             shipped = {}  # loky workers load the stores from the cache themselves
             if workers.ships:
                 shipped = {path: workers.ship_file(path, load_store) for path in sorted({t.store_path for t in todo})}
-            truths = map_truths(config, {t.dataset for t in todo if t.weight_function in READS_TRUTH})
+            reading = {t.dataset for t in todo if t.weight_function in READS_TRUTH}
+            truths = map_truths([info.facts.entry for info in stores.values() if info.name in reading])
             computed = workers.compute(
                 compute_run, todo, args=lambda task: (config, shipped.get(task.store_path), truths.get(task.dataset)),
                 key=lambda task: f"explore-{task.dataset}/{task.weight_function}/restart-{task.restart:03d}",
@@ -273,19 +274,18 @@ def _load_store(path: str):
     return load_store(Path(path))
 
 
-def map_truths(config: ExperimentConfig, datasets: set[str]) -> dict[str, np.ndarray]:
-    """The classes present in each cell of each map named in ``datasets`` (by name), for the walkers that read
-    a map's truth: (n_cells, C) bool ndarrays (:func:`~curiosity_cli.maps.cell_classes.classes_present` at the share
-    that counts a class found)."""
+def map_truths(entries: list[str]) -> dict[str, np.ndarray]:
+    """The classes present in each cell of the maps of these ``datasets`` entries, by map name, for the walkers
+    that read a map's truth: (n_cells, C) bool ndarrays (:func:`~curiosity_cli.maps.cell_classes.classes_present`
+    at the share that counts a class found). Only these maps are loaded: a grid without such a walker loads none."""
     from curiosity_cli.experiment.recipes import CLASS_SHARE_PERCENT
     from curiosity_cli.maps.cell_classes import classes_present, map_class_pixels
     from curiosity_cli.maps.map_data import load_map
 
     truths = {}
-    for entry in config.datasets:
+    for entry in entries:
         map_data = load_map(entry)
-        if map_data.config.name in datasets:
-            truths[map_data.config.name] = classes_present(map_class_pixels(map_data), CLASS_SHARE_PERCENT)
+        truths[map_data.config.name] = classes_present(map_class_pixels(map_data), CLASS_SHARE_PERCENT)
     return truths
 
 
