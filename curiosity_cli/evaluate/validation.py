@@ -164,8 +164,8 @@ def _validate(block: pd.DataFrame, measure: Measure, dataset: str, against: str,
     sign = -1.0 if measure.lower_is_better else 1.0
     leads = {name: sign * (block[name] - block[BASE]) for name in (*ORACLES, SHAM, OURS) if name in block}
     row = {"dataset": dataset, "measure": measure.name, "against": against, "path_length": length}
-    oracles = [name for name in ORACLES if name in leads]
-    complete = _side_by_side([leads[name] for name in oracles]) if len(oracles) == len(ORACLES) else None
+    # the restarts every oracle has, a column each: what the paired slope over P needs
+    complete = block[list(ORACLES)].sub(block[BASE], axis=0).mul(sign).dropna() if set(ORACLES) <= set(leads) else None
     row["n"] = 0 if complete is None else len(complete)
     for name, share in ORACLES.items():
         values = leads[name].dropna().to_numpy() if name in leads else np.zeros(0)
@@ -174,7 +174,10 @@ def _validate(block: pd.DataFrame, measure: Measure, dataset: str, against: str,
     if complete is not None and len(complete) >= 2:
         shares = np.array(list(ORACLES.values()))
         centred = shares - shares.mean()
-        slopes = complete.to_numpy() @ centred / (centred @ centred)
+        # the leads centred too, elementwise: equal leads give a slope of exactly 0 (a tie Wilcoxon drops), and
+        # no matrix product whose rounding follows the array's layout
+        leads_centred = complete.to_numpy() - complete.to_numpy().mean(axis=1, keepdims=True)
+        slopes = (leads_centred * centred).sum(axis=1) / (centred * centred).sum()
         slope, slope_p = float(slopes.mean()), _greater_p(slopes)
     top = max(ORACLES, key=ORACLES.get)
     top_p = _greater_p(leads[top].dropna().to_numpy()) if top in leads and leads[top].notna().any() else np.nan
@@ -187,13 +190,6 @@ def _validate(block: pd.DataFrame, measure: Measure, dataset: str, against: str,
     row["sham_null"] = bool(row["sham_replications"] >= MIN_REPLICATIONS and row["sham_rate_low"] <= ALPHA)
     row["validated"] = row["graded"] and row["sham_null"]
     return row
-
-
-def _side_by_side(parts: list) -> pd.DataFrame:
-    """The restarts every one of ``parts`` (Series of one index) has, side by side."""
-    import pandas as pd
-
-    return pd.concat(parts, axis=1).dropna()
 
 
 def _sham(leads) -> dict:
