@@ -136,6 +136,9 @@ COVERAGE_READINGS: dict[str, CoverageReading] = {
 #: and :data:`curiosity_cli.topics.devices.DEVICES`, the table of devices, holds exactly these
 #: and ``auto`` (checked when it loads).
 LABEL_DEVICES = ("cpu", "cuda", "auto")
+#: How a path's frozen Φ_p labels the whole map (``label.reading``; curiosity_cli/label/readings.py says what each
+#: does); the first is the default, which a label recipe leaves out.
+LABEL_READINGS = ("frozen", "unseen-topic", "used-topics", "thawed")
 
 #: The other open choices of the paper's exploration, each a key of ``explore`` with the
 #: values a config may name, today's reading first (``configs/paper.yaml`` gives each the
@@ -335,6 +338,9 @@ class LabelConfig:
     check_restarts: int = spec(min=0, max=MAX_RESTARTS)
     batch_sweeps: int = spec(min=1, max=MAX_SWEEPS)
     device: str = spec(choices=LABEL_DEVICES)
+    reading: str = spec(choices=LABEL_READINGS)
+    used_share: float = spec(min=0, max=1, min_exclusive=True)
+    thaw_sweeps: int = spec(min=1, max=MAX_SWEEPS)
 
 
 @dataclass(frozen=True)

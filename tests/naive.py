@@ -232,6 +232,7 @@ class NaiveModel:
     order: list
     times: list
     frozen: np.ndarray | None = None  # (V, K) frozen word-topic counts
+    allowed: np.ndarray | None = None  # (V, K) bool: the topics each word may take (FrozenChains' allowed); None: all
     free_stream: int | None = None  # the first stream id of no cell: n_cells as the model was made
 
     def __post_init__(self):
@@ -301,6 +302,8 @@ def eq5_weights(state: NaiveModel, nwk, nk, around, w) -> np.ndarray:
     p = (nwk[w].astype(np.float32) + np.float32(state.beta)) * inv * (
         np.asarray(around).astype(np.float32) + np.float32(state.alpha)
     )
+    if state.allowed is not None:
+        p = np.where(state.allowed[w], p, np.float32(0))
     return np.concatenate([p, np.zeros(state.padded - state.n_topics, np.float32)])
 
 
@@ -481,7 +484,8 @@ def ml_topics_naive(state: NaiveModel, cells) -> np.ndarray:
     for c in cells:
         around = neighbourhood(state, ncz, c)
         for w in state.words[c]:
-            out.append(np.argmax((nwk[w] + state.beta) * norm * (around + state.alpha)))
+            weights = (nwk[w] + state.beta) * norm * (around + state.alpha)
+            out.append(np.argmax(weights if state.allowed is None else np.where(state.allowed[w], weights, 0.0)))
     return np.array(out, np.int64)
 
 

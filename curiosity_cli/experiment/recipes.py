@@ -30,7 +30,7 @@ import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from curiosity_cli.config import READS_TRUTH, ExperimentConfig
+from curiosity_cli.config import LABEL_READINGS, READS_TRUTH, ExperimentConfig
 from curiosity_cli.config_yaml import to_dict
 
 #: Where a file's meta (``run.json``, an ``.npz``'s ``meta``) holds its recipe.
@@ -177,8 +177,16 @@ def label_recipe(run: str, batch: str, config: ExperimentConfig, human: str | No
     ``label.check_restarts`` enters only as whether this ``restart`` is checked (a
     second chain), so changing it relabels only the runs it adds or drops.
     """
-    # the device is left out: cpu and cuda give the same bytes (topics/chains.py)
-    label = {key: value for key, value in to_dict(config.label).items() if key not in ("check_restarts", "device")}
+    # the device is left out: cpu and cuda give the same bytes (topics/chains.py); the reading only when it is not
+    # the default (every label file made before readings was made with it), a reading's setting only under it
+    left_out = {"check_restarts", "device"}
+    if config.label.reading == LABEL_READINGS[0]:
+        left_out.add("reading")
+    if config.label.reading != "used-topics":
+        left_out.add("used_share")
+    if config.label.reading != "thawed":
+        left_out.add("thaw_sweeps")
+    label = {key: value for key, value in to_dict(config.label).items() if key not in left_out}
     inputs = {
         "format": LABEL_FORMAT, "tables": LABEL_TABLES, "run": run, "batch": batch, "label": label,
         "class_share_percent": CLASS_SHARE_PERCENT, "human": human,

@@ -9,7 +9,8 @@ then used to compute topic labels for each pixel in the map in batch mode."
 - **Z_p** (:func:`label_paths`): every word of the map gets a topic from Gibbs
   sweeps with the word-topic counts frozen to Φ_p (cells and neighbourhoods as in the
   model, initial topics uniformly random), then its maximum-likelihood topic; the
-  chains of many paths of a map advance in lock-step. Whether the sweeps were enough is
+  chains of many paths of a map advance in lock-step. ``label.reading`` says which
+  topics each word may take (:mod:`~curiosity_cli.label.readings`). Whether the sweeps were enough is
   checked by a second chain from a placed start: ``label`` runs one for the restarts
   below ``label.check_restarts``, and ``scripts/study_label_sweeps.py`` runs both for
   every schedule it compares.
@@ -28,7 +29,8 @@ import numpy as np
 
 from curiosity_cli.config import ModelConfig
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.seeds import PATH_TAG
+from curiosity_cli.label.readings import Reading
+from curiosity_cli.seeds import PATH_TAG, THAW_TAG
 from curiosity_cli.words.store import PIXEL_KINDS, WordStore
 
 
@@ -64,14 +66,18 @@ def whole_map_model(store: WordStore, model: ModelConfig, seed: int, frozen_coun
     return topic_model
 
 
-def map_chains(store: WordStore, model: ModelConfig, device: str = "cpu", kept: np.ndarray | None = None):
+def map_chains(
+    store: WordStore, model: ModelConfig, device: str = "cpu", kept: np.ndarray | None = None,
+    n_topics: int | None = None,
+):
     """Frozen-Φ Gibbs chains over every word of a map (:class:`~curiosity_cli.topics.chains.FrozenChains`), none started.
 
     What Z_p is sampled on: the map's cells and neighbour table, each cell's words in
     the store's order, as :func:`whole_map_model` holds them; on ``device`` (``"cpu"`` or
     ``"cuda"``, the same bytes). ``kept``, (N,) bool, keeps only those words (the
     observed half of a held-out split, :mod:`~curiosity_cli.label.heldout`): every cell
-    and neighbour stays, a cell with none of its words kept is empty.
+    and neighbour stays, a cell with none of its words kept is empty. ``n_topics``: the
+    chains' topics, if not the model's (a reading's labels: :mod:`~curiosity_cli.label.readings`).
     """
     from curiosity_cli.topics.chains import FrozenChains
 
@@ -79,14 +85,16 @@ def map_chains(store: WordStore, model: ModelConfig, device: str = "cpu", kept: 
     if kept is not None:
         words, cells = words[kept], cells[kept]
     return FrozenChains(
-        words, cells, store.grid.neighbour_table(model.spatial_neighbours), n_topics=model.topics,
+        words, cells, store.grid.neighbour_table(model.spatial_neighbours),
+        n_topics=model.topics if n_topics is None else n_topics,
         vocabulary_size=store.vocabulary_size, alpha=model.alpha, beta=model.beta, device=device,
     )
 
 
 def label_paths(
     store: WordStore, model: ModelConfig, paths: Sequence[Sequence[np.ndarray]], seeds: Sequence[int], *,
-    sweeps: int, warm_sweeps: int | None, placed: Sequence[bool] | None = None, device: str = "cpu", on_sweep=None,
+    sweeps: int, warm_sweeps: int | None, placed: Sequence[bool] | None = None, reading: Reading | None = None,
+    device: str = "cpu", on_sweep=None,
 ) -> Iterator[tuple[int, list[int], np.ndarray]]:
     """Z_p of every word for each checkpoint of several paths, their chains in lock-step.
 
@@ -116,6 +124,9 @@ def label_paths(
         Per path, start from placed topics instead of uniformly random ones
         (:meth:`~curiosity_cli.topics.chains.FrozenChains.start`): the second chain of a
         convergence check.
+    reading : Reading, optional
+        Which topics each word may take (:mod:`~curiosity_cli.label.readings`); None:
+        ``frozen``, every one.
     device : str
         Where the chains run, a name in :data:`curiosity_cli.topics.devices.DEVICES`; the
         labels are the same bytes on each.
@@ -130,22 +141,33 @@ def label_paths(
     chains : list of int
         The paths that have a ``j``-th checkpoint, in order.
     labels : (N, len(chains)) int16 ndarray
-        Their labels, each word of the store in the store's order.
+        Their labels, each word of the store in the store's order: ``0 .. reading.labels(K) - 1``.
     """
-    chains = map_chains(store, model, device)
+    chains = map_chains(store, model, device, n_topics=None if reading is None else reading.labels(model.topics))
+    thaw = 0 if reading is None else reading.thaw_sweeps
+    if reading is not None:
+        inputs = [[reading.chain_inputs(phi) for phi in path] for path in paths]
+        paths = [[counts for counts, _ in path] for path in inputs]
+        allowed = [[mask for _, mask in path] for path in inputs]
+    else:
+        allowed = None
     for j, active in advance_chains(
-        chains, paths, seeds, sweeps=sweeps, warm_sweeps=warm_sweeps, placed=placed, on_sweep=on_sweep,
+        chains, paths, seeds, sweeps=sweeps, warm_sweeps=warm_sweeps, placed=placed, allowed=allowed, on_sweep=on_sweep,
     ):
-        yield j, active, chains.ml_topics()
+        labels = chains.ml_topics()
+        if thaw:
+            labels = thawed_labels(store, model, labels, [thaw_seed(seeds[c], j) for c in active], thaw)
+        yield j, active, labels
 
 
 def advance_chains(
     chains, paths: Sequence[Sequence[np.ndarray]], seeds: Sequence[int], *, sweeps: int, warm_sweeps: int | None,
-    placed: Sequence[bool] | None = None, on_sweep=None,
+    placed: Sequence[bool] | None = None, allowed: Sequence[Sequence[np.ndarray | None]] | None = None, on_sweep=None,
 ) -> Iterator[tuple[int, list[int]]]:
     """Take :class:`~curiosity_cli.topics.chains.FrozenChains` through each path's checkpoints, as :func:`label_paths`
-    describes (its parameters), yielding ``(j, chains)`` once the paths with a ``j``-th checkpoint have swept at it:
-    the caller reads the chains' state then (their labels, their counts)."""
+    describes (its parameters; ``allowed``, per path and checkpoint, the topics each word may take, or None for all),
+    yielding ``(j, chains)`` once the paths with a ``j``-th checkpoint have swept at it: the caller reads the chains'
+    state then (their labels, their counts)."""
     placed = [False] * len(paths) if placed is None else list(placed)
     active = list(range(len(paths)))
     for j in range(max(len(path) for path in paths)):
@@ -154,13 +176,36 @@ def advance_chains(
             chains.keep([active.index(c) for c in still])
         active = still
         phis = [paths[c][j] for c in active]
+        masks = None if allowed is None else [allowed[c][j] for c in active]
         if j > 0 and warm_sweeps is not None:
-            chains.switch(phis)
+            chains.switch(phis, masks)
             chains.sweep(warm_sweeps, on_sweep)
         else:
-            chains.start(phis, [(seeds[c] + j) % 2**64 for c in active], [placed[c] for c in active])
+            chains.start(phis, [(seeds[c] + j) % 2**64 for c in active], [placed[c] for c in active], masks)
             chains.sweep(sweeps, on_sweep)
         yield j, active
+
+
+def thawed_labels(store: WordStore, model: ModelConfig, labels: np.ndarray, seeds: Sequence[int], sweeps: int) -> np.ndarray:
+    """The ``thawed`` reading (:mod:`~curiosity_cli.label.readings`): Algorithm 1 from each column's labels.
+
+    Each column of ``labels`` (N, R), the map's words in the store's order, starts a model
+    of the whole map (:func:`whole_map_model`, seed ``seeds[r]``) whose Φ is counted from
+    those labels, and so is updated with the map's words from then on; after ``sweeps``
+    batch sweeps each word's maximum-likelihood topic. Returns (N, R) int16.
+    """
+    out = np.empty(labels.shape, np.int16)
+    for r in range(labels.shape[1]):
+        topic_model = whole_map_model(store, model, seeds[r])
+        topic_model.set_topics(labels[:, r])
+        topic_model.refine_batch(sweeps)
+        out[:, r] = topic_model.ml_topics()
+    return out
+
+
+def thaw_seed(chain_seed: int, checkpoint: int) -> int:
+    """The seed of the ``thawed`` reading's sweeps after a chain of seed ``chain_seed`` at its ``checkpoint``-th."""
+    return int(np.random.SeedSequence((chain_seed % 2**64, checkpoint, THAW_TAG)).generate_state(1, np.uint64)[0])
 
 
 def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1):

@@ -234,8 +234,11 @@ def label_block(
     from curiosity_cli.label.sampling import label_paths
     from curiosity_cli.seeds import HELDOUT_CHAIN_TAG, PATH_TAG, SECOND_CHAIN_TAG
 
+    from curiosity_cli.label.readings import Reading
+
     store, pixel_words, human, batch, cell_classes = arrays
-    k = config.model.topics
+    reading = Reading.of(config.label)
+    k = reading.labels(config.model.topics)
     word_cells = store.word_cells()
     chains = []  # (run index, array-name prefix: how the chain starts)
     for index, run in enumerate(runs):
@@ -250,7 +253,7 @@ def label_block(
         store, config.model, [phis[index] for index, _ in chains],
         [path_seed(runs[index].meta["seed"], SECOND_CHAIN_TAG if prefix else PATH_TAG) for index, prefix in chains],
         placed=[bool(prefix) for _, prefix in chains], sweeps=config.label.sweeps, warm_sweeps=config.label.warm_sweeps,
-        device=device, on_sweep=on_sweep,
+        reading=reading, device=device, on_sweep=on_sweep,
     )
     held = map_split(store, config.seed, inputs.name)
     held_cells = word_cells[held]

@@ -168,12 +168,13 @@ def sweep_colour_kernel(colour_cells, n_chains, cell_first, cell_count, words, t
 
 
 @cuda.jit(cache=True)
-def ml_kernel(n_chains, cell_first, cell_count, words, counts, beta, norm, ng, alpha, out):
+def ml_kernel(n_chains, cell_first, cell_count, words, counts, allowed, beta, norm, ng, alpha, out):
     """``ml_chains_kernel`` over every cell in index order: one thread per (cell, chain), ``out`` (N, R) int16.
 
     The weight ``phid * (float64(ng[cell, k, r]) + alpha)`` in float64, ties to the lowest
     topic, with ``phid = (float64(counts[w, k, r]) + beta) * norm[k, r]`` computed here
-    as :class:`~curiosity_cli.topics.chains.FrozenChains` computes it in numpy for the CPU.
+    as :class:`~curiosity_cli.topics.chains.FrozenChains` computes it in numpy for the CPU, 0 where
+    ``allowed[w, k, r]`` is False.
     """
     t = cuda.grid(1)
     if t >= cell_first.shape[0] * n_chains:
@@ -187,7 +188,7 @@ def ml_kernel(n_chains, cell_first, cell_count, words, counts, beta, norm, ng, a
         best = np.float64(-1.0)
         best_k = 0
         for k in range(n_topics):
-            phid = dmul(dadd(np.float64(counts[w, k, r]), beta), norm[k, r])
+            phid = dmul(dadd(np.float64(counts[w, k, r]), beta), norm[k, r]) if allowed[w, k, r] else np.float64(0.0)
             v = dmul(phid, dadd(np.float64(ng[cell, k, r]), alpha))
             if v > best:
                 best = v
@@ -196,9 +197,9 @@ def ml_kernel(n_chains, cell_first, cell_count, words, counts, beta, norm, ng, a
 
 
 @cuda.jit(cache=True)
-def phiw_kernel(counts, beta, inv, phiw):
+def phiw_kernel(counts, allowed, beta, inv, phiw):
     """eq. 5's fixed factors, as numpy computes them for the CPU: ``phiw = (float32(counts) + beta) * inv[k, r]``
-    in float32, one thread per element of the (V, K, R) arrays."""
+    in float32 where ``allowed``, else 0, one thread per element of the (V, K, R) arrays."""
     t = cuda.grid(1)
     n_topics, n_chains = counts.shape[1], counts.shape[2]
     if t >= counts.shape[0] * n_topics * n_chains:
@@ -206,7 +207,7 @@ def phiw_kernel(counts, beta, inv, phiw):
     r = t % n_chains
     k = (t // n_chains) % n_topics
     w = t // (n_chains * n_topics)
-    phiw[w, k, r] = fmul(fadd(np.float32(counts[w, k, r]), beta), inv[k, r])
+    phiw[w, k, r] = fmul(fadd(np.float32(counts[w, k, r]), beta), inv[k, r]) if allowed[w, k, r] else np.float32(0.0)
 
 
 @cuda.jit(cache=True)

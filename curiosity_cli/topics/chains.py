@@ -33,8 +33,9 @@ step            CPU / CUDA
                 (cell, chain), then the neighbourhood sums from the cell counts (the same
                 integers); a placed start, sequential over the cells, on the CPU, its
                 chain then put in its column on the GPU
-``switch``      the frozen counts to the device; eq. 5's fixed factors ``phiw`` computed there
-                (CPU: numpy float32; CUDA: a thread per element, the same roundings)
+``switch``      the frozen counts and allowed topics to the device; eq. 5's fixed factors ``phiw``
+                computed there, 0 for a topic not allowed (CPU: numpy float32; CUDA: a thread
+                per element, the same roundings)
 ``keep``        CPU: indexing; CUDA: to the host, indexing, back
 ``sweep``       CPU: one kernel call over the cells in colour order, every chain in
                 lock-step; CUDA: one launch per colour, a thread per (cell, chain)
@@ -160,7 +161,10 @@ class FrozenChains:
     def n_words(self) -> int:
         return self._words.size
 
-    def start(self, phis: Sequence[np.ndarray], seeds: Sequence[int], placed: Sequence[bool] | None = None) -> None:
+    def start(
+        self, phis: Sequence[np.ndarray], seeds: Sequence[int], placed: Sequence[bool] | None = None,
+        allowed: Sequence[np.ndarray | None] | None = None,
+    ) -> None:
         """Start ``R = len(phis)`` chains: chain ``r`` with Φ ``phis[r]`` and seed ``seeds[r]``.
 
         Parameters
@@ -173,6 +177,12 @@ class FrozenChains:
             Per chain, start from placed topics (each word drawn from eq. 5 given the
             words drawn before it, cells in index order) instead of uniformly random
             ones (the default).
+        allowed : sequence of R (V, K) bool ndarrays or None, optional
+            Per chain, the topics each word may take (a labelling reading,
+            :mod:`curiosity_cli.label.readings`): eq. 5's weight of the others is 0, in
+            the sweeps and the ML labels (a uniform start may still put a word there,
+            which its first sweep moves). None: every topic, for every word. Each word
+            must be allowed a topic.
         """
         from curiosity_cli.topics._rng import mix
 
@@ -185,19 +195,20 @@ class FrozenChains:
         if len(placed) != n:
             raise ParameterError(f"placed: got {len(placed)}, expected one per chain ({n})")
         keys = [mix(np.uint64(check_int("seeds", s, 0, 2**64 - 1))) for s in seeds]
-        counts, inv = self._set_phis(phis)
+        counts, inv, allowed = self._set_phis(phis, allowed)
         self._n = n
         held = counts.shape[2]
         self._keys = np.array(_padded(keys, held), np.uint64)
-        self._engine.start(counts, inv, self._keys, np.array(_padded(placed, held), bool))
+        self._engine.start(counts, inv, allowed, self._keys, np.array(_padded(placed, held), bool))
         self._sweeps = 0
 
-    def switch(self, phis: Sequence[np.ndarray]) -> None:
-        """Freeze each chain's Φ to ``phis[r]``, keeping every topic (a warm start)."""
+    def switch(self, phis: Sequence[np.ndarray], allowed: Sequence[np.ndarray | None] | None = None) -> None:
+        """Freeze each chain's Φ to ``phis[r]`` and its topics to ``allowed[r]`` (as :meth:`start`), keeping every
+        topic (a warm start)."""
         self._started("switch")
         if len(phis) != self.n_chains:
             raise ParameterError(f"phis: got {len(phis)}, expected one per chain ({self.n_chains})")
-        self._engine.set_counts(*self._set_phis(phis))
+        self._engine.set_counts(*self._set_phis(phis, allowed))
 
     def keep(self, chains: Sequence[int]) -> None:
         """Keep only the listed chains, in that order (the others have no more checkpoints)."""
@@ -244,12 +255,21 @@ class FrozenChains:
         norm = 1.0 / (self._totals + self._v * self._beta)  # (K, R)
         return self._engine.ml_topics(norm)[:, : self._n]
 
-    def _set_phis(self, phis: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """Each chain's frozen counts, kept, padded (:data:`LANES`): ``(counts, inv)``, (V, K, R held) int32 and
-        ``1 / (n_k + V beta)`` (K, R held) float32, from which a device makes eq. 5's fixed factors (:func:`_phiw`)."""
+    def _set_phis(
+        self, phis: Sequence[np.ndarray], allowed: Sequence[np.ndarray | None] | None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Each chain's frozen counts and allowed topics, kept, padded (:data:`LANES`): ``(counts, inv, allowed)``,
+        (V, K, R held) int32, ``1 / (n_k + V beta)`` (K, R held) float32 and (V, K, R held) bool, from which a device
+        makes eq. 5's fixed factors (:func:`_phiw`)."""
+        if allowed is None:
+            allowed = [None] * len(phis)
+        if len(allowed) != len(phis):
+            raise ParameterError(f"allowed: got {len(allowed)}, expected one per chain ({len(phis)})")
         phis = _padded(list(phis), _held(len(phis)))
+        allowed = _padded(list(allowed), len(phis))
         counts = np.empty((self._v, self._k, len(phis)), np.int32)
-        for r, phi in enumerate(phis):
+        opened = np.ones((self._v, self._k, len(phis)), bool)
+        for r, (phi, mask) in enumerate(zip(phis, allowed)):
             phi = np.asarray(phi)
             if phi.shape != (self._v, self._k):
                 raise ParameterError(f"phis: chain {r} has shape {phi.shape}, expected (V, K) = {(self._v, self._k)}")
@@ -258,8 +278,18 @@ class FrozenChains:
             if phi.size and (phi.min() < 0 or phi.sum(axis=0, dtype=np.int64).max() > np.iinfo(np.int32).max):
                 raise ParameterError(f"phis: chain {r}'s counts must be >= 0 and each topic's total fit in int32")
             counts[:, :, r] = phi
+            if mask is not None:
+                mask = np.asarray(mask)
+                if mask.shape != (self._v, self._k) or mask.dtype != np.bool_:
+                    raise ParameterError(
+                        f"allowed: chain {r} is {mask.dtype} of shape {mask.shape}, expected bool (V, K) = "
+                        f"{(self._v, self._k)}"
+                    )
+                if not mask.any(axis=1).all():
+                    raise ParameterError(f"allowed: chain {r} allows no topic to word {int(np.argmin(mask.any(axis=1)))}")
+                opened[:, :, r] = mask
         self._totals = counts.sum(axis=0, dtype=np.int64)
-        return counts, (1.0 / (self._totals + self._v * self._beta)).astype(np.float32)
+        return counts, (1.0 / (self._totals + self._v * self._beta)).astype(np.float32), opened
 
     def _started(self, name: str) -> None:
         if self._keys is None:

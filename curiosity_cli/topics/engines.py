@@ -12,9 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 
-def _phiw(counts: np.ndarray, inv: np.ndarray, beta: float) -> np.ndarray:
-    """eq. 5's fixed factors (V, K, R) float32: ``(float32(counts) + beta) * inv``, one rounding each."""
-    return (counts.astype(np.float32) + np.float32(beta)) * inv
+def _phiw(counts: np.ndarray, inv: np.ndarray, allowed: np.ndarray, beta: float) -> np.ndarray:
+    """eq. 5's fixed factors (V, K, R) float32: ``(float32(counts) + beta) * inv``, one rounding each, where
+    ``allowed`` (V, K, R) bool; 0 where not (that word never takes that topic)."""
+    return np.where(allowed, (counts.astype(np.float32) + np.float32(beta)) * inv, np.float32(0))
 
 
 class CpuEngine:
@@ -27,12 +28,13 @@ class CpuEngine:
         self._beta = beta
         self._state = None  # [topics, ncz, ng]
 
-    def set_counts(self, counts, inv) -> None:
+    def set_counts(self, counts, inv, allowed) -> None:
         self._counts = counts
-        self._phiw = _phiw(counts, inv, self._beta)
+        self._allowed = allowed
+        self._phiw = _phiw(counts, inv, allowed, self._beta)
 
-    def start(self, counts, inv, keys, placed) -> None:
-        self.set_counts(counts, inv)
+    def start(self, counts, inv, allowed, keys, placed) -> None:
+        self.set_counts(counts, inv, allowed)
         self._keys = tuple(keys)
         self._state = _start_on_cpu(
             self._phiw, keys, placed, self._fixed[1], self._fixed[2], self._fixed[3], self._table, self._alpha
@@ -41,6 +43,7 @@ class CpuEngine:
     def keep(self, index, keys) -> None:
         self._state = [np.ascontiguousarray(a[..., index]) for a in self._state]
         self._counts = np.ascontiguousarray(self._counts[:, :, index])
+        self._allowed = np.ascontiguousarray(self._allowed[:, :, index])
         self._phiw = np.ascontiguousarray(self._phiw[:, :, index])
         self._keys = tuple(keys)
 
@@ -63,7 +66,7 @@ class CpuEngine:
         _, cell_first, cell_count, words = self._fixed
         out = np.empty((words.size, len(self._keys)), np.int16)
         cells = np.arange(cell_first.size, dtype=np.int64)
-        phid = (self._counts + self._beta) * norm
+        phid = np.where(self._allowed, (self._counts + self._beta) * norm, 0.0)
         ml_chains_kernel(cells, cell_first, cell_count, words, phid, self._state[2], self._alpha, self._keys, out)
         return out
 
@@ -108,19 +111,23 @@ class CudaEngine:
         self._beta = beta
         self._state = None  # [topics, ncz, ng] on the GPU
 
-    def set_counts(self, counts, inv) -> None:
+    def set_counts(self, counts, inv, allowed) -> None:
         from curiosity_cli.topics._chain_kernels_cuda import launch, phiw_kernel
 
         self._counts = self._cuda.to_device(counts)
+        self._allowed = self._cuda.to_device(allowed)
         self._phiw = self._cuda.device_array(counts.shape, np.float32)
-        launch(phiw_kernel, counts.size, self._counts, np.float32(self._beta), self._cuda.to_device(inv), self._phiw)
+        launch(
+            phiw_kernel, counts.size, self._counts, self._allowed, np.float32(self._beta), self._cuda.to_device(inv),
+            self._phiw,
+        )
 
-    def start(self, counts, inv, keys, placed) -> None:
+    def start(self, counts, inv, allowed, keys, placed) -> None:
         """Uniform starts on the GPU; placed ones on the CPU (they are sequential over the cells), put in their columns."""
         from curiosity_cli.topics._chain_kernels_cuda import launch, neighbour_sums_kernel, start_uniform_kernel
 
         cuda = self._cuda
-        self.set_counts(counts, inv)
+        self.set_counts(counts, inv, allowed)
         self._keys = cuda.to_device(np.ascontiguousarray(keys, np.uint64))
         n_cells, n_topics, held = self._table.shape[0], counts.shape[1], counts.shape[2]
         topics = cuda.to_device(np.zeros((self._n_words, held), np.int8))
@@ -134,7 +141,8 @@ class CudaEngine:
         if columns.size:
             cell_first, cell_count, words, table = self._host
             started = _start_on_cpu(
-                _phiw(counts[:, :, columns], inv[:, columns], self._beta), keys[columns], placed[columns],
+                _phiw(counts[:, :, columns], inv[:, columns], allowed[:, :, columns], self._beta), keys[columns],
+                placed[columns],
                 cell_first, cell_count, words, table, self._alpha,
             )
             self._put_columns(columns, started)
@@ -154,6 +162,7 @@ class CudaEngine:
         to = self._cuda.to_device
         self._state = [to(np.ascontiguousarray(a.copy_to_host()[..., index])) for a in self._state]
         self._counts = to(np.ascontiguousarray(self._counts.copy_to_host()[:, :, index]))
+        self._allowed = to(np.ascontiguousarray(self._allowed.copy_to_host()[:, :, index]))
         self._phiw = to(np.ascontiguousarray(self._phiw.copy_to_host()[:, :, index]))
         self._keys = to(np.ascontiguousarray(keys, np.uint64))
 
@@ -179,7 +188,7 @@ class CudaEngine:
         out = self._cuda.device_array((self._n_words, n_chains), np.int16)
         launch(
             ml_kernel, self._cell_first.shape[0] * n_chains, n_chains, self._cell_first, self._cell_count, self._words,
-            self._counts, float(self._beta), self._cuda.to_device(np.ascontiguousarray(norm)), self._state[2],
+            self._counts, self._allowed, float(self._beta), self._cuda.to_device(np.ascontiguousarray(norm)), self._state[2],
             float(self._alpha), out,
         )
         return out.copy_to_host()

@@ -223,6 +223,44 @@ class TopicModel(CellMemory):
         """
         return self._in_order(self._topics, self._cells_or_all(cells))
 
+    def set_topics(self, topics) -> None:
+        """Put every observed word at the topic given and recount from them: the start of a chain from given labels.
+
+        Parameters
+        ----------
+        topics : (n,) int ndarray
+            ``0 .. K - 1``, in the order of :meth:`topics` (every observed cell by cell
+            index, each cell's words in the order added). The counts (``n_kw`` and ``n_k``
+            unless the model is frozen, each cell's and each neighbourhood's) are made
+            from them; the random state is kept.
+
+        Raises
+        ------
+        ParameterError
+            ``topics`` is not one topic per observed word in ``0 .. K - 1``.
+        """
+        cells = self._cells_or_all(None)
+        index = self._in_order(np.arange(self._topics.size), cells)
+        topics = np.asarray(topics)
+        if topics.shape != index.shape or (topics.size and not np.issubdtype(topics.dtype, np.integer)):
+            raise ParameterError(f"topics: got {topics.dtype} of shape {topics.shape}, expected ({index.size},) integers")
+        if topics.size and (topics.min() < 0 or topics.max() >= self._k):
+            raise ParameterError(f"topics: got {topics.min()} .. {topics.max()}, expected 0 .. {self._k - 1}")
+        self._topics[index] = topics
+        kp = self._nwk.shape[1]
+        word_cells = np.repeat(cells, self._cell_count[cells])
+        self._ncz[:] = np.bincount(word_cells * kp + topics, minlength=self._ncz.size).reshape(self._ncz.shape)
+        self._ng[:] = self._ncz
+        for j in range(self._table.shape[1]):
+            around = self._table[:, j]
+            has = around >= 0
+            self._ng[has] += self._ncz[around[has]]
+        if not self._frozen:
+            words = self._words[index].astype(np.int64)
+            self._nwk[:] = np.bincount(words * kp + topics, minlength=self._nwk.size).reshape(self._nwk.shape)
+            self._nk[:] = self._nwk.sum(axis=0)
+            self._refresh_inverse()
+
     def topic_word_counts(self) -> np.ndarray:
         """(V, K) int32 ndarray: ``n_kw``, how often word ``w`` has topic ``k`` (Φ as counts)."""
         return self._nwk[:, : self._k].copy()

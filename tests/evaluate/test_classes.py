@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import json
 from types import SimpleNamespace
 
@@ -161,7 +163,11 @@ def test_run_rows_give_classes_found_recall_and_first_steps_per_checkpoint():
 
 
 def test_a_label_file_is_current_only_for_the_recipe_it_was_made_from(tmp_path):
-    config = SimpleNamespace(label=LabelConfig(sweeps=2, warm_sweeps=1, check_restarts=1, batch_sweeps=3, device="cpu"))
+    label = LabelConfig(
+        sweeps=2, warm_sweeps=1, check_restarts=1, batch_sweeps=3, device="cpu", reading="frozen", used_share=0.01,
+        thaw_sweeps=4,
+    )
+    config = SimpleNamespace(label=label)
     recipe = label_recipe("run-digest", "batch-digest", config, "human-digest", 1)
     path = ExperimentFolder(tmp_path).label_file("own", "random-walk", 1)
     assert label_changes(path, recipe) == NOT_LABELLED
@@ -172,7 +178,7 @@ def test_a_label_file_is_current_only_for_the_recipe_it_was_made_from(tmp_path):
     # another share of a cell makes a class found; other sweeps; a batch reference made again
     other_share = Recipe({**recipe.inputs, "class_share_percent": CLASS_SHARE_PERCENT + 5})
     assert label_changes(path, other_share) == f"class_share_percent was {CLASS_SHARE_PERCENT}, now {CLASS_SHARE_PERCENT + 5}"
-    more_sweeps = SimpleNamespace(label=LabelConfig(sweeps=4, warm_sweeps=1, check_restarts=1, batch_sweeps=3, device="cpu"))
+    more_sweeps = SimpleNamespace(label=dataclasses.replace(label, sweeps=4))
     assert label_changes(path, label_recipe("run-digest", "batch-digest", more_sweeps, "human-digest", 1)) == (
         "label.sweeps was 2, now 4"
     )
@@ -181,7 +187,17 @@ def test_a_label_file_is_current_only_for_the_recipe_it_was_made_from(tmp_path):
     )
     # checking fewer restarts leaves this one's file current; checking it too asks for its second chain
     for checked, change in ((0, None), (2, "second_start was absent, now 'placed'")):
-        other = SimpleNamespace(label=LabelConfig(sweeps=2, warm_sweeps=1, check_restarts=checked, batch_sweeps=3, device="cpu"))
+        other = SimpleNamespace(label=dataclasses.replace(label, check_restarts=checked))
+        assert label_changes(path, label_recipe("run-digest", "batch-digest", other, "human-digest", 1)) == change
+    # the default reading is not in the recipe (files made before readings stay current), nor a share it does not read;
+    # another reading is, and used-topics' share with it
+    assert "reading" not in recipe.inputs["label"] and "used_share" not in recipe.inputs["label"]
+    for changed, change in (
+        ({"used_share": 0.2}, None), ({"reading": "unseen-topic"}, "label.reading was absent, now 'unseen-topic'"),
+        ({"reading": "used-topics"}, "label.reading was absent, now 'used-topics', label.used_share was absent, now 0.01"),
+        ({"reading": "thawed"}, "label.reading was absent, now 'thawed', label.thaw_sweeps was absent, now 4"),
+    ):
+        other = SimpleNamespace(label=dataclasses.replace(label, **changed))
         assert label_changes(path, label_recipe("run-digest", "batch-digest", other, "human-digest", 1)) == change
     with np.load(path) as npz:
         assert json.loads(str(npz["meta"]))["restart"] == 1

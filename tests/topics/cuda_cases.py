@@ -33,13 +33,27 @@ def one_cell_map():
     return np.array([3, 3, 7, 0, 29]), np.zeros(5, int), np.array([[-1, -1, -1, -1]], np.int32)
 
 
+def allowed_topics(rng, n_chains: int) -> list:
+    """Every other chain's topics allowed per word (a labelling reading's): about half of them, one at least; the
+    rest None (all)."""
+    masks = []
+    for r in range(n_chains):
+        mask = rng.random((V, K)) < 0.5
+        mask[np.arange(V), rng.integers(0, K, V)] = True
+        masks.append(mask if r % 2 else None)
+    return masks
+
+
 def run(device: str, words, cells, table, n_chains: int, seed: int) -> list[tuple[str, np.ndarray]]:
     """Start, sweep, switch, keep and sweep ``n_chains`` chains on ``device``; every state along the way."""
     rng = np.random.default_rng(seed)
     phis = [rng.integers(0, 6, (V, K)) for _ in range(n_chains)]
     later = [rng.integers(0, 6, (V, K)) for _ in range(n_chains)]
     chains = FrozenChains(words, cells, table, n_topics=K, vocabulary_size=V, alpha=0.1, beta=0.1, device=device)
-    chains.start(phis, [seed * 100 + r for r in range(n_chains)], [r % 3 == 1 for r in range(n_chains)])
+    chains.start(
+        phis, [seed * 100 + r for r in range(n_chains)], [r % 3 == 1 for r in range(n_chains)],
+        allowed_topics(rng, n_chains),
+    )
     states = []
 
     def record(step: str) -> None:
@@ -50,7 +64,7 @@ def run(device: str, words, cells, table, n_chains: int, seed: int) -> list[tupl
     record("start")
     chains.sweep(2)
     record("2 sweeps")
-    chains.switch(later)
+    chains.switch(later, allowed_topics(rng, n_chains))
     chains.sweep(1)
     record("switched")
     if n_chains > 1:

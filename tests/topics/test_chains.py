@@ -75,6 +75,48 @@ def test_every_chain_of_a_block_is_its_naive_twin_draw_for_draw():
         np.testing.assert_array_equal(chains.ml_topics()[:, r], ml_topics_naive(twin, sorted(twin.topics)))
 
 
+def test_chains_with_allowed_topics_are_their_naive_twins_and_stay_inside_them():
+    """A labelling reading's mask (``allowed``): each chain is its twin whose eq. 5 weights are 0 outside the mask,
+    in the sweeps and the ML labels, and after a sweep every word is at a topic it may take; a chain given None is
+    the unmasked chain."""
+    words, cells, table = small_map()
+    rng = np.random.default_rng(4)
+    phis = [rng.integers(0, 6, (V, K)) for _ in range(3)]
+    masks = []
+    for _ in range(2):
+        mask = rng.random((V, K)) < 0.4
+        mask[np.arange(V), rng.integers(0, K, V)] = True
+        masks.append(mask)
+    seeds, placed = [3, 8, 3], [True, False, False]
+    chains = chains_of(words, cells, table)
+    chains.start(phis, seeds, placed, [masks[0], masks[1], None])
+    chains.sweep(2)
+    unmasked = chains_of(words, cells, table)
+    unmasked.start(phis[2:], seeds[2:], placed[2:])
+    unmasked.sweep(2)
+    np.testing.assert_array_equal(chains.topics()[:, 2], unmasked.topics()[:, 0])
+    for r, mask in enumerate(masks):
+        twin = twin_of(words, cells, table, phis[r])
+        twin.allowed = mask
+        start_chain_naive(twin, seeds[r], placed[r])
+        for s in range(2):
+            sweep_chain_naive(twin, table.shape[0] + s)
+        topics = chains.topics()[:, r]
+        np.testing.assert_array_equal(topics, twin_topics(twin))
+        np.testing.assert_array_equal(chains.ml_topics()[:, r], ml_topics_naive(twin, sorted(twin.topics)))
+        assert mask[words, topics].all() and mask[words, chains.ml_topics()[:, r]].all()
+
+
+def test_a_word_allowed_no_topic_is_refused():
+    words, cells, table = small_map()
+    mask = np.ones((V, K), bool)
+    mask[7] = False
+    with pytest.raises(ParameterError, match="allowed: chain 0 allows no topic to word 7"):
+        chains_of(words, cells, table).start([np.ones((V, K), int)], [0], allowed=[mask])
+    with pytest.raises(ParameterError, match=r"allowed: chain 0 is int64 of shape \(30, 5\), expected bool"):
+        chains_of(words, cells, table).start([np.ones((V, K), int)], [0], allowed=[np.ones((V, K), int)])
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("n_topics", [8, 13, 24, 127])
 def test_the_draw_over_many_topics_is_the_twins(n_topics):

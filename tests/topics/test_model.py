@@ -502,3 +502,20 @@ def test_a_ring_of_frames_links_the_last_frame_to_the_first():
 def test_neighbour_tables_name_the_bad_parameter(call, name):
     with pytest.raises(ParameterError, match=rf"^{name}:"):
         call()
+
+
+@pytest.mark.parametrize("frozen", [False, True])
+def test_set_topics_puts_every_word_there_and_recounts(frozen):
+    model = build(seed=3)
+    if frozen:
+        model = build(seed=3, frozen_counts=np.random.default_rng(0).integers(0, 4, (15, 6)))
+    topics = np.random.default_rng(1).integers(0, 6, model.n_words)
+    model.set_topics(topics)
+    np.testing.assert_array_equal(model.topics(), topics)
+    assert_consistent(model)
+    model.refine_batch(2)  # a chain from there keeps its counts exact
+    assert_consistent(model)
+    with pytest.raises(ParameterError, match=r"topics: got 1 \.\. 6, expected 0 \.\. 5"):
+        model.set_topics(np.where(topics == 0, 6, topics))
+    with pytest.raises(ParameterError, match=rf"topics: got int64 of shape \(3,\), expected \({model.n_words},\) integers"):
+        model.set_topics(topics[:3])
