@@ -2,14 +2,18 @@
 
 Pools the ``mi.csv`` of evaluated experiments that ran stochastic coverage beside the
 validation walkers (configs/validation.yaml and validation-sham.yaml; a run two of them
-share is taken once, and only when both give it the same values), and writes
-``validation.csv`` and ``validation.png``/``.pdf`` to --out
-(:mod:`curiosity_cli.evaluate.validation` says what passes). Prints, per map, each measure
-that passed and each that did not, with the oracles' leads, the sham's rate and where topic
-perplexity sits on the oracles' scale.
+share is taken once, and only when both give it the same values), apart for each labelling
+reading the experiments were labelled under (``label.reading``), and writes ``validation.csv``
+(a ``reading`` column first) and a figure per reading, ``validation-READING.png``/``.pdf``, to
+--out (:mod:`curiosity_cli.evaluate.validation` says what passes). Prints, per reading and map,
+each measure that passed and each that did not, with the oracles' leads, the sham's rate and
+where topic perplexity sits on the oracles' scale.
 
     curiosity reproduce validation && curiosity reproduce validation-sham
     python scripts/validate_measures.py results/validation results/validation-sham --out results/validation-table
+    # another reading: label copies of the same runs under it (docs/GUIDE.md, "Validating the measures")
+    curiosity label results-unseen/validation --set label.reading=unseen-topic && curiosity evaluate results-unseen/validation
+    python scripts/validate_measures.py results/validation* results-unseen/validation* --out results/validation-table
     python scripts/validate_measures.py --smoke     # a tiny generated map, every validation walker, seconds
 """
 
@@ -21,7 +25,7 @@ import tempfile
 from pathlib import Path
 
 from curiosity_cli.errors import CuriosityError
-from curiosity_cli.evaluate.validation import ORACLES, pooled_runs, validation_table
+from curiosity_cli.evaluate.validation import ORACLES, pooled_readings, readings_table
 
 #: --smoke's experiment: a tiny generated map, stochastic coverage and every validation walker, 10 restarts of
 #: 10 steps, one sweep.
@@ -33,16 +37,21 @@ SMOKE = [
 
 
 def validate(folders: list[Path], out: Path, length: int) -> int:
-    """Write the table and figure of ``folders`` to ``out`` and print what passed; returns the exit code."""
+    """Write the table and figures of ``folders`` to ``out`` and print what passed; returns the exit code."""
     from curiosity_cli.plots.validation import validation_figure
 
-    table = validation_table(pooled_runs(folders), length)
+    table = readings_table(pooled_readings(folders), length)
     out.mkdir(parents=True, exist_ok=True)
     table.to_csv(out / "validation.csv", index=False)
-    validation_figure(table, out / "validation")
+    figures = [
+        validation_figure(block, out / f"validation-{reading}")[0] for reading, block in table.groupby("reading", sort=False)
+    ]
     top = f"lead_{max(ORACLES.values()):g}"
-    for dataset, block in table.groupby("dataset", sort=False):
-        print(f"\n{dataset}: {int(block['validated'].sum())} of {len(block)} measures validated at {length} steps")
+    for (reading, dataset), block in table.groupby(["reading", "dataset"], sort=False):
+        print(
+            f"\n{dataset}, labelled {reading}: {int(block['validated'].sum())} of {len(block)} measures validated "
+            f"at {length} steps"
+        )
         for _, row in block.iterrows():
             status = "passes" if row["validated"] else ("graded, sham undecided" if row["graded"] else "fails")
             print(
@@ -52,7 +61,7 @@ def validate(folders: list[Path], out: Path, length: int) -> int:
                 f"topic perplexity {row['ours_lead']:+.4f} [{row['ours_low']:+.4f}, {row['ours_high']:+.4f}], "
                 f"P equivalent {row['ours_p_equivalent']:.2f}"
             )
-    print(f"\nwrote {out / 'validation.csv'} and {out / 'validation.png'}")
+    print(f"\nwrote {out / 'validation.csv'} and {', '.join(map(str, figures))}")
     return 0
 
 

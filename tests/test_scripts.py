@@ -45,7 +45,7 @@ SMOKED = {
     "study_frozen_cost.py": "fit:",
     "study_label_sweeps.py": "doubling:",
     "study_screening.py": "rost",
-    "validate_measures.py": "validation.png",
+    "validate_measures.py": "validation-frozen.png",
 }
 #: The smoke runs of a few seconds, in the quick tier; the others start numba's kernels, OpenCV, Dask or a drive
 #: in processes of their own and are marked slow.

@@ -91,6 +91,34 @@ def pooled_runs(folders) -> pd.DataFrame:
     return merge_runs(parts)
 
 
+def pooled_readings(folders) -> dict:
+    """:func:`pooled_runs` of evaluated experiment folders, apart for each labelling reading their configs name.
+
+    Returns
+    -------
+    dict of str to pandas.DataFrame
+        By reading (:attr:`~curiosity_cli.label.readings.Reading.title`, in the order first met), the runs of
+        the folders labelled under it, each run once.
+    """
+    from curiosity_cli.experiment.experiment import Experiment
+    from curiosity_cli.label.readings import Reading
+
+    groups = {}
+    for folder in folders:
+        groups.setdefault(Reading.of(Experiment.open(folder).config.label).title, []).append(folder)
+    return {title: pooled_runs(group) for title, group in groups.items()}
+
+
+def readings_table(groups: dict, path_length: int, measures: tuple[Measure, ...] = MEASURES) -> pd.DataFrame:
+    """:func:`validation_table` under each labelling reading: ``groups`` maps a reading's title to its runs (as
+    :func:`pooled_readings` gives them); the rows of each, a ``reading`` column first. A measure that reads no
+    labels (the time to a first find, the classes found, the held-out words) has the same row under every reading."""
+    import pandas as pd
+
+    tables = [validation_table(mi, path_length, measures).assign(reading=title) for title, mi in groups.items()]
+    return pd.concat(tables, ignore_index=True)[["reading", *COLUMNS]]
+
+
 def merge_runs(parts: dict) -> pd.DataFrame:
     """:func:`pooled_runs` of tables already read: ``parts`` maps where each came from to its rows.
 

@@ -53,6 +53,13 @@ class Reading:
         return cls(label.reading, label.used_share, label.thaw_sweeps)
 
     @property
+    def title(self) -> str:
+        """Its name with the setting it reads: ``frozen``, ``unseen-topic``, ``used-topics-0.01``, ``thawed-4``."""
+        if self.name == "used-topics":
+            return f"{self.name}-{self.used_share:g}"
+        return f"{self.name}-{self.thaw}" if self.name == "thawed" else self.name
+
+    @property
     def thaw_sweeps(self) -> int:
         """Sweeps of Algorithm 1 after the frozen chains: ``thaw`` under ``thawed``, else 0."""
         return self.thaw if self.name == "thawed" else 0

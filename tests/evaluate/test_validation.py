@@ -9,7 +9,7 @@ import pytest
 
 from curiosity_cli.evaluate.measures import MI, TIME_TO_FIND
 from curiosity_cli.evaluate.tables import EvaluationError
-from curiosity_cli.evaluate.validation import BLOCK, MIN_REPLICATIONS, merge_runs, validation_table
+from curiosity_cli.evaluate.validation import BLOCK, MIN_REPLICATIONS, merge_runs, readings_table, validation_table
 
 SEEDS, RESTARTS = 4, 60  # 4 x 60 / 5 = 48 sham replications
 
@@ -89,6 +89,16 @@ def test_the_kept_validation_gives_its_table_again_from_its_kept_runs():
     pd.testing.assert_frame_equal(table, pd.read_csv(kept / "validation.csv"), check_dtype=False)
     passes = table[table["validated"]]
     assert set(passes.loc[passes["measure"] == "time_to_find", "dataset"]) == {"planted-shared", "rare-patches"}
+
+
+def test_each_reading_is_validated_on_its_own_runs():
+    graded, flat = table(0.02, 0.0, 0.03), table(0.0, 0.0, 0.0, seed=1)
+    both = readings_table({"frozen": graded, "unseen-topic": flat}, 80, (MI,))
+    assert list(both["reading"]) == ["frozen", "unseen-topic"] and list(both.columns[:2]) == ["reading", "dataset"]
+    assert list(both["validated"]) == [True, False]
+    pd.testing.assert_frame_equal(
+        both.iloc[1:].drop(columns="reading").reset_index(drop=True), validation_table(flat, 80, (MI,)),
+    )
 
 
 def test_a_restart_whose_oracles_all_lead_alike_has_a_slope_of_exactly_0_which_the_test_leaves_out():

@@ -93,3 +93,8 @@ def test_thawed_is_the_frozen_labels_then_algorithm_1_from_them():
         np.testing.assert_array_equal(thawed, again.ml_topics())
         assert not np.array_equal(thawed, frozen)  # Φ moved with the map's words
     assert Reading("used-topics", 0.01, 4).thaw_sweeps == 0  # a thaw setting is read only under thawed
+
+
+def test_a_readings_title_names_the_setting_it_reads():
+    titles = [Reading(name, 0.01, 4).title for name in LABEL_READINGS]
+    assert titles == ["frozen", "unseen-topic", "used-topics-0.01", "thawed-4"]
