@@ -101,6 +101,23 @@ def test_each_reading_is_validated_on_its_own_runs():
     )
 
 
+def test_the_kept_readings_give_their_table_again_from_their_kept_runs():
+    """studies/validation/readings/READING/ holds the four mi.csv of the validation labelled under each reading but
+    frozen (whose are studies/validation's own); readings.csv is the table scripts/validate_measures.py made of all."""
+    from pathlib import Path
+
+    kept = Path(__file__).resolve().parents[2] / "studies" / "validation"
+    names = ["validation", *(f"validation-sham-{m}" for m in ("planted-disjoint", "planted-shared", "rare-patches"))]
+    folders = {"frozen": kept, **{path.name: path for path in sorted((kept / "readings").iterdir())}}
+    groups = {title: merge_runs({n: pd.read_csv(folder / f"{n}-mi.csv") for n in names}) for title, folder in folders.items()}
+    table = readings_table(groups, 80)
+    expected = pd.read_csv(kept / "readings.csv")
+    assert list(dict.fromkeys(expected["reading"])) == list(folders)
+    pd.testing.assert_frame_equal(table, expected, check_dtype=False)
+    frozen = table[table["reading"] == "frozen"].drop(columns="reading").reset_index(drop=True)
+    pd.testing.assert_frame_equal(frozen, pd.read_csv(kept / "validation.csv"), check_dtype=False)
+
+
 def test_a_restart_whose_oracles_all_lead_alike_has_a_slope_of_exactly_0_which_the_test_leaves_out():
     rows = table(0.0, 0.0, 0.0, noise=0.0)  # every walker of a restart equal: each oracle's lead is exactly 0
     lifted = rows["weight_function"].str.startswith("oracle") & (rows["restart"] < 10)
