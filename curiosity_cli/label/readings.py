@@ -1,9 +1,10 @@
 """How a path's frozen Φ_p labels the whole map: the readings of ``label.reading`` (issue 59).
 
 The paper: each run's Φ_p "was used to compute topic labels for each pixel in the map in
-batch mode". Every reading here holds Φ_p frozen and runs the same chains
+batch mode". Every reading runs the same chains with Φ_p frozen
 (:class:`~curiosity_cli.topics.chains.FrozenChains`); they differ in which topics a word
-may take (the chains' ``allowed``), so eq. 5's weights are unchanged where a topic is open:
+may take (the chains' ``allowed``: eq. 5's weights are unchanged where a topic is open),
+or, under ``thawed``, in sweeps that update Φ after them:
 
 ``frozen`` (the default)
     Every topic open to every word. A word the path never saw weighs each topic by
