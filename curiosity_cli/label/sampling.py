@@ -205,7 +205,7 @@ def thawed_labels(store: WordStore, model: ModelConfig, labels: np.ndarray, seed
 
 def thaw_seed(chain_seed: int, checkpoint: int) -> int:
     """The seed of the ``thawed`` reading's sweeps after a chain of seed ``chain_seed`` at its ``checkpoint``-th."""
-    return int(np.random.SeedSequence((chain_seed % 2**64, checkpoint, THAW_TAG)).generate_state(1, np.uint64)[0])
+    return path_seed((chain_seed % 2**64, checkpoint), THAW_TAG)
 
 
 def batch_labels(store: WordStore, model: ModelConfig, *, sweeps: int, seed: int, threads: int = 1):

@@ -4,11 +4,12 @@ The compact state is the observed cells in the order added, their times and word
 counts, their words and topics cell after cell, and the random state. Every count of the
 model follows from it (with a frozen model's frozen counts, which a file keeps apart),
 so a file holds no counts: :func:`set_compact_state` checks the arrays, since they come
-from a file, and recomputes the counts.
+from a file, and has the model recount (:meth:`TopicModel.set_topics
+<curiosity_cli.topics.model.TopicModel.set_topics>`).
 
 Both functions go through the model's whole state (:meth:`TopicModel.full_state
 <curiosity_cli.topics.model.TopicModel.full_state>` and its setter), whose layout the
-model owns; this module owns the compact form and how the counts follow from it.
+model owns; this module owns the compact form.
 :mod:`~curiosity_cli.topics.persistence` writes and reads it.
 """
 
@@ -81,21 +82,9 @@ def set_compact_state(model: TopicModel, *, order, times, sizes, words, topics, 
     firsts = np.concatenate([[0], np.cumsum(sizes)[:-1]]) if n else np.zeros(0, np.int64)
     state["cell_first"][order] = firsts
     state["cell_count"][order] = sizes
-    word_cells = np.repeat(order.astype(np.int64), sizes)
-    kp = state["nk"].size  # K rounded up to a multiple of 8, the model's count layout
-    ncz, ng = state["ncz"], state["ng"]
-    ncz[:] = np.bincount(word_cells * kp + topics, minlength=model.n_cells * kp).reshape(-1, kp)
-    ng[:] = ncz
-    for column in model.neighbours.T:
-        present = column >= 0
-        ng[present] += ncz[column[present]]
-    if not model.frozen:
-        nwk, nk = state["nwk"], state["nk"]
-        pairs = words.astype(np.int64) * kp + topics
-        nwk[:] = np.bincount(pairs, minlength=model.vocabulary_size * kp).reshape(-1, kp)
-        nk[:] = nwk.sum(axis=0)
     state.update(words=words, topics=topics, order=order, times=times, counter=counter)
     model.set_full_state(**state)
+    model.set_topics(model.topics())  # the counts, made from the words and topics just put back
 
 
 def _check_arrays(model: TopicModel, order, times, sizes, words, topics) -> None:
