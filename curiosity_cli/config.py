@@ -42,6 +42,9 @@ SWEEP_KEY = "sweep"
 #: overrides run on every map and replicate seed (:mod:`curiosity_cli.study.specifications`); an
 #: experiment never sees it either.
 SPECIFICATIONS_KEY = "specifications"
+#: The top-level key of a study config that declares hypotheses, each tested on some of its specifications'
+#: seeds (:mod:`curiosity_cli.study.hypotheses`); an experiment never sees it either.
+HYPOTHESES_KEY = "hypotheses"
 
 #: The largest ORB or texton vocabulary a config may name and ``vocab build`` may learn.
 MAX_VOCABULARY = 30000
@@ -486,7 +489,7 @@ def _load_chain(path: Path, raw: Raw, seen: tuple[Path, ...] = ()) -> None:
     if path in seen:
         raise ConfigError(f"{display_path(path)}: base: the chain of base configs loops back here")
     data = read_yaml(path, "config file")
-    for key, what in ((SWEEP_KEY, "a sweep"), (SPECIFICATIONS_KEY, "specifications")):
+    for key, what in ((SWEEP_KEY, "a sweep"), (SPECIFICATIONS_KEY, "specifications"), (HYPOTHESES_KEY, "hypotheses")):
         if key in data and seen:
             raise ConfigError(f"{display_path(path)}: {key}: only the experiment config itself may declare {what}")
         # the sweep's, not an experiment's (curiosity_cli.study.sweep.declared_sweeps, curiosity_cli.study.specifications)

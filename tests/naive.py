@@ -730,3 +730,24 @@ def heldout_sums_naive(scores, unvisited) -> tuple[float, float]:
         if outside:
             part += score
     return total, part
+
+
+# --------------------------------------------------------------------------- confirmation
+# Twin of curiosity_cli/evaluate/confirmation.py's sign_flip_test, which draws the flips.
+
+
+def sign_flip_p_naive(differences, strata) -> float:
+    """The exact one-sided p of a stratified mean above 0: every one of the 2^n sign flips of the differences,
+    the share whose mean over maps of each map's mean reaches the observed one."""
+    import itertools
+
+    differences = np.asarray(differences, np.float64)
+    strata = list(strata)
+    maps = sorted(set(strata))
+
+    def statistic(values) -> float:
+        return float(np.mean([np.mean([v for v, s in zip(values, strata) if s == m]) for m in maps]))
+
+    observed = statistic(differences)
+    flips = list(itertools.product((-1.0, 1.0), repeat=differences.size))
+    return sum(statistic(differences * np.array(signs)) >= observed - 1e-12 for signs in flips) / len(flips)

@@ -74,6 +74,13 @@ def _pooled(folder: Path, specification: str) -> tuple[pd.DataFrame, pd.DataFram
 @pytest.mark.slow
 def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give_and_resumes(own_map, tmp_path):
     config = study_yaml(own_map, tmp_path)
+    text = yaml.safe_load(config.read_text())
+    text["hypotheses"] = {"alpha": 0.025, "H1": {  # declared: SWEEP.md leads with it (tests/test_hypotheses.py)
+        "claim": "sooner", "specification": "default", "comparators": ["random-walk", "stochastic-coverage"],
+        "measure": "time_to_find", "reading": "frozen", "path_length": 80, "label_schedule": {"sweeps": 2, "warm_sweeps": 1},
+        "seeds": [1, 2], "scale": {"own": 10.0},
+    }}
+    config.write_text(yaml.safe_dump(text, sort_keys=False))
     results = tmp_path / "results"
     result = sweep(config, results)
     assert result.exit_code == 0, result.output
@@ -85,6 +92,17 @@ def test_a_study_runs_leads_its_report_with_the_curve_that_its_mi_csv_files_give
 
     report = (folder / "SWEEP.md").read_text()
     assert report.startswith("# Specification curve of `tiny`: 2 specifications x 2 seeds (4 combinations)\n")
+    assert report.index("## Declared hypotheses (hypotheses.csv)") < report.index("## Specification curve")
+    hypotheses = pd.read_csv(folder / "hypotheses.csv", dtype={"seeds": str})
+    mi, _ = _pooled(folder, "default")
+    times = mi.pivot_table(index=["replicate", "restart"], columns="weight_function", values="time_to_find")
+    for comparator in ("random-walk", "stochastic-coverage"):
+        row = hypotheses.query(f"scope == 'pooled' and comparator == '{comparator}'").iloc[0]
+        lead = times[comparator] - times["topic-perplexity"]
+        assert row["pairs"] == 4 and row["raw_difference"] == pytest.approx(lead.mean())
+    head = hypotheses[hypotheses["comparator"].isna() & (hypotheses["scope"] == "pooled")].iloc[0]
+    assert head["decision"] in ("confirmed", "not confirmed") and head["status"].startswith("exploratory: no --record")
+    assert f"| H1 | sooner | primary | `default` | time to first find (human) at 80 | 1 2 | 4 |" in report
     human = report.index("![specification curve, MI against human labels](specification-curve.png)")
     batch = report.index("![specification curve, MI against Z_b](specification-curve-batch.png)")
     assert report.index("## Specification curve") < human < report.index("### Against Z_b") < batch < report.index("## Headlines")

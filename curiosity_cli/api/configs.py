@@ -26,13 +26,15 @@ def show_config(config: str | Path, overrides: typing.Iterable[str] = ()) -> str
 def _study(config: str | Path, overrides: typing.Iterable[str]) -> str:
     """For a config that declares a sweep or specifications: every experiment it makes checked
     (as ``reproduce`` would, before it runs), and what they are, as YAML comments after the config."""
-    from curiosity_cli.config import SPECIFICATIONS_KEY, SWEEP_KEY
+    from curiosity_cli.config import HYPOTHESES_KEY, SPECIFICATIONS_KEY, SWEEP_KEY
+    from curiosity_cli.study.hypotheses import declared_hypotheses
     from curiosity_cli.study.specifications import declared_specifications, study_size
     from curiosity_cli.study.sweep import declared_sweeps, parse_sweeps, plan_sweep
     from curiosity_cli.study.types import count
 
     sweeps, specifications = declared_sweeps(config), declared_specifications(config)
     if not sweeps and not specifications:
+        declared_hypotheses(config, (), ())  # refuses hypotheses without the specifications they name
         return ""
     sweep = plan_sweep(config, parse_sweeps(sweeps, list(overrides)), list(overrides), specifications, declared=[
         text.partition("=")[0] for text in sweeps
@@ -43,6 +45,10 @@ def _study(config: str | Path, overrides: typing.Iterable[str]) -> str:
         "the overrides of each, as checked here",
         *(f"  {SWEEP_KEY}: {axis.key} = {', '.join(axis.values)}" for axis in sweep.axes),
         *(f"  {SPECIFICATIONS_KEY}: {s.name}: {', '.join(s.overrides) or '(none: the config as it is)'}" for s in specifications),
+        *(
+            f"  {HYPOTHESES_KEY}: {h.name} ({'primary' if h.primary else 'secondary'}): {h.claim} ({h.specification}, "
+            f"{h.measure} at {h.path_length}, seeds {', '.join(map(str, h.seeds))})" for h in sweep.hypotheses
+        ),
     ]
     return "".join(f"# {line}\n" for line in lines)
 

@@ -393,6 +393,7 @@ def reproduce(
         A recorded combination made from other recipes than the study gives now, or edited.
     """
     from curiosity_cli.config import load_config, with_converged_labels
+    from curiosity_cli.study.hypotheses import declared_hypotheses
     from curiosity_cli.study.pipeline import reproduce as run_pipeline
     from curiosity_cli.study.specifications import declared_specifications
     from curiosity_cli.study.sweep import declared_sweeps, merge_sweeps
@@ -424,6 +425,7 @@ def reproduce(
                     results_dir=results_dir, cache_dir=cache_dir, jobs=jobs, force=force, backend=backend, scheduler=scheduler,
                     reuse=reuse, record=record, measure=measure,
                 )
+            declared_hypotheses(config, (), ())  # refuses hypotheses without the specifications they name
             resolved = load_config(config, overrides)  # neither a sweep nor specifications, just read: one experiment
         if record is not None:
             raise UsageError(

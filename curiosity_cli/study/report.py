@@ -1,6 +1,7 @@
 """A sweep's report: ``SWEEP.md``, ``sweep.csv`` and ``sensitivity.csv`` (:mod:`curiosity_cli.study.sweep` runs it).
 
-``SWEEP.md`` opens with how to run the sweep again, then, for a study that declares
+``SWEEP.md`` opens with how to run the sweep again, then the study's declared hypotheses, each
+confirmed or not (:mod:`curiosity_cli.study.hypotheses`, ``hypotheses.csv``), then, for a study that declares
 specifications (:mod:`curiosity_cli.study.specifications`), the specification curve; else the
 sensitivity table, which pools the seeds of each treatment (:func:`pool_treatments`);
 then every combination's headline. ``sweep.csv`` has a row per combination and dataset,
@@ -96,6 +97,7 @@ def write_sweep_report(
     sensitivity, pooled_rows = _sensitivity(sweep, treatments)
     # a study's curve has the sensitivity table's rows and numbers, and more: it takes its place
     lead = specification_lead(sweep, folder, treatments, measure) if sweep.specifications else sensitivity
+    lead = _hypotheses(sweep, folder, outcomes, record) + lead
     rows, sections = [], []
     overview = [
         "| # | " + " | ".join(keys) + " | dataset | ratio | next best | paired Wilcoxon p (pairs) | paper's ratio |",
@@ -181,6 +183,18 @@ def write_sweep_report(
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(lines))
     return path
+
+
+def _hypotheses(sweep: Sweep, folder: Path, outcomes: Sequence[Outcome], record: Path | None) -> list[str]:
+    """Write ``hypotheses.csv`` and return the section SWEEP.md leads with, for a study that declares hypotheses."""
+    from curiosity_cli.study.hypotheses import TABLE, hypothesis_lines, hypothesis_table
+
+    if not sweep.hypotheses:
+        return []
+    table, declared = hypothesis_table(sweep, outcomes, record)
+    with atomic_path(folder / TABLE) as tmp:
+        table.to_csv(tmp, index=False)
+    return hypothesis_lines(sweep, table, declared)
 
 
 def _read_revisits(folder: Path):

@@ -73,6 +73,7 @@ from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.files import atomic_path, display_path
 from curiosity_cli.paths import DEFAULT_RESULTS
 from curiosity_cli.schema import MAX_NAME, OVERRIDES
+from curiosity_cli.study.hypotheses import declared_hypotheses
 from curiosity_cli.study.specifications import check_specifications, specification_error
 from curiosity_cli.study.types import (
     SPECIFICATION,
@@ -328,7 +329,8 @@ def plan_sweep(
         The first combination that does not validate, in one line: the error its
         overrides give, naming the specification's key in the config file, or the sweeps,
         when one of theirs is at fault, else followed by the combination; or a
-        specification's key also swept or given with ``--set``.
+        specification's key also swept or given with ``--set``; a declared hypothesis at odds with the study
+        (:func:`~curiosity_cli.study.hypotheses.declared_hypotheses`).
     """
     if not axes and not specifications:
         raise ValueError("a sweep needs at least one axis or specification")
@@ -351,7 +353,8 @@ def plan_sweep(
             assert _NAME.match(name), name  # by construction: keys are config fields, values made safe
             loaded.append(Combination(len(loaded) + 1, overrides, name, replace(config, name=name)))
     _check_each_changes_something(loaded)
-    return Sweep(base_name, config_path, sets, tuple(axes), tuple(loaded), tuple(specifications))
+    hypotheses = declared_hypotheses(config_path, specifications, loaded)
+    return Sweep(base_name, config_path, sets, tuple(axes), tuple(loaded), tuple(specifications), hypotheses)
 
 
 def _check_each_changes_something(combinations: Sequence[Combination]) -> None:

@@ -102,6 +102,9 @@ class Sweep:
     specifications : tuple of Specification
         The specifications the config declares (:mod:`curiosity_cli.study.specifications`);
         empty for a plain sweep.
+    hypotheses : tuple of Hypothesis
+        The hypotheses the config declares (:mod:`curiosity_cli.study.hypotheses`), checked against
+        its specifications and seeds; empty when it declares none.
     """
 
     name: str
@@ -110,6 +113,7 @@ class Sweep:
     axes: tuple[SweepAxis, ...]
     combinations: tuple[Combination, ...] = field(repr=False)
     specifications: tuple[Specification, ...] = ()
+    hypotheses: tuple[Hypothesis, ...] = ()
 
     @property
     def keys(self) -> list[str]:
@@ -175,6 +179,61 @@ class Specification:
     def keys(self) -> list[str]:
         """The dotted keys it sets."""
         return [text.partition("=")[0] for text in self.overrides]
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """One declared hypothesis: that ``walker`` does better than each of ``comparators`` on a measure, pooled
+    over the maps of ``scale`` and the seeds declared (:mod:`curiosity_cli.study.hypotheses` says each field).
+
+    Attributes
+    ----------
+    name, claim : str
+        Its name (``H1``) and the claim in words.
+    primary : bool
+        In the family whose p-values Holm adjusts; a secondary hypothesis is reported and decides nothing.
+    specification : str
+    walker : str
+    comparators : tuple of str
+    measure, against : str
+        A measure of :data:`~curiosity_cli.evaluate.measures.MEASURES` and the labelling it is taken against.
+    reading : str
+        The labelling reading (``label.reading``) the specification labels with.
+    path_length : int
+    label_schedule : dict of str to int or None
+        ``sweeps`` and ``warm_sweeps``, as the specification's ``label`` section has them.
+    test : str
+        ``sign-flip`` or ``stratified-t`` (:mod:`curiosity_cli.evaluate.confirmation`).
+    draws : int
+        The sign flips drawn.
+    seeds : tuple of int
+    scale : dict of str to float
+        Per map, what its paired differences are divided by.
+    alpha : float
+        The family's one-sided level.
+    """
+
+    name: str
+    claim: str
+    primary: bool
+    specification: str
+    walker: str
+    comparators: tuple[str, ...]
+    measure: str
+    against: str
+    reading: str
+    path_length: int
+    label_schedule: dict
+    test: str
+    draws: int
+    seeds: tuple[int, ...]
+    scale: dict
+    alpha: float
+
+    @property
+    def maps(self) -> list[str]:
+        """The maps it pools, in the order declared."""
+        return list(self.scale)
 
 
 @dataclass(frozen=True)
