@@ -39,6 +39,7 @@ SMOKED = {
     "device_compare.py": "the same bytes on both devices",
     "make_maps.py": "rare-patches: identical",
     "null_reference.py": "one walker 50 % worse",
+    "plan_hypotheses.py": "scale: {aerial-mosaic: ",
     "record_study.py": "recorded 1 combinations",
     "study_batch_sampler.py": "verdict:",
     "study_budget.py": "by word samples per step",
@@ -49,7 +50,7 @@ SMOKED = {
 }
 #: The smoke runs of a few seconds, in the quick tier; the others start numba's kernels, OpenCV, Dask or a drive
 #: in processes of their own and are marked slow.
-QUICK = {"compare_mi.py", "make_maps.py", "null_reference.py"}
+QUICK = {"compare_mi.py", "make_maps.py", "null_reference.py", "plan_hypotheses.py"}
 #: Each script not smoked, and why.
 NOT_SMOKED = {
     "bench_chain_kernel.py": "it checks out a reference commit with `git worktree` (the repository's own .git) and "

@@ -9,7 +9,7 @@ from naive import sign_flip_p_naive
 from scipy import stats
 
 from curiosity_cli.errors import ParameterError
-from curiosity_cli.evaluate.confirmation import Stratified, sign_flip_test, stratified_t
+from curiosity_cli.evaluate.confirmation import Stratified, plan_scales, planned_power, sign_flip_test, stratified_t
 
 
 def test_the_stratified_mean_weighs_each_map_once_however_many_pairs_it_has():
@@ -91,3 +91,23 @@ def test_bad_differences_are_refused_naming_the_parameter(differences, strata, m
 def test_no_sign_flips_is_refused():
     with pytest.raises(ParameterError, match="draws: got 0, expected at least 1"):
         sign_flip_test(Stratified.of([1.0], ["a"]), 0, np.random.default_rng(0))
+
+
+def test_a_plan_s_scale_is_the_spread_of_a_map_s_leads_pooled_over_its_comparators():
+    leads = {"a": np.array([[1.0, 2.0], [3.0, 2.0], [5.0, 8.0]]), "b": np.array([[0.0, 0.0], [0.0, 1.0]])}
+    scales = plan_scales(leads)
+    assert scales["a"] == pytest.approx(np.sqrt((4.0 + 12.0) / 2))
+    assert scales["b"] == pytest.approx(np.sqrt((0.0 + 0.5) / 2))
+    with pytest.raises(ParameterError, match="leads: c: the leads never vary"):
+        plan_scales({"c": np.ones((3, 2))})
+    with pytest.raises(ParameterError, match=r"leads: d: got shape \(1, 2\), expected \(n, C\) with at least two pairs"):
+        plan_scales({"d": np.ones((1, 2))})
+
+
+def test_a_plan_s_power_is_high_for_a_clear_lead_and_at_most_its_level_for_none():
+    rng = np.random.default_rng(11)
+    leads = {name: rng.normal(0.5 * spread, spread, (30, 3)) for name, spread in (("a", 1.0), ("b", 3.0), ("c", 0.2))}
+    scales = plan_scales(leads)
+    assert planned_power(leads, scales, 50, 0.0125, 200, rng, effect=1.0) > 0.9
+    # with no lead the intersection-union test rejects less often than its level (each comparator must reject)
+    assert planned_power(leads, scales, 50, 0.0125, 400, rng, effect=0.0) <= 0.0125 + 3 * np.sqrt(0.0125 / 400)
