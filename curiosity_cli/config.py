@@ -142,6 +142,9 @@ LABEL_DEVICES = ("cpu", "cuda", "auto")
 #: How a path's frozen Φ_p labels the whole map (``label.reading``; curiosity_cli/label/readings.py says what each
 #: does); the first is the default, which a label recipe leaves out.
 LABEL_READINGS = ("frozen", "unseen-topic", "used-topics", "thawed")
+#: How surprising a camera frame's image cells are to the drive (``drive.surprise``; curiosity_cli/drive/surprise.py
+#: says what each is), the paper's eq. 12 as the drive computed it first.
+DRIVE_SURPRISES = ("paper", "predictive", "recent", "bayesian")
 
 #: The other open choices of the paper's exploration, each a key of ``explore`` with the
 #: values a config may name, today's reading first (``configs/paper.yaml`` gives each the
@@ -358,6 +361,7 @@ class DriveConfig:
         for key, value in (("window_frames", 150), ("carry_frames", 50), ("carry_sweeps", 2))
     }
 
+    surprise: str = spec(choices=DRIVE_SURPRISES)
     gamma: float = spec(min=0, max=1, max_exclusive=True)
     temporal_neighbours: int = spec(choices=(0, 2))
     frame_width: int = spec(min=16)

@@ -34,6 +34,7 @@ SMOKED = {
     "bench_scaleout.py": "overhead per task",
     "bench_study_reuse.py": "--reuse",
     "check_drive_surprise.py": "target <= 1.5: met",
+    "check_revisits.py": "passes: ",
     "check_dose_response.py": "slope of mean_recall per rare class seen",
     "compare_mi.py": "outside the noise:",
     "device_compare.py": "the same bytes on both devices",

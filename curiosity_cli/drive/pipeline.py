@@ -3,15 +3,17 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Collection
 from dataclasses import dataclass
 
 import numpy as np
 
 from curiosity_cli.config import ExperimentConfig
 from curiosity_cli.drive.controller import Command, steer
-from curiosity_cli.drive.curiosity import CuriosityScores, cell_perplexity
+from curiosity_cli.drive.curiosity import CuriosityScores
 from curiosity_cli.drive.frame_words import FrameWords
 from curiosity_cli.drive.stream import StreamModel, newest_share
+from curiosity_cli.drive.surprise import add_and_score
 
 
 @dataclass(frozen=True)
@@ -21,7 +23,8 @@ class Decision:
     Attributes
     ----------
     perplexity : (rows, cols) float64 ndarray
-        Topic perplexity of each image cell in this frame.
+        The surprise of each image cell in this frame under ``drive.surprise``
+        (:mod:`~curiosity_cli.drive.surprise`): a perplexity, or bits for ``bayesian``.
     scores : (rows, cols) float64 ndarray
         Decayed curiosity scores after this frame.
     target : (int, int)
@@ -34,7 +37,9 @@ class Decision:
         (:class:`~curiosity_cli.drive.stream.StreamModel`); 0 (a share that rounds to no
         samples): its perplexity reads the random topics its words were given.
     seconds : dict of str to float
-        Time spent per stage: ``words``, ``model`` (add and refine), ``score``.
+        Time spent per stage: ``words``, ``model`` (add and refine, and the surprise), ``score``.
+    surprises : dict of str to (rows, cols) float64 ndarray
+        Each reading the pipeline was asked for (``drive.surprise``'s, and any ``readings`` beside it).
     """
 
     perplexity: np.ndarray
@@ -44,6 +49,7 @@ class Decision:
     words: int
     refined: int
     seconds: dict
+    surprises: dict
 
 
 class CuriosityPipeline:
@@ -55,10 +61,14 @@ class CuriosityPipeline:
         Uses ``model``, ``words`` and ``drive``.
     seed : int
         Seeds the stream's topic models.
+    readings : collection of str, optional
+        Readings of the surprise to compute beside ``drive.surprise``'s, in :attr:`Decision.surprises`, to compare
+        them on one run (they do not steer).
     """
 
-    def __init__(self, config: ExperimentConfig, seed: int):
+    def __init__(self, config: ExperimentConfig, seed: int, readings: Collection[str] = ()):
         self.config = config
+        self.readings = tuple(dict.fromkeys((config.drive.surprise, *readings)))
         drive, model = config.drive, config.model
         self.words = FrameWords(config.words, drive)
         self.grid = self.words.grid
@@ -89,9 +99,12 @@ class CuriosityPipeline:
         start = time.perf_counter()
         cell_words = self.words(frame)
         extracted = time.perf_counter()
-        counts = self.stream.add_frame(cell_words)
+        surprises = {
+            reading: values.reshape(self.grid)
+            for reading, values in add_and_score(self.stream, cell_words, self.readings, self.config.model.alpha).items()
+        }
         modelled = time.perf_counter()
-        perplexity = cell_perplexity(counts, self.stream.topic_totals(), self.config.model.alpha).reshape(self.grid)
+        perplexity = surprises[self.config.drive.surprise]
         scores = self.curiosity.update(perplexity).copy()
         target = self.curiosity.target()
         command = steer(target, self.grid, self.config.drive)
@@ -104,6 +117,7 @@ class CuriosityPipeline:
             words=sum(w.size for w in cell_words),
             refined=self.stream.refined,
             seconds={"words": extracted - start, "model": modelled - extracted, "score": done - modelled},
+            surprises=surprises,
         )
 
 

@@ -198,6 +198,21 @@ class StreamModel:
         """(K,) int64: words per topic over the frames in memory (the path's topic counts)."""
         return self.model.topic_totals().astype(np.int64)
 
+    def frame_cells(self, back: int = 0) -> np.ndarray | None:
+        """(rows * cols,) int64: the model's cells of the newest frame (``back`` 0) or of the one ``back`` frames
+        before it, row-major; None when that frame never came or has been forgotten."""
+        frame = self.frames - 1 - back
+        if frame < 0 or back >= self.frames_in_memory:
+            return None
+        return self._cells_of(frame if self._slots is None else frame % self._slots)
+
+    def recent_totals(self, frames: int) -> np.ndarray:
+        """(K,) int64: words per topic over the newest ``frames`` frames in memory."""
+        cells = [c for back in range(frames) if (c := self.frame_cells(back)) is not None]
+        if not cells:
+            return np.zeros(self.model.n_topics, np.int64)
+        return self.model.cell_topic_counts(np.concatenate(cells)).sum(axis=0, dtype=np.int64)
+
 
 def newest_share(config) -> float:
     """The share of each frame's budget the newest frame gets: ``drive.newest_share``, or, when

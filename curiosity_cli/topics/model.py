@@ -269,18 +269,21 @@ class TopicModel(CellMemory):
         """(K,) int32 ndarray: ``n_k``, the words with topic ``k`` (columns of Φ summed)."""
         return self._nk[: self._k].copy()
 
-    def cell_topic_counts(self) -> np.ndarray:
-        """(n_cells, K) int32 ndarray: topic counts of each cell (zeros if not observed)."""
-        return self._ncz[:, : self._k].copy()
+    def cell_topic_counts(self, cells=None) -> np.ndarray:
+        """(n_cells, K) int32 ndarray: topic counts of each cell (zeros if not observed); of ``cells`` only, in their
+        order, if given."""
+        return self._ncz[:, : self._k].copy() if cells is None else self._ncz[np.asarray(cells, np.int64), : self._k]
 
-    def neighbourhood_counts(self) -> np.ndarray:
-        """(n_cells, K) int32 ndarray: ``n_Gk``, topic counts of each cell plus its neighbours."""
-        return self._ng[:, : self._k].copy()
+    def neighbourhood_counts(self, cells=None) -> np.ndarray:
+        """(n_cells, K) int32 ndarray: ``n_Gk``, topic counts of each cell plus its neighbours; of ``cells`` only, in
+        their order, if given."""
+        return self._ng[:, : self._k].copy() if cells is None else self._ng[np.asarray(cells, np.int64), : self._k]
 
-    def phi(self) -> np.ndarray:
-        """(V, K) float64 ndarray: ``φ_k(w) = (n_kw + β) / (n_k + Vβ)``; each column sums to 1."""
-        counts = self._nwk[:, : self._k].astype(np.float64)
-        return (counts + self._beta) / (self._nk[: self._k] + self._v * self._beta)
+    def phi(self, words=None) -> np.ndarray:
+        """(V, K) float64 ndarray: ``φ_k(w) = (n_kw + β) / (n_k + Vβ)``; each column sums to 1. Of ``words`` only, a
+        row per word in their order, if given."""
+        rows = self._nwk[:, : self._k] if words is None else self._nwk[np.asarray(words, np.int64), : self._k]
+        return (rows.astype(np.float64) + self._beta) / (self._nk[: self._k] + self._v * self._beta)
 
     def ml_topics(self, cells=None) -> np.ndarray:
         """Maximum-likelihood topic of every word of ``cells`` (default: all observed, by cell index).
