@@ -21,8 +21,11 @@ recipe): the same bytes as a computed one, timing fields aside. Each stored file
 named ``<key>.<sha256>.npz`` by its own digest, written under a temporary name and
 renamed into place, so two experiments storing one item at once leave one whole file,
 and one altered since (a disk error, an edit) no longer matches its name: it is named,
-removed and computed again, never used. ``reuse=False`` (``--no-reuse``) computes
-everything and stores nothing.
+removed and computed again, never used. An item also holds the key it was made for (a run's
+labels: :data:`KEY_FIELD`; a batch reference: its recipe's digest, which is its key), so a
+whole file under another item's name, its digest its own, is named, removed and computed
+again too. ``reuse=False`` (``--no-reuse``) computes everything and stores nothing; ``--force``
+computes everything and stores what it computed.
 """
 
 from __future__ import annotations
@@ -44,6 +47,8 @@ SHARED_FOLDER = "shared"
 #: The kinds of item, each a folder of its own.
 BATCH, LABELS = "batch", "labels"
 _EXAMPLE = "example_"
+#: The member of a stored run's labels that holds the key it was made for.
+KEY_FIELD = "item_key"
 #: Hex digits of a file's SHA-256 in its name.
 _NAMED_DIGEST = 16
 
@@ -95,8 +100,7 @@ class SharedItems:
                     return path
             except OSError:  # removed meanwhile by another experiment that found it altered
                 continue
-            note(f"{display_path(path)}: altered since it was stored (its digest is not its name's); computing it again")
-            path.unlink(missing_ok=True)
+            self.discard(path, "altered since it was stored (its digest is not its name's)")
         return None
 
     def keep_file(self, kind: str, key: str, source: Path) -> None:
@@ -105,22 +109,36 @@ class SharedItems:
 
     def labels(self, key: str) -> tuple[dict, dict] | None:
         """A run's stored label arrays and example maps (``(arrays, examples)``, as
-        :func:`~curiosity_cli.label.stage.label_block` gives them), or None."""
+        :func:`~curiosity_cli.label.stage.label_block` gives them), or None; an item made for another key (or
+        stored before items held theirs) is named on stderr and removed."""
         path = self.find(LABELS, key)
         if path is None:
             return None
         with open_npz(path) as npz:
-            arrays = {name: npz[name] for name in npz.files if not name.startswith(_EXAMPLE)}
+            made_for = str(npz[KEY_FIELD]) if KEY_FIELD in npz.files else None
+            arrays = {name: npz[name] for name in npz.files if not name.startswith(_EXAMPLE) and name != KEY_FIELD}
             examples = {int(name[len(_EXAMPLE):]): npz[name] for name in npz.files if name.startswith(_EXAMPLE)}
+        if made_for != key:
+            self.discard(path, "made for another run's labels" if made_for else "stored without the key it was made for")
+            return None
         return arrays, examples
 
     def keep_labels(self, key: str, arrays: dict, examples: dict) -> None:
-        """Store a run's label arrays and example maps as the item ``key``."""
+        """Store a run's label arrays and example maps as the item ``key``, with the key."""
         def write(tmp: Path) -> None:
             with open(tmp, "wb") as handle:
-                np.savez_compressed(handle, **arrays, **{f"{_EXAMPLE}{length}": pixels for length, pixels in examples.items()})
+                np.savez_compressed(
+                    handle, **arrays, **{f"{_EXAMPLE}{length}": pixels for length, pixels in examples.items()},
+                    **{KEY_FIELD: np.array(key)},
+                )
 
         self._keep(LABELS, key, write)
+
+    @staticmethod
+    def discard(path: Path, why: str) -> None:
+        """Remove a stored item that cannot be taken, saying why on stderr."""
+        note(f"{display_path(path)}: {why}; computing it again")
+        path.unlink(missing_ok=True)
 
     def _keep(self, kind: str, key: str, write) -> None:
         """Write an item under a temporary name, then rename it to ``<key>.<its sha256>.npz``: atomic, so two
@@ -132,6 +150,10 @@ class SharedItems:
         tmp = Path(name)
         try:
             write(tmp)
-            os.replace(tmp, folder / f"{key}.{record(tmp)['sha256'][:_NAMED_DIGEST]}.npz")
+            target = folder / f"{key}.{record(tmp)['sha256'][:_NAMED_DIGEST]}.npz"
+            os.replace(tmp, target)
         finally:
             tmp.unlink(missing_ok=True)
+        for other in folder.glob(f"{key}.*.npz"):  # what it replaces: one stored before it held its key, or altered
+            if other != target:
+                other.unlink(missing_ok=True)

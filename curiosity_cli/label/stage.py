@@ -584,7 +584,8 @@ def _plan_batches(experiment: Experiment, stores: list, shared: SharedItems | No
     recipes = {info.name: experiment.batch_recipe(info.name) for info in stores}
     files = {info.name: experiment.folder.batch(info.name) for info in stores}
     stale = [info for info in stores if force or not batch_is_current(files[info.name], recipes[info.name])]
-    taken = [info for info in stale if _take_batch(shared, files[info.name], recipes[info.name])]
+    # --force computes: a shared item taken again would undo nothing it is meant to redo
+    taken = [] if force else [info for info in stale if _take_batch(shared, files[info.name], recipes[info.name])]
     return _Batches(recipes, files, [info for info in stale if info not in taken], taken)
 
 
@@ -625,7 +626,7 @@ def _plan_runs(experiment: Experiment, by_name: dict, finished: list, shared: Sh
         recipes[run.folder] = recipe
         if shared is not None:
             keys[run.folder] = label_key(recipe.inputs, run.meta, run_inputs.checkpoints, run_inputs.path)
-            if (stored := shared.labels(keys[run.folder])) is not None:
+            if not force and (stored := shared.labels(keys[run.folder])) is not None:
                 taken.append((run_inputs, *stored))
                 continue
         to_label.setdefault(info.name, []).append(run_inputs)
@@ -760,7 +761,10 @@ def _take_batch(shared: SharedItems | None, path: Path, recipe) -> bool:
         return False
     with atomic_path(path) as tmp:
         tmp.write_bytes(stored.read_bytes())
-    return batch_is_current(path, recipe)
+    if batch_is_current(path, recipe):
+        return True
+    shared.discard(stored, "not the batch reference its name says it is")  # taken again it would fail again
+    return False
 
 
 def unexplored(run: Path, layout: ExperimentFolder) -> str:

@@ -102,6 +102,44 @@ def test_an_altered_shared_item_is_named_and_computed_again(own_map, tmp_path, c
     assert len(list(damaged.parent.glob("*.npz"))) == 8, "the altered copy was replaced by the one computed again"
 
 
+@pytest.mark.slow
+def test_a_whole_item_under_another_run_s_key_is_named_removed_and_computed_again(own_map, tmp_path, capsys):
+    """A label file stored under another run's name, its digest its own, was taken for that run without a word
+    (issue 63: one run's MI 0.746 -> 0.985 bits); each item holds the key it was made for."""
+    config, first = explored(own_map, tmp_path, "first")
+    label_experiment(config, first, cache_dir=tmp_path / "cache", jobs=1)
+    items = sorted((tmp_path / "cache" / SHARED_FOLDER / LABELS).glob("*.npz"))
+    source, victim = items[0], items[5]
+    victim_key = victim.name.split(".")[0]
+    swapped = victim.parent / f"{victim_key}.{source.name.split('.')[1]}.npz"
+    victim.unlink()
+    swapped.write_bytes(source.read_bytes())
+    capsys.readouterr()
+    config, second = explored(own_map, tmp_path, "second")
+    done = label_experiment(config, second, cache_dir=tmp_path / "cache", jobs=1)
+    assert done["shared"]["labels"] == 7 and done["labelled"] == 8
+    assert f"{swapped.name}: made for another run's labels; computing it again" in capsys.readouterr().err
+    assert label_bytes(second) == label_bytes(first)
+    assert not swapped.exists() and len(list(victim.parent.glob(f"{victim_key}.*.npz"))) == 1
+
+
+@pytest.mark.slow
+def test_force_computes_every_item_again_and_stores_it(own_map, tmp_path):
+    config, first = explored(own_map, tmp_path, "first")
+    label_experiment(config, first, cache_dir=tmp_path / "cache", jobs=1)
+    config, second = explored(own_map, tmp_path, "second")
+    assert label_experiment(config, second, cache_dir=tmp_path / "cache", jobs=1)["shared"] == {"labels": 8, "batches": 1}
+    taken = label_bytes(second)
+    result = runner.invoke(app, ["label", str(second), "--force", "--jobs", "1", "--cache-dir", str(tmp_path / "cache")])
+    assert result.exit_code == 0, result.output
+    assert "taken from other experiments' shared items: 0 label files, 0 batch references" in result.stdout
+    computed = label_bytes(second)
+    assert {k: v for k, v in computed.items() if not k.startswith("batch/")} == {
+        k: v for k, v in taken.items() if not k.startswith("batch/")
+    }
+    assert len(list((tmp_path / "cache" / SHARED_FOLDER / LABELS).glob("*.npz"))) == 8, "one item a run, as before"
+
+
 def test_two_writers_of_one_item_leave_one_whole_file(tmp_path):
     shared = SharedItems(tmp_path)
     arrays = {"lengths": np.arange(3, dtype=np.int32), "batch": np.random.default_rng(0).integers(0, 9, (3, 8, 8))}
