@@ -57,6 +57,24 @@ MAX_PATH_LENGTH = 100_000
 MAX_SAMPLES = 100_000_000  # word samples of refinement per step or frame: 1,000 times the default
 MAX_SWEEPS = 100_000  # Gibbs sweeps of a labelling chain or of the batch reference
 MAX_CANDIDATE_SWEEPS = 1_000  # passes over a candidate's temporary labels
+#: Bounds on the other numbers a config names, each far above any defensible setting and below what overflows,
+#: hangs or fails inside a library, so that a typo is refused by name (issue 63).
+MAX_PRIOR = 1_000.0  # α, β: Dirichlet priors, the paper's 0.1; 1e308 made every log-likelihood -inf
+MAX_PIXELS = 16_384  # a length in pixels: an ORB tile or grid step, a frame's width, the simulated camera's view
+MAX_CELLS_SIDE = 256  # image cells along a frame's side
+MAX_FEATURES = 10_000_000  # ORB keypoints of a map or of one of its tiles
+MAX_STEP_SECONDS = 3_600.0  # a walker's time budget per step; 1e308 never ended
+MAX_DISTANCE2 = 1e9  # a squared distance in cells: a map of 30,000 cells a side
+MAX_FRAMES = 100_000_000  # frames the live model remembers: a year at 3 frames a second
+MAX_SPEED = 10.0  # m/s forward: twenty times the paper robot's fastest; the robot never backs up (0 at least)
+MAX_RATE = 6.283  # rad/s yaw or pitch: a turn a second
+MAX_GAIN = 100.0  # m/s or rad/s per unit of target offset (offsets run -1..1)
+MAX_BAUD = 12_000_000  # the fastest USB serial adapters
+MAX_WAIT = 3_600.0  # s: a timeout, a watchdog, a simulated frame's interval
+KEEPALIVE_MAX = 0.2  # s: the wire protocol wants a host frame at least every 200 ms (drive/PROTOCOL.md)
+MAX_RATE_HZ = 1_000.0  # Hz: telemetry, a video's frames
+MAX_RESENDS = 100
+MAX_METRES_PER_PIXEL = 1_000.0
 
 #: The walkers a config may name in ``explore.weight_functions``, in the order reports list
 #: them: the paper's four weight functions in its order, the lawnmower, the ceilings, then the
@@ -200,8 +218,8 @@ class ModelConfig:
     """The ROST topic model (paper section 3)."""
 
     topics: int = spec(min=2, max=127)
-    alpha: float = spec(min=0, min_exclusive=True)
-    beta: float = spec(min=0, min_exclusive=True)
+    alpha: float = spec(min=0, min_exclusive=True, max=MAX_PRIOR)
+    beta: float = spec(min=0, min_exclusive=True, max=MAX_PRIOR)
     eta: float = spec(min=0, max=1)
     spatial_neighbours: int = spec(choices=(0, 4))
 
@@ -215,11 +233,11 @@ class WordsConfig:
     texton_vocabulary: int = spec(min=2, max=MAX_VOCABULARY)
     orb_detector: str = spec(choices=ORB_DETECTORS)
     # read by the grid detector only (store_settings)
-    orb_grid_step: int = spec(min=1)
+    orb_grid_step: int = spec(min=1, max=MAX_PIXELS)
     # read by the keypoints detector only (store_settings)
-    orb_tile: int = spec(min=1)
-    orb_per_tile: int | None = spec(min=1)
-    orb_max_features: int | None = spec(min=1)
+    orb_tile: int = spec(min=1, max=MAX_PIXELS)
+    orb_per_tile: int | None = spec(min=1, max=MAX_FEATURES)
+    orb_max_features: int | None = spec(min=1, max=MAX_FEATURES)
     orb_fast_threshold: int = spec(min=1, max=255)
     orb_fill_threshold: int | None = spec(min=1, max=255)
     # hue words, whichever the ORB detector
@@ -304,10 +322,10 @@ class ExploreConfig:
     path_length: int = spec(min=1, max=MAX_PATH_LENGTH)
     checkpoints: tuple[int, ...] = spec(min=1, max=MAX_PATH_LENGTH)
     samples_per_step: int = spec(min=1, max=MAX_SAMPLES)
-    step_seconds: float | None = spec(min=0, min_exclusive=True)
+    step_seconds: float | None = spec(min=0, min_exclusive=True, max=MAX_STEP_SECONDS)
     coverage: str = spec(choices=tuple(COVERAGE_READINGS))
     # read only by a reading whose reads_min_d2 says so (run_settings)
-    min_d2: float | None = spec(min=0, min_exclusive=True)
+    min_d2: float | None = spec(min=0, min_exclusive=True, max=MAX_DISTANCE2)
     candidates: int = spec(choices=EXPLORE_READINGS["candidates"])
     candidate_context: str = spec(choices=EXPLORE_READINGS["candidate_context"])
     candidate_sweeps: int = spec(min=1, max=MAX_CANDIDATE_SWEEPS)
@@ -364,37 +382,37 @@ class DriveConfig:
     surprise: str = spec(choices=DRIVE_SURPRISES)
     gamma: float = spec(min=0, max=1, max_exclusive=True)
     temporal_neighbours: int = spec(choices=(0, 2))
-    frame_width: int = spec(min=16)
-    grid_rows: int = spec(min=1)
-    grid_cols: int = spec(min=1)
-    texton_stride: int = spec(min=1)
+    frame_width: int = spec(min=16, max=MAX_PIXELS)
+    grid_rows: int = spec(min=1, max=MAX_CELLS_SIDE)
+    grid_cols: int = spec(min=1, max=MAX_CELLS_SIDE)
+    texton_stride: int = spec(min=1, max=MAX_PIXELS)
     orb_levels: int = spec(min=1, max=16)
-    orb_per_tile: int = spec(min=1)
+    orb_per_tile: int = spec(min=1, max=MAX_FEATURES)
     orb_fill_threshold: int | None = spec(min=1, max=19)
     samples_per_frame: int = spec(min=0, max=MAX_SAMPLES)
     newest_share: float | None = spec(min=0, max=1)
-    memory_frames: int | None = spec(min=2)
-    surge_cruise: float = spec()
-    surge_gain: float = spec(min=0)
-    surge_min: float = spec()
-    surge_max: float = spec()
-    yaw_gain: float = spec(min=0)
-    yaw_rate_max: float = spec(min=0)
-    pitch_gain: float = spec(min=0)
-    pitch_rate_max: float = spec(min=0)
+    memory_frames: int | None = spec(min=2, max=MAX_FRAMES)
+    surge_cruise: float = spec(min=0, max=MAX_SPEED)
+    surge_gain: float = spec(min=0, max=MAX_GAIN)
+    surge_min: float = spec(min=0, max=MAX_SPEED)
+    surge_max: float = spec(min=0, max=MAX_SPEED)
+    yaw_gain: float = spec(min=0, max=MAX_GAIN)
+    yaw_rate_max: float = spec(min=0, max=MAX_RATE)
+    pitch_gain: float = spec(min=0, max=MAX_GAIN)
+    pitch_rate_max: float = spec(min=0, max=MAX_RATE)
     port: str | None = spec()
-    baud: int = spec(min=1)
-    hello_timeout: float = spec(min=0, min_exclusive=True)
-    ack_timeout: float = spec(min=0, min_exclusive=True)
-    resends: int = spec(min=0)
-    keepalive: float = spec(min=0, min_exclusive=True)
-    watchdog: float = spec(min=0, min_exclusive=True)
-    state_rate: float = spec(min=0, min_exclusive=True)
-    sim_metres_per_pixel: float = spec(min=0, min_exclusive=True)
-    sim_view_rows: int = spec(min=16)
-    sim_view_cols: int = spec(min=16)
-    sim_frame_interval: float = spec(min=0)
-    video_fps: float = spec(min=0, min_exclusive=True)
+    baud: int = spec(min=1, max=MAX_BAUD)
+    hello_timeout: float = spec(min=0, min_exclusive=True, max=MAX_WAIT)
+    ack_timeout: float = spec(min=0, min_exclusive=True, max=MAX_WAIT)
+    resends: int = spec(min=0, max=MAX_RESENDS)
+    keepalive: float = spec(min=0, min_exclusive=True, max=KEEPALIVE_MAX)
+    watchdog: float = spec(min=0, min_exclusive=True, max=MAX_WAIT)
+    state_rate: float = spec(min=0, min_exclusive=True, max=MAX_RATE_HZ)
+    sim_metres_per_pixel: float = spec(min=0, min_exclusive=True, max=MAX_METRES_PER_PIXEL)
+    sim_view_rows: int = spec(min=16, max=MAX_PIXELS)
+    sim_view_cols: int = spec(min=16, max=MAX_PIXELS)
+    sim_frame_interval: float = spec(min=0, max=MAX_WAIT)
+    video_fps: float = spec(min=0, min_exclusive=True, max=MAX_RATE_HZ)
 
 
 @dataclass(frozen=True)
@@ -527,8 +545,16 @@ def _parse_override(text: str) -> tuple[tuple[str, ...], Any]:
 
 
 def _apply_overrides(raw: Raw, overrides: typing.Iterable[str]) -> None:
+    given: dict[tuple, str] = {}
     for text in overrides:
         keys, value = _parse_override(text)
+        for earlier, shown_text in given.items():  # the last would win in silence: refuse it by name
+            if earlier[: len(keys)] == keys or keys[: len(earlier)] == earlier:
+                raise ConfigError(
+                    f"{OVERRIDES}: {'.'.join(keys)} is given twice ({shown_text}, {text}); give each key once",
+                    parameter=OVERRIDES,
+                )
+        given[keys] = text
         nested: Any = value
         for key in reversed(keys[1:]):
             nested = {key: nested}
@@ -728,6 +754,8 @@ def _check_drive(drive: DriveConfig, raw: Raw) -> None:
          "row of cells a pixel"),
         (drive.surge_min <= drive.surge_max, "surge_min", f"at most surge_max ({drive.surge_max})"),
         (drive.keepalive < drive.watchdog, "keepalive", f"shorter than the robot's watchdog ({drive.watchdog} s)"),
+        (drive.ack_timeout < drive.watchdog, "ack_timeout", f"shorter than the robot's watchdog ({drive.watchdog} s): "
+         "a frame is resent before the robot stops for want of one"),
     ]
     for ok, key, expected in rules:
         if not ok:

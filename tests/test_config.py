@@ -385,10 +385,13 @@ def test_a_top_up_without_a_tile_cap_is_refused_on_the_command_line():
         load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_fill_threshold=1"])
 
 
-@pytest.mark.parametrize("text, value", [("1e-3", 1e-3), ("1E5", 1e5), ("2.5e3", 2500.0), (".5", 0.5), ("5.", 5.0), ("-.5", -0.5)])
+@pytest.mark.parametrize("text, value", [("1e-3", 1e-3), ("1E1", 10.0), ("2.5e0", 2.5), (".5", 0.5), ("5.", 5.0)])
 def test_the_float_forms_people_type_are_numbers(text, value):
     config = load_config(CONFIG_DIR / "quick.yaml", [f"drive.surge_cruise={text}"])
     assert config.drive.surge_cruise == value
+    # read as the number it is, then held to its bounds
+    with pytest.raises(ConfigError, match=r"^overrides: drive\.surge_cruise: got -0\.5 \(float\), expected a number >= 0"):
+        load_config(CONFIG_DIR / "quick.yaml", ["drive.surge_cruise=-.5"])
 
 
 def test_the_newest_frames_share_is_a_share_of_the_budget_or_null():
@@ -466,3 +469,31 @@ def test_every_count_has_a_bound_that_the_command_line_names(key, value, bound):
     assert result.exit_code == 1 and "Traceback" not in result.output
     assert f"--set: {key}: got {value} (int), expected an integer >= " in result.stderr
     assert f"and <= {bound}" in result.stderr
+
+
+@pytest.mark.parametrize(
+    "override, message",
+    [  # issue 63's hostile cases: each hung, overflowed or ended in a traceback deep inside a run
+        ("explore.step_seconds=1e308", "explore.step_seconds: got 1e+308 (float), expected a number > 0 and <= 3600"),
+        ("model.alpha=1e308", "model.alpha: got 1e+308 (float), expected a number > 0 and <= 1000"),
+        ("words.orb_tile=1e23", "words.orb_tile: got 1e+23 (float), expected an integer >= 1 and <= 16384"),
+        ("drive.hello_timeout=1e308", "drive.hello_timeout: got 1e+308 (float), expected a number > 0 and <= 3600"),
+        ("drive.sim_frame_interval=1e308", "drive.sim_frame_interval: got 1e+308 (float), expected a number >= 0 and <= 3600"),
+        ("drive.baud=99999999999", "drive.baud: got 99999999999 (int), expected an integer >= 1 and <= 12000000"),
+        ("drive.ack_timeout=1e308", "drive.ack_timeout: got 1e+308 (float), expected a number > 0 and <= 3600"),
+        # the wire protocol wants a host frame every 200 ms; the robot never backs up
+        ("drive.keepalive=0.5", "drive.keepalive: got 0.5 (float), expected a number > 0 and <= 0.2"),
+        ("drive.surge_min=-1", "drive.surge_min: got -1 (int), expected a number >= 0 and <= 10"),
+    ],
+)
+def test_every_number_has_an_upper_bound_named_in_its_error(override, message):
+    with pytest.raises(ConfigError) as info:
+        load_config(CONFIG_DIR / "quick.yaml", [override])
+    assert str(info.value) == f"overrides: {message}"
+
+
+def test_a_key_given_twice_is_refused_not_the_last_taken():
+    with pytest.raises(ConfigError, match=r"^overrides: seed is given twice \(seed=1, seed=2\); give each key once$"):
+        load_config(CONFIG_DIR / "quick.yaml", ["seed=1", "seed=2"])
+    with pytest.raises(ConfigError, match=r"^overrides: drive.gamma is given twice \(drive=\{gamma: 0.5\}, drive.gamma=0.6\)"):
+        load_config(CONFIG_DIR / "quick.yaml", ["drive={gamma: 0.5}", "drive.gamma=0.6"])

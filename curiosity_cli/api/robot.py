@@ -116,6 +116,8 @@ def drive(
     UsageError
         Arguments that do not go together, naming them.
     """
+    from curiosity_cli.checks import check_int
+    from curiosity_cli.config import MAX_BAUD
     from curiosity_cli.drive.session import drive_session
     from curiosity_cli.maps.map_data import load_map
 
@@ -125,6 +127,7 @@ def drive(
     clock = _clock(clock)
     out, video_out = optional_path(out, "out"), optional_path(video_out, "video_out")
     seed, max_frames = optional_count(seed, "seed", 0), optional_count(max_frames, "max_frames")
+    baud = None if baud is None else check_int("baud", baud, 1, MAX_BAUD)
     foxglove = optional_count(foxglove, "foxglove", 0)
     if foxglove is not None and foxglove > 65535:
         raise UsageError(f"foxglove: got {foxglove}, expected a port 0..65535 (0: any free one)", parameter="foxglove")

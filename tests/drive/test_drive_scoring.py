@@ -90,11 +90,13 @@ def test_steer_turns_towards_the_target_and_limits_apply():
     "change, message",
     [
         (dict(surge_min=1.0), "drive.surge_min: got 1.0, expected at most surge_max (0.5)"),
-        (dict(keepalive=1.5), "drive.keepalive: got 1.5, expected shorter than the robot's watchdog (1.0 s)"),
+        (dict(keepalive=0.15, watchdog=0.1), "drive.keepalive: got 0.15, expected shorter than the robot's watchdog (0.1 s)"),
+        (dict(ack_timeout=2.0), "drive.ack_timeout: got 2.0, expected shorter than the robot's watchdog (1.0 s): a frame is "
+         "resent before the robot stops for want of one"),
         (dict(frame_width=16, grid_cols=32), "drive.grid_cols: got 32, expected at most frame_width (16): a frame is "
          "resized to 16 px wide, a pixel at least to each column of cells"),
         # hostile-user F15: accepted, then refused after the warm-up for a "frame" of the simulated camera
-        (dict(grid_rows=100000), "drive.grid_rows: got 100000, expected at most frame_width (192): a frame is resized "
+        (dict(grid_rows=200), "drive.grid_rows: got 200, expected at most frame_width (192): a frame is resized "
          "to 192 px wide, and stretched no taller than that to give each row of cells a pixel"),
     ],
 )
