@@ -126,3 +126,32 @@ def test_only_a_study_of_seeds_keeps_a_record(own_map, tmp_path):
     with pytest.raises(UsageError, match="^record: keeps a study's seeds"):
         api.reproduce(plain, record=tmp_path / "record", results_dir=tmp_path / "r", cache_dir=tmp_path / "c")
     assert not (tmp_path / "r").exists() and not (tmp_path / "record").exists()
+
+
+def test_a_record_folder_that_cannot_be_written_is_refused_before_anything_is_computed(own_map, tmp_path):
+    """Issue 63: a read-only or looping --record folder failed only after the first combination was computed."""
+    config = study_yaml(own_map, tmp_path, ONE)
+    loop = tmp_path / "loop"
+    loop.symlink_to(loop)
+    refused = sweep(config, tmp_path / "results", "--record", str(loop), "--sweep", "seed=1")
+    assert refused.exit_code == 1 and f"Error: --record {loop}: cannot be written (" in refused.output, refused.output
+    assert not (tmp_path / "results" / "tiny-sweep" / "specification-default_seed-1").exists()
+
+
+@pytest.mark.slow
+def test_another_study_s_record_is_named_as_such_and_not_offered_for_removal(own_map, tmp_path):
+    from small_maps import edit_yaml, write_own_map
+
+    record = tmp_path / "record"
+    assert sweep(study_yaml(own_map, tmp_path, ONE), tmp_path / "first", "--record", str(record), "--sweep", "seed=1").exit_code == 0
+    (tmp_path / "second").mkdir()
+    other_map = edit_yaml(write_own_map(tmp_path / "second"), name="elsewhere")
+    other = study_yaml(other_map, tmp_path / "second", ONE)
+    refused = sweep(other, tmp_path / "results", "--record", str(record), "--sweep", "seed=1")
+    assert refused.exit_code == 1
+    line = refused.output.strip().splitlines()[-1]
+    assert line == (
+        f"Error: {record / 'seed-1' / 'default'}: a record of the maps own, not this study's (elsewhere): another "
+        "study's record, perhaps; give this study's own --record folder"
+    )
+    assert "remove it" not in line and (record / "seed-1" / "default" / "mi.csv").is_file()

@@ -66,7 +66,8 @@ def remove_partial_runs(root: Path) -> int:
 
 
 def write_run(folder: Path, exploration: Exploration, meta: dict, grid: SquareGrid) -> int:
-    """Write a run's folder atomically (replacing an old one); returns its size in bytes, run.json included.
+    """Write a run's folder atomically (replacing an old one, whose files the tool did not write are kept);
+    returns its size in bytes, run.json included.
 
     Parameters
     ----------
@@ -85,6 +86,10 @@ def write_run(folder: Path, exploration: Exploration, meta: dict, grid: SquareGr
         with naming_os_errors(folder):  # a full disk names the run, not "no space left" alone
             size = _write_files(tmp, exploration, meta, grid)
         if folder.exists():
+            written = {item.name for item in tmp.iterdir()}
+            for item in folder.iterdir():
+                if item.name not in written:  # a user's file: --force replaces only what the tool wrote
+                    os.replace(item, tmp / item.name)
             shutil.rmtree(folder)
         os.rename(tmp, folder)
     finally:

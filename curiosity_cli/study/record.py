@@ -127,6 +127,26 @@ class StudyRecord:
             raise RecordError(f"--record {display_path(self.root)}: expected a folder, found a file")
         self.sweep = sweep
 
+    def check_writable(self) -> None:
+        """Refuse a record folder that cannot be written (read-only, a symlink loop, under a file) before anything
+        is computed, not after the first combination.
+
+        Raises
+        ------
+        RecordError
+        """
+        import tempfile
+
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            with tempfile.NamedTemporaryFile(dir=self.root, prefix=".writable-"):
+                pass
+        except OSError as exc:
+            raise RecordError(
+                f"--record {display_path(self.root)}: cannot be written ({exc.strerror or exc}); give a folder this "
+                "user can write"
+            ) from None
+
     def folder(self, combination: Combination) -> Path:
         """Where ``combination``'s tables are recorded: ``<record>/seed-<S>/<specification>``."""
         values = dict(text.split("=", 1) for text in combination.overrides)
@@ -177,6 +197,11 @@ class StudyRecord:
             path, why = change
             raise RecordError(f"{display_path(path)}: not the table that was recorded ({why}); {remedy}")
         now = recipes(Experiment(folder, combination.config, _maps(combination, loaded)))
+        if set(recorded["maps"]) != set(now["maps"]):  # another study's record: removing it would lose that study
+            raise RecordError(
+                f"{where}: a record of the maps {', '.join(sorted(recorded['maps']))}, not this study's "
+                f"({', '.join(sorted(now['maps']))}): another study's record, perhaps; give this study's own --record folder"
+            )
         found = [_in_words(keys, old, new) for keys, old, new in differences(recorded, now)]
         if found:
             more = f"; and {len(found) - 1} more" if len(found) > 1 else ""

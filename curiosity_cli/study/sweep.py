@@ -461,6 +461,8 @@ def run_sweep(
 
     kept = StudyRecord(record, sweep) if record is not None else None
     taken = kept.recorded() if kept is not None else {}
+    if kept is not None and len(taken) < len(sweep.combinations):
+        kept.check_writable()  # what it computes is recorded as it finishes: refused now, not after the first
     for combination in sweep.combinations:  # a GPU one combination asks for and this machine lacks: before any runs
         if combination.index not in taken:
             resolve_device(combination.config.label.device)

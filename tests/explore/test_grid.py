@@ -102,6 +102,19 @@ def test_a_finished_grid_is_skipped_and_force_redoes_it(own_map, tmp_path):
 
 
 @pytest.mark.slow
+def test_force_keeps_a_user_s_file_in_a_run_folder(own_map, tmp_path):
+    """Issue 63: explore --force deleted runs/<map>/<walker>/restart-000/notes.txt without a word."""
+    config = grid_config(own_map)
+    run_grid(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1)
+    run = next((tmp_path / config.name / "runs").glob("*/*/restart-000"))
+    (run / "notes.txt").write_text("the camera fogged here")
+    written = sorted(p.name for p in run.iterdir())
+    run_grid(config, results_dir=tmp_path, cache_dir=tmp_path / "cache", jobs=1, force=True)
+    assert (run / "notes.txt").read_text() == "the camera fogged here"
+    assert sorted(p.name for p in run.iterdir()) == written
+    read_run(run)  # and the run is whole
+
+
 def test_a_killed_grid_resumes_to_the_results_of_an_uninterrupted_one(own_map, tmp_path):
     config_path = grid_yaml(own_map, tmp_path)
     command = [sys.executable, "-m", "curiosity_cli", "explore", str(config_path), "--jobs", "1",
