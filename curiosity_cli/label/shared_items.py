@@ -90,6 +90,19 @@ class SharedItems:
     def __init__(self, cache_dir: Path):
         self.root = Path(cache_dir) / SHARED_FOLDER
 
+    def writable(self) -> str | None:
+        """None when items can be stored here; else why not, in words (checked before any work, so that a
+        read-only cache or one under a file is not found after the labelling)."""
+        import tempfile
+
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            with tempfile.NamedTemporaryFile(dir=self.root, prefix=".writable-"):
+                pass
+        except OSError as exc:
+            return f"{display_path(self.root)}: cannot be written ({exc.strerror or exc})"
+        return None
+
     def find(self, kind: str, key: str) -> Path | None:
         """The stored file of an item, if there is one whose bytes still match its name; one that does not is
         named on stderr and removed."""

@@ -456,6 +456,11 @@ def label_experiment(
 
         with computing as workers:
             shared = SharedItems(cache_dir) if reuse else None
+            if shared is not None and (why := shared.writable()) is not None:
+                raise LabelError(
+                    f"{why}: the shared items of labels are stored there; give a --cache-dir this user can write, "
+                    "or --no-reuse to label without them"
+                )
             batches = _plan_batches(experiment, list(stores.values()), shared, force)
             plan = _plan_runs(experiment, by_name, finished, shared, force)
             problems += plan.problems

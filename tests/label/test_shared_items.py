@@ -140,6 +140,19 @@ def test_force_computes_every_item_again_and_stores_it(own_map, tmp_path):
     assert len(list((tmp_path / "cache" / SHARED_FOLDER / LABELS).glob("*.npz"))) == 8, "one item a run, as before"
 
 
+def test_a_cache_whose_shared_items_cannot_be_written_is_refused_before_any_labelling(own_map, tmp_path):
+    """Issue 63: a cache folder that is a file (or read-only) was reported after all the labelling."""
+    config, first = explored(own_map, tmp_path, "first")
+    (tmp_path / "cache" / SHARED_FOLDER).write_text("not a folder")
+    result = runner.invoke(app, ["label", str(first), "--jobs", "1", "--cache-dir", str(tmp_path / "cache")])
+    assert result.exit_code == 1
+    assert f"Error: {tmp_path / 'cache' / SHARED_FOLDER}: cannot be written (" in result.output, result.output
+    assert "--no-reuse to label without them" in result.output
+    assert not list((first / "labels").glob("**/*.npz")), "refused before any labelling"
+    done = runner.invoke(app, ["label", str(first), "--jobs", "1", "--no-reuse", "--cache-dir", str(tmp_path / "cache")])
+    assert done.exit_code == 0, done.output
+
+
 def test_two_writers_of_one_item_leave_one_whole_file(tmp_path):
     shared = SharedItems(tmp_path)
     arrays = {"lengths": np.arange(3, dtype=np.int32), "batch": np.random.default_rng(0).integers(0, 9, (3, 8, 8))}
