@@ -359,3 +359,42 @@ def test_explore_names_a_registered_map_by_its_name_and_a_dataset_yaml_by_its_pa
     monkeypatch.setattr(grid, "run_grid", lambda config, **_: config.datasets)
     assert api.explore("quick", maps=["reef-mosaic"]) == ("reef-mosaic",)
     assert api.explore("quick", maps=[str(own_map)]) == (str(own_map.resolve()),)
+
+
+class _Wrong:
+    """A value of no type any argument takes."""
+
+    def __repr__(self) -> str:
+        return "<wrong>"
+
+
+#: What each required argument of the API is given while another one is wrong: a folder with nothing in it, a
+#: shipped map or config; never enough for work to start, which a wrong argument must stop first.
+_REQUIRED = {
+    "folder": Path("no-such-experiment"), "dataset": "zurich-zh17", "weight_function": "random-walk", "restart": 0,
+    "name": "x", "map_name": "aerial-mosaic", "text": "aerial-mosaic/random-walk/0", "parameter": "run",
+    "datasets": ["zurich-zh17"], "source": Path("no-such-experiment"), "config": "quick",
+}
+_ARGUMENTS = [
+    (name, parameter)
+    for name in sorted(dir(api)) if not name.startswith("_") and inspect.isfunction(getattr(api, name))
+    for parameter in inspect.signature(getattr(api, name)).parameters
+]
+
+
+@pytest.mark.parametrize("name, parameter", _ARGUMENTS)
+def test_every_api_argument_of_a_wrong_type_is_refused_by_its_name(name, parameter, tmp_path, monkeypatch):
+    """Issue 63: a callback that cannot be called, png_every=3.5, overrides=b"x" failed as raw TypeErrors deep in
+    the work, or were taken."""
+    monkeypatch.chdir(tmp_path)
+    function = getattr(api, name)
+    arguments = {
+        other.name: _REQUIRED[other.name] for other in inspect.signature(function).parameters.values()
+        if other.default is inspect.Parameter.empty and other.name != parameter
+    }
+    with pytest.raises(ParameterError) as info:
+        function(**arguments, **{parameter: _Wrong()})
+    # run_named's text is named by the option it stands for, its parameter
+    named = "run" if (name, parameter) == ("run_named", "text") else parameter
+    assert str(info.value).startswith(f"{named}: got <wrong>"), str(info.value)
+    assert not any(tmp_path.iterdir()), "refused before anything was written"

@@ -90,3 +90,17 @@ def boolean(value, name: str) -> bool:
     if isinstance(value, bool):
         return value
     raise ParameterError(f"{name}: got {_given(value)}, expected True or False")
+
+
+def callback(value, name: str):
+    """A function to call, or None (a callback that cannot be called fails as itself, not deep in the work)."""
+    if value is None or callable(value):
+        return value
+    raise ParameterError(f"{name}: got {_given(value)}, expected a function to call, or None")
+
+
+def name_text(value, name: str) -> str:
+    """A string (a name, a topic), not anything else."""
+    if isinstance(value, str):
+        return value
+    raise ParameterError(f"{name}: got {_given(value)}, expected a string")

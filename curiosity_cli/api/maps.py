@@ -133,10 +133,10 @@ def build_vocabularies(
         build_orb_vocabulary, build_texton_vocabulary, built_vocabulary, save_vocabulary, vocabulary_path,
     )
 
-    from curiosity_cli.api.arguments import folder_argument
+    from curiosity_cli.api.arguments import callback, folder_argument
     from curiosity_cli.checks import check_int
 
-    out, seed = folder_argument(out, "out"), check_int("seed", seed, 0)
+    out, seed, log = folder_argument(out, "out"), check_int("seed", seed, 0), callback(log, "log")
     plan = (
         ("texton_words", "texton", build_texton_vocabulary, texton_words),
         ("orb_words", "orb", build_orb_vocabulary, orb_words),

@@ -15,7 +15,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from curiosity_cli.api.arguments import (
-    boolean, config_argument, folder_argument, name_or_path, optional_count, optional_path, overrides_argument, strings,
+    boolean, callback, config_argument, folder_argument, name_or_path, name_text, optional_count, optional_path,
+    overrides_argument, strings,
 )
 from curiosity_cli.errors import UsageError
 from curiosity_cli.paths import DEFAULT_CACHE, DEFAULT_RESULTS
@@ -99,6 +100,12 @@ def _is_config(config: Config) -> bool:
 
 
 def _check_scheduler(backend: str, scheduler: str | None) -> None:
+    from curiosity_cli.checks import check_choice
+    from curiosity_cli.workers import BACKENDS
+
+    check_choice("backend", backend, BACKENDS)
+    if scheduler is not None:
+        name_text(scheduler, "scheduler")
     if scheduler is not None and backend != "dask":
         raise UsageError("scheduler: needs `backend` dask", parameter="scheduler")
 
@@ -130,7 +137,7 @@ def extract(
     from curiosity_cli.maps.map_data import load_map
     from curiosity_cli.words.extract import extract_words
 
-    dataset, config = name_or_path(dataset, "dataset"), config_argument(config)
+    dataset, config, overrides = name_or_path(dataset, "dataset"), config_argument(config), overrides_argument(overrides)
     density, cache_dir = optional_path(density, "density"), folder_argument(cache_dir, "cache_dir")
     stride, cell_width = optional_count(stride, "stride"), optional_count(cell_width, "cell_width")
     force = boolean(force, "force")
@@ -209,6 +216,7 @@ def explore(
     from curiosity_cli.maps.datasets import DATASET_CONFIG_DIR, dataset_path
 
     _check_scheduler(backend, scheduler)
+    on_prepared, on_run = callback(on_prepared, "on_prepared"), callback(on_run, "on_run")
     maps = strings(maps, "maps", "aerial-mosaic")
     weights = None if weights is None else strings(weights, "weights", "topic-perplexity")
     restarts, steps, jobs = optional_count(restarts, "restarts"), optional_count(steps, "steps"), optional_count(jobs, "jobs")
@@ -280,6 +288,7 @@ def label(
     from curiosity_cli.label.stage import label_experiment
 
     _check_scheduler(backend, scheduler)
+    on_stage, on_done = callback(on_stage, "on_stage"), callback(on_done, "on_done")
     folder, overrides = folder_argument(folder), overrides_argument(overrides)
     jobs, cache_dir = optional_count(jobs, "jobs"), folder_argument(cache_dir, "cache_dir")
     force, converged, reuse = boolean(force, "force"), boolean(converged, "converged"), boolean(reuse, "reuse")
@@ -319,6 +328,7 @@ def run_named(text: str, parameter: str = "run") -> tuple[str, str, int]:
     UsageError
         Not three parts with a restart number, naming ``parameter``.
     """
+    parameter = name_text(parameter, "parameter")
     parts = text.split("/") if isinstance(text, str) else []
     if len(parts) != 3 or not parts[2].isdigit():
         raise UsageError(
@@ -399,6 +409,7 @@ def reproduce(
     from curiosity_cli.study.sweep import declared_sweeps, merge_sweeps
 
     _check_scheduler(backend, scheduler)
+    on_stage, on_done, on_status = callback(on_stage, "on_stage"), callback(on_done, "on_done"), callback(on_status, "on_status")
     config, overrides, sweeps = config_argument(config), overrides_argument(overrides), strings(sweeps, "sweeps", "seed=0,1")
     jobs, reuse = optional_count(jobs, "jobs"), boolean(reuse, "reuse")
     force, converged = boolean(force, "force"), boolean(converged, "converged")

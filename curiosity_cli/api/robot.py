@@ -10,7 +10,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
 
-from curiosity_cli.api.arguments import boolean, folder_argument, name_or_path, optional_count, optional_path
+from curiosity_cli.api.arguments import (
+    boolean, callback, folder_argument, name_or_path, name_text, optional_count, optional_path,
+)
 from curiosity_cli.api.pipeline import Config, load
 from curiosity_cli.errors import ParameterError, UsageError
 
@@ -123,6 +125,12 @@ def drive(
 
     _finite("heading_deg", heading_deg)
     _check_start(start)
+    on_status, on_frame = callback(on_status, "on_status"), callback(on_frame, "on_frame")
+    on_replay = callback(on_replay, "on_replay")
+    serial = None if serial is None else name_text(serial, "serial")
+    topic = None if topic is None else name_text(topic, "topic")
+    sim_map = None if sim_map is None else name_or_path(sim_map, "sim_map")
+    png_every = check_int("png_every", png_every, 0)
     dry_run, force, strict = boolean(dry_run, "dry_run"), boolean(force, "force"), boolean(strict, "strict")
     clock = _clock(clock)
     out, video_out = optional_path(out, "out"), optional_path(video_out, "video_out")
@@ -213,6 +221,7 @@ def simrobot(
 
     _finite("heading_deg", heading_deg)
     _finite("estop_after", estop_after)
+    on_ready = callback(on_ready, "on_ready")
     map_name, seed = name_or_path(map_name, "map_name"), optional_count(seed, "seed", 0)
     link, log_file = optional_path(link, "link"), optional_path(log_file, "log_file")
     if not isinstance(noise, str):
