@@ -240,8 +240,8 @@ def simrobot(
 
 def open_mission(folder: Path | str) -> pd.DataFrame:
     """A drive's frames, one row per frame, from its run folder: ``frames.parquet``
-    (:mod:`~curiosity_cli.drive.frames_table`), or its ``log.jsonl`` where the drive was
-    stopped before writing the table.
+    (:mod:`~curiosity_cli.drive.frames_table`) where it was made from the run's log as it is, else its
+    ``log.jsonl``, with a note saying why (:func:`~curiosity_cli.drive.frames_table.read_frames_table`).
 
     The frame's times are integer nanoseconds (``time_ns``: the bag time of a replay, the
     host's clock live); ``surprise`` is the mean topic perplexity of its image cells, with
@@ -259,17 +259,14 @@ def open_mission(folder: Path | str) -> pd.DataFrame:
     import yaml
 
     from curiosity_cli.drive.driver import RUN_LOG
-    from curiosity_cli.drive.frames_table import FRAMES_PARQUET, frames_table
+    from curiosity_cli.drive.frames_table import read_frames_table
     from curiosity_cli.errors import CuriosityError
     from curiosity_cli.files import display_path
 
     folder = folder_argument(folder)
     if not (folder / RUN_LOG).is_file():
         raise CuriosityError(f"{display_path(folder / RUN_LOG)}: not found; give a run folder of `curiosity drive`")
-    try:
-        table = pd.read_parquet(folder / FRAMES_PARQUET) if (folder / FRAMES_PARQUET).is_file() else frames_table(folder / RUN_LOG)
-    except (OSError, ValueError) as exc:  # pyarrow's errors for a file that is no parquet are ValueErrors and OSErrors
-        raise CuriosityError(f"{display_path(folder / FRAMES_PARQUET)}: cannot be read ({' '.join(str(exc).split())})") from None
+    table = read_frames_table(folder)
     for name in ("config", "provenance"):
         path = folder / f"{name}.yaml"
         try:

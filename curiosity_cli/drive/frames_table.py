@@ -16,6 +16,9 @@ import numpy as np
 
 #: The table's files in a run folder.
 FRAMES_PARQUET, FRAMES_CSV = "frames.parquet", "frames.csv"
+#: Where ``frames.parquet``'s schema metadata records what it was made from: the SHA-256 of the run's log and its
+#: frames, so that a table edited, or another run's, is never read as this run's.
+MADE_FROM = b"curiosity.made_from"
 
 #: Its columns, in order; the integer ones that may be missing are pandas' nullable Int64.
 COLUMNS = (
@@ -109,13 +112,64 @@ def write_frames_table(folder: Path):
     CuriosityError
         As :func:`frames_table`.
     """
+    import json
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
     from curiosity_cli.drive.driver import RUN_LOG
-    from curiosity_cli.files import atomic_path
+    from curiosity_cli.files import atomic_path, file_sha256
 
     folder = Path(folder)
     table = frames_table(folder / RUN_LOG)
+    made_from = json.dumps({"log_sha256": file_sha256(folder / RUN_LOG), "frames": len(table)}).encode()
+    arrow = pa.Table.from_pandas(table, preserve_index=False)
+    arrow = arrow.replace_schema_metadata({**(arrow.schema.metadata or {}), MADE_FROM: made_from})
     with atomic_path(folder / FRAMES_PARQUET) as tmp:
-        table.to_parquet(tmp, index=False)
+        pq.write_table(arrow, tmp)
     with atomic_path(folder / FRAMES_CSV) as tmp:
         table.to_csv(tmp, index=False)
     return table
+
+
+def read_frames_table(folder: Path):
+    """A run's frames: its ``frames.parquet`` where that was made from the run's log as the log is now (the
+    log's SHA-256 and frame count it records), else the log's own (:func:`frames_table`), with a note saying why:
+    a table edited, another run's, or one of a run stopped before writing it.
+
+    Raises
+    ------
+    CuriosityError
+        A table that is no parquet file, or a log that cannot be read, naming the file.
+    """
+    import json
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from curiosity_cli.drive.driver import RUN_LOG
+    from curiosity_cli.errors import CuriosityError
+    from curiosity_cli.files import display_path, file_sha256, note
+
+    folder = Path(folder)
+    path, log = folder / FRAMES_PARQUET, folder / RUN_LOG
+    if not path.is_file():
+        return frames_table(log)
+    try:
+        arrow = pq.read_table(path)
+    except (OSError, ValueError, pa.ArrowException) as exc:
+        raise CuriosityError(f"{display_path(path)}: cannot be read ({' '.join(str(exc).split())})") from None
+    try:
+        made_from = json.loads((arrow.schema.metadata or {}).get(MADE_FROM, b"null"))
+    except ValueError:
+        made_from = None
+    if not isinstance(made_from, dict):
+        why = "it does not say which log it was made from (written by another tool, or before tables said)"
+    elif made_from.get("log_sha256") != file_sha256(log):
+        why = "it was made from another log than this run's (another run's table, or the log changed since)"
+    elif made_from.get("frames") != arrow.num_rows:
+        why = f"it holds {arrow.num_rows} frames where the log it was made from has {made_from.get('frames')}"
+    else:
+        return arrow.to_pandas()
+    note(f"{display_path(path)}: {why}; the frames are read from {display_path(log)}")
+    return frames_table(log)

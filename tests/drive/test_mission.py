@@ -250,6 +250,30 @@ def test_open_mission_reads_the_log_of_a_drive_stopped_before_its_table(replayed
     pd.testing.assert_frame_equal(api.open_mission(copy), api.open_mission(replayed), check_like=False)
 
 
+@pytest.mark.slow
+def test_a_frames_table_not_made_from_the_run_s_log_is_named_and_the_log_read(replayed, tmp_path, capsys):
+    """Issue 63: open_mission returned an edited frames.parquet, another run's table, and 8 rows for a run whose
+    log holds only its start record; the table records the log's SHA-256 and frames it was made from."""
+    truth = api.open_mission(replayed)
+    copy = tmp_path / "copy"
+    copy.mkdir()
+    for name in ("log.jsonl", "config.yaml", "provenance.yaml", "frames.parquet"):
+        (copy / name).write_bytes((replayed / name).read_bytes())
+    edited = truth.copy()
+    edited["surprise"] = 99.0
+    edited.to_parquet(copy / "frames.parquet", index=False)  # another tool's write: no record of its log
+    capsys.readouterr()
+    pd.testing.assert_frame_equal(api.open_mission(copy), truth)
+    assert "frames.parquet: it does not say which log it was made from" in capsys.readouterr().err
+
+    started = copy / "log.jsonl"
+    started.write_text(started.read_text().splitlines()[0] + "\n")  # the start record alone
+    (copy / "frames.parquet").write_bytes((replayed / "frames.parquet").read_bytes())  # another run's table
+    table = api.open_mission(copy)
+    assert len(table) == 0 and list(table.columns) == list(truth.columns)
+    assert "frames.parquet: it was made from another log than this run's" in capsys.readouterr().err
+
+
 def test_open_mission_of_a_folder_that_is_no_run_is_one_error(tmp_path):
     from curiosity_cli.errors import CuriosityError
 
