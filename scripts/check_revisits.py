@@ -22,9 +22,10 @@ by side on the same run (a recorded mission does not steer, so the model is the 
 A frame's surprise is the mean over its cells. Per reading, map and seed it prints the median
 surprise of each lap, lap 4's over lap 1's (the target: at most ``FALL``), and the patch's
 frames: how many stand above the timeline's rule (median + 10 MADs of the mission,
-:func:`curiosity_cli.drive.timeline.surprise_threshold`) and in the top ``TOP`` of laps 2-4. A
-reading passes where, in every seed and map, lap 4 falls to ``FALL`` and every patched frame is
-above the rule and in the top share. With ``--figure`` it draws each reading's surprise per
+:func:`curiosity_cli.drive.timeline.surprise_threshold`), how many in the top ``TOP`` of laps
+2-4, and each one's rank among the frames of laps 2-4 (1: the most surprising). A reading
+passes where, in every seed and map, lap 4 falls to ``FALL`` and every patched frame is above
+the rule and in the top share. With ``--figure`` it draws each reading's surprise per
 frame, the laps overlaid, for seed 0 of each map.
 
     python scripts/check_revisits.py                     # aerial-mosaic and reef-mosaic, seeds 0-4, 100 frames a lap
@@ -127,8 +128,10 @@ def verdict(result: dict, reading: str, n: int) -> dict:
     above = int(np.sum(values[marked] > rule))
     in_top = int(np.sum(values[marked] >= top))
     fall = medians[-1] / medians[0]
+    # each patched frame's rank among the frames of laps 2-4, 1 the most surprising
+    ranks = [int(np.sum(later > values[i])) + 1 for i in marked]
     return {
-        "medians": medians, "fall": fall, "above": above, "in_top": in_top,
+        "medians": medians, "fall": fall, "above": above, "in_top": in_top, "ranks": ranks,
         "passes": fall <= FALL and above == len(marked) and in_top == len(marked),
     }
 
@@ -189,14 +192,15 @@ def main() -> int:
     passing = {}
     for reading in READINGS:
         print(f"\n{reading}")
-        print(f"  {'map':<16}{'seed':>5}  {'median per lap':<40}{'4 / 1':>7}  {'patch: above rule, in top':>26}")
+        print(f"  {'map':<16}{'seed':>5}  {'median per lap':<40}{'4 / 1':>7}  {'patch: above rule, in top':>26}"
+              f"  ranks in laps 2-4 (of {(LAPS - 1) * args.frames})")
         ok = True
         for result in results:
             v = verdict(result, reading, args.frames)
             ok &= v["passes"]
             medians = "  ".join(f"{m:9.4g}" for m in v["medians"])
             print(f"  {result['map']:<16}{result['seed']:>5}  {medians:<40}{v['fall']:>7.3f}  "
-                  f"{v['above']:>12} / {PATCH_FRAMES}, {v['in_top']} / {PATCH_FRAMES}")
+                  f"{v['above']:>12} / {PATCH_FRAMES}, {v['in_top']} / {PATCH_FRAMES}  {' '.join(map(str, v['ranks']))}")
         passing[reading] = ok
     print("\npasses: " + ", ".join(r for r, ok in passing.items() if ok) if any(passing.values()) else "\npasses: none")
     if args.figure is not None:
