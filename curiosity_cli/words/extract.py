@@ -168,6 +168,11 @@ def extract_words(
             f"{map_data.config.name} ({image.shape[0]} x {image.shape[1]} px); expected a step that leaves grid points "
             "inside the map, away from its border",
         )
+    if words.orb_detector == "keypoints" and store.count_by_type().get("orb", 0) == 0:
+        raise CuriosityError(  # as above: 255 found no corner on any shipped map, and the store ran without ORB words
+            f"words.orb_fast_threshold: got {words.orb_fast_threshold}, but FAST finds no corner on "
+            f"{map_data.config.name} at it; expected a lower threshold, or a map with texture ORB can see"
+        )
     save_store(store, path)
     seconds["total"] = time.perf_counter() - start
     return Extraction(store, path, reused=False, seconds=seconds)

@@ -126,9 +126,24 @@ def test_a_grid_step_that_places_no_orb_word_is_refused_by_name(tmp_path):
     from curiosity_cli.cli import app
 
     result = CliRunner().invoke(app, [
-        "extract", "aerial-mosaic", "--set", "words.orb_detector=grid", "--set", "words.orb_grid_step=100000",
+        "extract", "aerial-mosaic", "--set", "words.orb_detector=grid", "--set", "words.orb_grid_step=10000",
         "--cache-dir", str(tmp_path),
     ])
     assert result.exit_code == 1 and "Traceback" not in result.output
-    assert "words.orb_grid_step: got 100000, but its grid places no ORB word on aerial-mosaic (1024 x 1024 px)" in result.stderr
+    assert "words.orb_grid_step: got 10000, but its grid places no ORB word on aerial-mosaic (1024 x 1024 px)" in result.stderr
+    assert not list(tmp_path.glob("*.npz")), "no store is cached"
+
+
+@pytest.mark.slow
+def test_a_fast_threshold_that_finds_no_corner_is_refused_by_name(tmp_path):
+    """Issue 63: words.orb_fast_threshold=255 gave a store without ORB words, and no warning."""
+    from typer.testing import CliRunner
+
+    from curiosity_cli.cli import app
+
+    result = CliRunner().invoke(app, [
+        "extract", "aerial-mosaic", "--set", "words.orb_fast_threshold=255", "--cache-dir", str(tmp_path),
+    ])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    assert "words.orb_fast_threshold: got 255, but FAST finds no corner on aerial-mosaic at it" in result.stderr
     assert not list(tmp_path.glob("*.npz")), "no store is cached"
