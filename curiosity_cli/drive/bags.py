@@ -224,6 +224,9 @@ class BagCamera:
                 f"topic: {topic!r} holds {counts[topic][0]}, not images; the image topics of {where}: {listed}",
                 parameter="topic",
             )
+        if not images[topic]:
+            self.close()
+            raise CameraError(f"{where}: {topic} holds no message: no frame to replay")
         self.topic = topic
         self.messages = images[topic]
         try:
@@ -238,7 +241,7 @@ class BagCamera:
     def _read_odometry(self, odom_topic: str | None, counts: dict, where: str):
         """(the odometry topic or None, its :class:`~curiosity_cli.drive.odometry.Odometry` or None, why frames have
         no pose or what to know of it)."""
-        from curiosity_cli.drive.odometry import read_odometry
+        from curiosity_cli.drive.odometry import MAX_COORDINATE, MAX_POSE_GAP_NS, read_odometry
 
         odometry = sorted(name for name, (kind, _) in counts.items() if kind in POSE_TYPES)
         if odom_topic is None and len(odometry) != 1:
@@ -253,13 +256,19 @@ class BagCamera:
             )
         name = odom_topic or odometry[0]
         try:
-            poses, damaged = read_odometry(self._reader, [c for c in self._reader.connections if c.topic == name])
+            poses, damaged, senseless = read_odometry(self._reader, [c for c in self._reader.connections if c.topic == name])
         except ValueError as exc:
             raise CameraError(f"odom_topic: {name} of {where}: {exc}", parameter="odom_topic") from None
+        parts = [f"{damaged} damaged"] * bool(damaged) + [
+            f"{senseless} outside physical sense (a coordinate beyond {MAX_COORDINATE:.0e} m, or a quaternion of no length)"
+        ] * bool(senseless)
+        left_out = f" ({' and '.join(parts)} left out)" if parts else ""
         if poses is None:
-            return name, None, f"frames have no pose: none of the {damaged} messages of {name} decoded"
-        left_out = f" ({damaged} damaged messages left out)" if damaged else ""
-        return name, poses, f"poses from {name}: {len(poses)} messages{left_out}, each frame given the nearest in time"
+            return name, None, f"frames have no pose: no message of {name} is left{left_out}"
+        return name, poses, (
+            f"poses from {name}: {len(poses)} messages{left_out}, each frame given the nearest in time within "
+            f"{MAX_POSE_GAP_NS / 1e9:g} s (none beyond)"
+        )
 
     def read(self) -> Frame | None:
         """The next frame, with its bag time and pose; None after the last.
@@ -374,11 +383,13 @@ def decode(message, msgtype: str, where: str) -> np.ndarray:
     dtype = np.dtype(np.uint8 if size == 1 else (">u2" if message.is_bigendian else "<u2"))
     rows, cols, step = message.height, message.width, message.step
     data = np.frombuffer(bytes(message.data), np.uint8)
-    if rows == 0 or cols == 0:
-        _damaged(where, f"a {rows} x {cols} image: no pixels")
+    if rows <= 0 or cols <= 0:
+        _damaged(where, f"a {rows} x {cols} image: expected a positive height and width")
     if encoding in _YUV422 and cols % 2:
         _damaged(where, f"{encoding} of {cols} columns: expected an even number (two pixels share their colour)")
-    if step < cols * channels * size or data.size < rows * step:
+    if step < cols * channels * size:
+        _damaged(where, f"a row step of {step} bytes: expected at least {cols * channels * size}, a row of {cols} {encoding} pixels")
+    if data.size < rows * step:
         _damaged(where, f"{data.size} bytes for {rows} x {cols} {encoding} rows of {step}: expected at least {rows * step}")
     image = data[: rows * step].reshape(rows, step)[:, : cols * channels * size].copy().view(dtype)
     image = image.reshape(rows, cols, channels).squeeze(axis=2) if channels == 1 else image.reshape(rows, cols, channels)

@@ -20,6 +20,11 @@ POSE_TYPES = (ODOMETRY, "foxglove.PoseInFrame")
 #: Odometry messages a replay reads at most: 10 hours at 100 Hz, about 1 GB of arrays beyond that
 #: would be read before the first frame.
 MAX_ODOMETRY = 3_600_000
+#: A pose outside physical sense is left out: a coordinate beyond this many metres (a UTM northing reaches 10^7),
+#: or a quaternion of no length (no orientation at all).
+MAX_COORDINATE = 1e8
+#: A frame is given the nearest pose only within this of its bag time; farther, the robot's pose then is not known.
+MAX_POSE_GAP_NS = 2_000_000_000
 
 
 @dataclass(frozen=True)
@@ -45,8 +50,8 @@ class FramePose:
 
     @property
     def yaw(self) -> float:
-        """Heading about z, radians (from the quaternion)."""
-        x, y, z, w = self.orientation
+        """Heading about z, radians (from the quaternion, normalised: a recorder's quaternion need not be a unit one)."""
+        x, y, z, w = np.asarray(self.orientation) / np.linalg.norm(self.orientation)
         return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
 
 
@@ -73,20 +78,24 @@ class Odometry:
     def __len__(self) -> int:
         return self.times.size
 
-    def nearest(self, time_ns: int) -> FramePose:
-        """The pose recorded nearest ``time_ns`` (the earlier one of two as near)."""
+    def nearest(self, time_ns: int) -> FramePose | None:
+        """The pose recorded nearest ``time_ns`` (the earlier one of two as near); None when it is more than
+        :data:`MAX_POSE_GAP_NS` away (a single pose a year before the frames was given to every frame)."""
         at = int(np.searchsorted(self.times, time_ns))
         if at == self.times.size or (at > 0 and time_ns - self.times[at - 1] <= self.times[at] - time_ns):
             at -= 1
+        if abs(int(self.times[at]) - int(time_ns)) > MAX_POSE_GAP_NS:
+            return None
         return FramePose(
             self.frame_ids[at], tuple(float(v) for v in self.positions[at]),
             tuple(float(v) for v in self.orientations[at]), int(self.times[at]) - int(time_ns),
         )
 
 
-def read_odometry(reader, connections) -> tuple[Odometry | None, int]:
-    """The odometry of ``connections`` of a bag ``reader`` (rosbags' ``AnyReader`` or one like it), and how many of
-    its messages did not decode (left out). None when no message decoded.
+def read_odometry(reader, connections) -> tuple[Odometry | None, int, int]:
+    """The odometry of ``connections`` of a bag ``reader`` (rosbags' ``AnyReader`` or one like it), how many of
+    its messages did not decode and how many held a pose outside physical sense (a coordinate beyond
+    :data:`MAX_COORDINATE`, a quaternion of no length), both left out. None when no message is left.
 
     Raises
     ------
@@ -97,7 +106,7 @@ def read_odometry(reader, connections) -> tuple[Odometry | None, int]:
     if total > MAX_ODOMETRY:
         raise ValueError(f"{total:,} odometry messages; at most {MAX_ODOMETRY:,} are read")
     times, positions, orientations, frame_ids = [], [], [], []
-    damaged = 0
+    damaged = senseless = 0
     for connection, stamp, data in reader.messages(connections=connections):
         try:
             message = reader.deserialize(data, connection.msgtype)
@@ -111,10 +120,14 @@ def read_odometry(reader, connections) -> tuple[Odometry | None, int]:
         if not all(math.isfinite(v) for v in (*position, *orientation)):
             damaged += 1
             continue
+        if max(abs(v) for v in position) > MAX_COORDINATE or sum(v * v for v in orientation) < 1e-12:
+            senseless += 1
+            continue
         times.append(stamp)
         positions.append(position)
         orientations.append(orientation)
         frame_ids.append(frame_id)
     if not times:
-        return None, damaged
-    return Odometry(np.array(times, np.int64), np.array(positions), np.array(orientations), frame_ids), damaged
+        return None, damaged, senseless
+    odometry = Odometry(np.array(times, np.int64), np.array(positions), np.array(orientations), frame_ids)
+    return odometry, damaged, senseless
