@@ -511,6 +511,10 @@ def _load_chain(path: Path, raw: Raw, seen: tuple[Path, ...] = ()) -> None:
     if path in seen:
         raise ConfigError(f"{display_path(path)}: base: the chain of base configs loops back here")
     data = read_yaml(path, "config file")
+    if not data:  # else every section would be reported missing, the first as "model: got None"
+        raise ConfigError(
+            f"{display_path(path)}: empty; expected a YAML config, e.g. base: paper.yaml and the keys that differ from it"
+        )
     for key, what in ((SWEEP_KEY, "a sweep"), (SPECIFICATIONS_KEY, "specifications"), (HYPOTHESES_KEY, "hypotheses")):
         if key in data and seen:
             raise ConfigError(f"{display_path(path)}: {key}: only the experiment config itself may declare {what}")

@@ -168,8 +168,10 @@ def read_yaml(path: Path, what: str) -> dict:
 
     path = Path(path)
     where = display_path(path)
-    if not path.is_file():
+    if not path.exists():
         raise ConfigError(f"{where}: {what} not found")
+    if not path.is_file():  # a folder, or a link to /dev/zero: not "not found", and never read to its end
+        raise ConfigError(f"{where}: not a regular file (a folder, a device or a pipe); expected a YAML {what}")
     # the size is checked before reading, so a huge file is never read into memory
     if path.stat().st_size > MAX_BYTES:
         raise ConfigError(f"{where}: larger than {MAX_BYTES // 2**20} MiB; expected a YAML {what} of at most that size")

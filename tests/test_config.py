@@ -497,3 +497,15 @@ def test_a_key_given_twice_is_refused_not_the_last_taken():
         load_config(CONFIG_DIR / "quick.yaml", ["seed=1", "seed=2"])
     with pytest.raises(ConfigError, match=r"^overrides: drive.gamma is given twice \(drive=\{gamma: 0.5\}, drive.gamma=0.6\)"):
         load_config(CONFIG_DIR / "quick.yaml", ["drive={gamma: 0.5}", "drive.gamma=0.6"])
+
+
+def test_an_empty_config_and_one_that_is_no_regular_file_are_named_as_such(tmp_path):
+    """Issue 64: an empty config said "model: got None"; a config linked to /dev/zero said "not found"."""
+    empty = tmp_path / "empty.yaml"
+    empty.write_text("")
+    with pytest.raises(ConfigError, match=r"empty.yaml: empty; expected a YAML config, e.g. base: paper.yaml"):
+        load_config(empty)
+    device = tmp_path / "zero.yaml"
+    device.symlink_to("/dev/zero")
+    with pytest.raises(ConfigError, match=r": not a regular file \(a folder, a device or a pipe\); expected a YAML config file$"):
+        load_config(device)
