@@ -53,18 +53,22 @@ def os_error_message(exc: OSError) -> str:
     if exc.filename is None:
         return reason
     path = Path(os.fsdecode(exc.filename))
-    if exc.errno in (errno.ENOTDIR, errno.EEXIST):
-        blocking = _file_in_the_way(path)
+    if exc.errno in (errno.ENOTDIR, errno.EEXIST, errno.ELOOP):
+        blocking = _in_the_way(path)
         if blocking is not None:
-            return f"{display_path(blocking)}: is a file; expected a folder"
+            where, what = blocking
+            return f"{display_path(where)}: {what}; expected a folder"
     return f"{display_path(path)}: {reason}"
 
 
-def _file_in_the_way(path: Path) -> Path | None:
-    """The nearest of ``path`` and its parents that exists and is not a folder, if any."""
+def _in_the_way(path: Path) -> tuple[Path, str] | None:
+    """The nearest of ``path`` and its parents that is not a folder, and what it is instead: a file, or a symbolic
+    link that leads nowhere (a loop, or a missing target: "File exists" said of it named no cause)."""
     for candidate in (path, *path.parents):
+        if candidate.is_symlink() and not candidate.exists():
+            return candidate, "a symbolic link that leads nowhere (a loop, or its target is missing)"
         if candidate.exists() and not candidate.is_dir():
-            return candidate
+            return candidate, "is a file"
     return None
 
 

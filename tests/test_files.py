@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 
@@ -88,3 +89,19 @@ def test_the_leftovers_of_killed_atomic_writers_are_removed_and_nothing_else(tmp
     (tmp_path / "a" / ".hidden").write_bytes(b"not ours")
     assert remove_leftovers(tmp_path) == 1
     assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == [".hidden", "kept.npz"]
+
+
+def test_a_folder_behind_a_symbolic_link_that_leads_nowhere_names_the_link():
+    """Issue 64: a labels/ symlink loop was reported as "File exists"."""
+    import tempfile
+
+    from curiosity_cli.files import os_error_message
+
+    with tempfile.TemporaryDirectory() as top:
+        loop = Path(top) / "labels"
+        loop.symlink_to(loop)
+        with pytest.raises(OSError) as info:
+            (loop / "own" / "random-walk").mkdir(parents=True, exist_ok=True)
+        assert os_error_message(info.value) == (
+            f"{loop}: a symbolic link that leads nowhere (a loop, or its target is missing); expected a folder"
+        )
