@@ -46,6 +46,28 @@ class SweepCounter:
             os.replace(tmp, self.path)  # whole or not at all: the reader never sees half a number
 
 
+#: The progress folders' names in the temporary folder: the prefix, then the labelling process's id.
+_PREFIX = "curiosity-label-progress-"
+
+
+def remove_orphans() -> int:
+    """Remove the progress folders whose labelling process is gone (killed: it could not remove its own); returns how
+    many. A folder named without a process id (written before names held one) is left alone."""
+    removed = 0
+    for folder in Path(tempfile.gettempdir()).glob(f"{_PREFIX}*"):
+        pid = folder.name[len(_PREFIX):].split("-", 1)[0]
+        if not pid.isdigit():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:
+            shutil.rmtree(folder, ignore_errors=True)
+            removed += 1
+        except (PermissionError, OverflowError):  # another user's live process, or no such id: not ours to remove
+            continue
+    return removed
+
+
 class BlockProgress:
     """In the stage: passes the blocks' sweeps on to ``on_done`` as they are made.
 
@@ -66,7 +88,10 @@ class BlockProgress:
         self._ended: set[str] = set()
         self._lock = threading.Lock()
         self._stop = threading.Event()
-        self._folder = tempfile.mkdtemp(prefix="curiosity-label-progress-") if on_done is not None and local else None
+        self._folder = None
+        if on_done is not None and local:
+            remove_orphans()
+            self._folder = tempfile.mkdtemp(prefix=f"{_PREFIX}{os.getpid()}-")
         self._thread = None
 
     def path(self, key: str) -> str | None:

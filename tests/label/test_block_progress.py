@@ -37,3 +37,20 @@ def test_without_a_display_or_shared_files_nothing_is_written():
     counter = SweepCounter(None)
     counter(4)
     assert counter.done == 4
+
+
+def test_progress_folders_a_killed_labelling_left_are_removed_and_a_live_one_s_kept(tmp_path, monkeypatch):
+    """Issue 64: SIGKILL during labelling left an empty curiosity-label-progress-* folder in TMPDIR."""
+    import os
+    import tempfile
+
+    from curiosity_cli.label.block_progress import remove_orphans
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    dead = tmp_path / "curiosity-label-progress-999999999-abc"  # above any process id Linux gives
+    live = tmp_path / f"curiosity-label-progress-{os.getpid()}-def"
+    older = tmp_path / "curiosity-label-progress-ghi"  # named before names held a process id: left alone
+    for folder in (dead, live, older):
+        folder.mkdir()
+    assert remove_orphans() == 1
+    assert not dead.exists() and live.is_dir() and older.is_dir()
