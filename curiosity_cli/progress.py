@@ -16,6 +16,7 @@ stage that took 85 s.
 
 from __future__ import annotations
 
+import shutil
 import sys
 import threading
 import time
@@ -167,6 +168,8 @@ class Progress:
         filled = int(_BAR * self._done / self._units) if self._units else _BAR
         bar = "#" * filled + "-" * (_BAR - filled)
         line = f"{self._description} [{bar}] {self.status(now)}"
+        # a line as wide as the terminal wraps, and each redraw then starts a new row: cut it one column short
+        line = line[: max(1, shutil.get_terminal_size().columns - 1)]
         # spaces over what a longer line before left: a notebook shows no terminal's erase codes
         self._write(f"\r{line}{' ' * max(0, self._width - len(line))}")
         self._width = len(line)

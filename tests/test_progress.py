@@ -90,6 +90,20 @@ def test_a_watched_stage_is_one_line_rewritten_in_place():
     assert text.split("\r")[-1].startswith("exploring [########################] 4/4 (100 %), 1.00/s, about 0 s left")
 
 
+def test_a_watched_line_is_cut_to_the_terminal_s_width_so_it_never_wraps(monkeypatch):
+    """Issue 64: with COLUMNS=5 the line stayed about 80 columns and wrapped, a new row at every redraw."""
+    monkeypatch.setenv("COLUMNS", "30")
+    out, clock = io.StringIO(), Clock()
+    with Progress(out, watched=True, clock=clock) as progress:
+        progress.stage("exploring", 4)
+        for _ in range(4):
+            clock.now += 1
+            progress.advance()
+    drawn = [part for part in out.getvalue().split("\r") if part]
+    assert drawn and all(len(part.split(" in ")[0].rstrip()) <= 29 for part in drawn)
+    assert drawn[-1].startswith("exploring [##################")
+
+
 def test_in_a_notebook_a_long_function_given_no_callbacks_shows_its_own_progress(monkeypatch):
     import sys
     import types
