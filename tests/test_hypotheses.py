@@ -181,6 +181,9 @@ def test_a_hypothesis_with_a_seed_missing_is_not_tested_and_no_primary_one_is_de
     outcomes[3] = Outcome(failed.combination, None, "killed", 1.0)
     head = heads(hypothesis_table(plan, outcomes, None)[0])
     assert head.loc["H2", "decision"] == "not tested: seed 2 not finished"
+    # a seed the sweep does not run now is as missing: the hypothesis is never tested on fewer than declared
+    config = hypotheses_yaml(own_map, tmp_path, {"alpha": 0.025, "H1": declared(own_map, tmp_path, seeds=[1, 2, 3])["H1"]})
+    assert heads(hypothesis_table(planned(config), outcomes, None)[0]).loc["H1", "decision"] == "not tested: seed 3 not finished"
     # Holm over one of the two declared would test H1 at twice the level declared
     assert head.loc["H1", "decision"] == "not decided: H2 not tested" and np.isnan(head.loc["H1", "p_holm"])
 
@@ -260,7 +263,8 @@ def _error(own_map, tmp_path, hypotheses) -> str:
         ({"test": "t"}, "H1.test: got 't', expected one of sign-flip, stratified-t"),
         ({"draws": 10}, "H1.draws: got 10, expected a whole number of sign flips from 1000 to 10000000"),
         ({"role": "main"}, "H1.role: got 'main', expected one of primary, secondary"),
-        ({"seeds": [1, 3]}, "H1.seeds: got [1, 3], expected a list of the study's seeds, each once: 1, 2"),
+        ({"seeds": [1, -1]}, "H1.seeds: got [1, -1], expected a list of seeds (whole numbers >= 0), each once"),
+        ({"seeds": [1, 1]}, "H1.seeds: got [1, 1], expected a list of seeds (whole numbers >= 0), each once"),
         ({"scale": {"zurich-zh17": 1.0}}, "H1.scale: 'zurich-zh17': not a map of the study; expected some of own"),
         ({"scale": {"own": -1}}, "H1.scale.own: got -1, expected a positive number"),
     ],
