@@ -123,6 +123,13 @@ def test_hypotheses_are_read_with_their_defaults_and_the_study_s_map_names(own_m
     )
     assert (h2.test, h2.draws, h2.primary) == ("stratified-t", 100_000, True) and not h3.primary
     assert h1.maps == ["own"]
+    # a study of specifications alone, no seeds swept: its one seed is the config's
+    config = hypotheses_yaml(own_map, tmp_path, {"alpha": 0.025, "H1": declared(own_map, tmp_path, seeds=[0])["H1"]})
+    text = yaml.safe_load(config.read_text())
+    del text["sweep"]
+    config.write_text(yaml.safe_dump(text, sort_keys=False))
+    alone = plan_sweep(config, (), (), declared_specifications(config))
+    assert [h.seeds for h in alone.hypotheses] == [(0,)]
 
 
 def test_each_hypothesis_is_tested_on_its_seeds_pairs_and_the_primary_ones_adjusted_together(own_map, tmp_path):

@@ -65,7 +65,7 @@ import numpy as np
 from curiosity_cli.config import HYPOTHESES_KEY, SPECIFICATIONS_KEY, config_file
 from curiosity_cli.errors import ConfigError
 from curiosity_cli.files import display_path
-from curiosity_cli.study.types import REPLICATE_KEY, SPECIFICATION, Combination, Hypothesis, Outcome, Specification, Sweep
+from curiosity_cli.study.types import SPECIFICATION, Combination, Hypothesis, Outcome, Specification, Sweep
 
 #: The tests a hypothesis may declare (:mod:`curiosity_cli.evaluate.confirmation`).
 TESTS = ("sign-flip", "stratified-t")
@@ -126,7 +126,7 @@ def declared_hypotheses(
     configs = {}
     for combination in combinations:
         values = dict(text.split("=", 1) for text in combination.overrides)
-        configs.setdefault(values[SPECIFICATION], {})[int(values[REPLICATE_KEY])] = combination.config
+        configs.setdefault(values[SPECIFICATION], {})[combination.config.seed] = combination.config
     found = []
     for name, fields in declared.items():
         if name == "alpha":
@@ -326,8 +326,7 @@ def hypothesis_table(sweep: Sweep, outcomes: Sequence[Outcome], record: Path | N
     for hypothesis in sweep.hypotheses:
         combinations = _combinations(sweep, hypothesis)
         finished = {
-            int(dict(t.split("=", 1) for t in c.overrides)[REPLICATE_KEY]) for c in combinations
-            if by_index.get(c.index) is not None and by_index[c.index].error is None
+            c.config.seed for c in combinations if by_index.get(c.index) is not None and by_index[c.index].error is None
         }
         missing = sorted(set(hypothesis.seeds) - finished)
         base = {
@@ -382,7 +381,7 @@ def _combinations(sweep: Sweep, hypothesis: Hypothesis) -> list[Combination]:
     chosen = []
     for combination in sweep.combinations:
         values = dict(text.split("=", 1) for text in combination.overrides)
-        if values[SPECIFICATION] == hypothesis.specification and int(values[REPLICATE_KEY]) in hypothesis.seeds:
+        if values[SPECIFICATION] == hypothesis.specification and combination.config.seed in hypothesis.seeds:
             chosen.append(combination)
     return chosen
 
