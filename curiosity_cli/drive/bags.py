@@ -191,7 +191,9 @@ class BagCamera:
             self._reader = AnyReader(paths)
             self._reader.open()
         except Exception as exc:  # rosbags raises its own errors, and Python's own for torn or foreign bytes
-            self._reader = _foxglove_mcap(paths, where) or _cut_mcap(paths)
+            # a bag folder whose .mcap is cut short fails on its metadata.yaml: its storage file is read as given alone
+            stored = _storage_files(paths)
+            self._reader = _foxglove_mcap(stored, where) or _cut_mcap(stored)
             if self._reader is None:
                 raise CameraError(f"{where}: not a readable bag ({_why_unreadable(exc, paths)})") from None
             if hasattr(self._reader, "unfinished"):
@@ -310,6 +312,14 @@ class BagCamera:
         if hasattr(self, "_messages"):
             self._messages.close()
         self._reader.close()
+
+
+def _storage_files(paths: list[Path]) -> list[Path]:
+    """``paths``, or, for a ROS 2 bag folder, the storage files in it (what a folder without ``metadata.yaml`` is
+    read through, :func:`bag_paths`)."""
+    if len(paths) == 1 and paths[0].is_dir():
+        return sorted(p for p in paths[0].iterdir() if p.suffix.lower() in (".mcap", ".db3"))
+    return paths
 
 
 def _foxglove_mcap(paths: list[Path], where: str):

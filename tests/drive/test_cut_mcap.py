@@ -22,8 +22,8 @@ def views() -> list[np.ndarray]:
     return [np.ascontiguousarray(image[10 * i : 10 * i + 120, 12 * i : 12 * i + 160]) for i in range(FRAMES)]
 
 
-def write_mcap(folder, views, zstd: bool):
-    """A ROS 2 bag folder of ``views`` as rgb8 Images; returns its .mcap file."""
+def write_mcap(folder, views, zstd: bool, metadata: bool = False):
+    """A ROS 2 bag folder of ``views`` as rgb8 Images, without its metadata.yaml unless said; returns its .mcap file."""
     store = get_typestore(Stores.ROS2_HUMBLE)
     writer = Writer2(folder, version=9, storage_plugin=StoragePlugin.MCAP)
     if zstd:
@@ -33,7 +33,8 @@ def write_mcap(folder, views, zstd: bool):
         for i, view in enumerate(views):
             message = _image(store.types, view, "rgb8", START + i * PERIOD)
             writer.write(connection, START + i * PERIOD, store.serialize_cdr(message, "sensor_msgs/msg/Image"))
-    (folder / "metadata.yaml").unlink()  # as a recorder killed before it could write it
+    if not metadata:
+        (folder / "metadata.yaml").unlink()  # as a recorder killed before it could write it
     return next(folder.glob("*.mcap"))
 
 
@@ -53,6 +54,20 @@ def test_an_uncompressed_mcap_cut_anywhere_replays_every_whole_message(tmp_path,
     assert [r["bag_time"] for r in records] == [(START + i * PERIOD) / 1e9 for i in range(whole)]
     (said,) = [line for line in result.stderr.splitlines() if "ends before its summary" in line]
     assert f"(a recording cut short?): replaying its {whole} whole messages; its last " in said
+
+
+@pytest.mark.slow
+def test_a_bag_folder_whose_mcap_is_cut_replays_as_its_mcap_would(tmp_path, views):
+    """Issue 64: a bag folder with its metadata.yaml and a cut .mcap failed on the metadata ("File end magic is
+    invalid"), while the same file given alone replayed to its last whole message."""
+    mcap = write_mcap(tmp_path / "mission", views, zstd=False, metadata=True)
+    data = mcap.read_bytes()
+    mcap.write_bytes(data[: len(data) // 2])
+    whole = sum(data.find(view.tobytes()) + view.nbytes <= len(data) // 2 for view in views)
+    folder = replay(tmp_path / "mission", tmp_path / "run")
+    assert folder.exit_code == 0, folder.output
+    assert len(frame_records(tmp_path / "run")) == whole > 0
+    assert f"replaying its {whole} whole messages" in folder.stderr
 
 
 @pytest.mark.slow
