@@ -196,6 +196,12 @@ class BagCamera:
             self._reader = _foxglove_mcap(stored, where) or _cut_mcap(stored)
             if self._reader is None:
                 raise CameraError(f"{where}: not a readable bag ({_why_unreadable(exc, paths)})") from None
+            if getattr(self._reader, "message_count", None) == 0:
+                self._reader.close()
+                raise CameraError(
+                    f"{where}: ends before its summary (a recording cut short?) and before its first whole message: "
+                    "nothing to replay"
+                ) from None
             if hasattr(self._reader, "unfinished"):
                 cut = (
                     f"{display_path(paths[0])} ends before its summary (a recording cut short?): replaying its "
@@ -344,8 +350,8 @@ def _foxglove_mcap(paths: list[Path], where: str):
 
 
 def _cut_mcap(paths: list[Path]):
-    """A :class:`~curiosity_cli.drive.mcap_scan.CutMcap` of a lone MCAP file rosbags could not open,
-    if it holds whole messages (a file cut short); None otherwise."""
+    """A :class:`~curiosity_cli.drive.mcap_scan.CutMcap` of a lone MCAP file rosbags could not open (a file cut
+    short); None otherwise."""
     from curiosity_cli.drive.mcap_scan import CutMcap, CutMcapError
 
     if len(paths) != 1 or paths[0].suffix.lower() != ".mcap" or not paths[0].is_file():
@@ -354,7 +360,7 @@ def _cut_mcap(paths: list[Path]):
         scan = CutMcap(paths[0])
     except (CutMcapError, OSError, struct.error, UnicodeDecodeError):
         return None
-    return scan if scan.message_count else None
+    return scan
 
 
 def _why_unreadable(exc: Exception, paths: list[Path]) -> str:

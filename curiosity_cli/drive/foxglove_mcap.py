@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import base64
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
-from curiosity_cli.drive.mcap_scan import Connection
 
 #: The Foxglove image schemas a replay reads.
 FOXGLOVE_COMPRESSED, FOXGLOVE_RAW = "foxglove.CompressedImage", "foxglove.RawImage"
@@ -29,6 +29,17 @@ FOXGLOVE_COMPRESSED, FOXGLOVE_RAW = "foxglove.CompressedImage", "foxglove.RawIma
 FOXGLOVE_POSE = "foxglove.PoseInFrame"
 #: Message encodings it decodes.
 ENCODINGS = ("protobuf", "json")
+
+
+@dataclass(frozen=True)
+class Connection:
+    """A channel of an MCAP file, as ``rosbags`` names its parts (this reader's and
+    :class:`~curiosity_cli.drive.mcap_scan.CutMcap`'s)."""
+
+    id: int
+    topic: str
+    msgtype: str
+    msgcount: int
 
 
 class FoxgloveMcapError(Exception):
@@ -55,7 +66,7 @@ class FoxgloveMcap:
     Attributes
     ----------
     connections : list of Connection
-        Every channel (:class:`~curiosity_cli.drive.mcap_scan.Connection`), its schema name as
+        Every channel (:class:`Connection`), its schema name as
         ``msgtype`` and its message count.
 
     Raises
@@ -103,46 +114,51 @@ class FoxgloveMcap:
         wanted = {c.id: c for c in connections}
         schemas = {s.name: s.data for s in self._reader.get_summary().schemas.values()}
         for c in wanted.values():
-            self._decoders[c.msgtype] = (_decoder(self._encodings[c.id]), schemas.get(c.msgtype, b""))
+            self._decoders[c.msgtype] = (decoder(self._encodings[c.id]), schemas.get(c.msgtype, b""))
         topics = sorted({c.topic for c in wanted.values()})
         for _, channel, message in self._reader.iter_messages(topics=topics):
             if channel.id in wanted:
                 yield wanted[channel.id], message.log_time, message.data
 
     def deserialize(self, data: bytes, msgtype: str):
-        """The message, with the fields :func:`~curiosity_cli.drive.bags.decode` and a bag camera read.
-
-        Raises
-        ------
-        ValueError
-            Bytes that do not decode as ``msgtype`` in its channel's encoding.
-        """
+        """The message, with the fields :func:`~curiosity_cli.drive.bags.decode` and a bag camera read
+        (:func:`foxglove_message`)."""
         decode, schema = self._decoders[msgtype]
-        message = decode(data, msgtype, schema)
-        if msgtype == FOXGLOVE_POSE:
-            pose = message["pose"]
-            return SimpleNamespace(
-                header=SimpleNamespace(frame_id=message["frame_id"]),
-                pose=SimpleNamespace(pose=SimpleNamespace(
-                    position=SimpleNamespace(**pose["position"]), orientation=SimpleNamespace(**pose["orientation"]),
-                )),
-            )
-        sec, nsec = message["timestamp"]
-        fields = {
-            "header": SimpleNamespace(stamp=SimpleNamespace(sec=int(sec), nanosec=int(nsec)), frame_id=message["frame_id"]),
-            "data": message["data"],
-        }
-        if msgtype == FOXGLOVE_COMPRESSED:
-            fields["format"] = message["format"]
-        else:
-            fields.update(
-                encoding=message["encoding"], width=int(message["width"]), height=int(message["height"]),
-                step=int(message["step"]), is_bigendian=False,
-            )
-        return SimpleNamespace(**fields)
+        return foxglove_message(decode(data, msgtype, schema), msgtype)
 
     def close(self) -> None:
         self._file.close()
+
+
+def foxglove_message(message: dict, msgtype: str) -> SimpleNamespace:
+    """A decoded Foxglove message (a :func:`decoder`'s fields) with the fields of its ROS counterpart a replay reads.
+
+    Raises
+    ------
+    ValueError
+        Bytes that did not decode as ``msgtype`` in its channel's encoding (raised by the decoder).
+    """
+    if msgtype == FOXGLOVE_POSE:
+        pose = message["pose"]
+        return SimpleNamespace(
+            header=SimpleNamespace(frame_id=message["frame_id"]),
+            pose=SimpleNamespace(pose=SimpleNamespace(
+                position=SimpleNamespace(**pose["position"]), orientation=SimpleNamespace(**pose["orientation"]),
+            )),
+        )
+    sec, nsec = message["timestamp"]
+    fields = {
+        "header": SimpleNamespace(stamp=SimpleNamespace(sec=int(sec), nanosec=int(nsec)), frame_id=message["frame_id"]),
+        "data": message["data"],
+    }
+    if msgtype == FOXGLOVE_COMPRESSED:
+        fields["format"] = message["format"]
+    else:
+        fields.update(
+            encoding=message["encoding"], width=int(message["width"]), height=int(message["height"]),
+            step=int(message["step"]), is_bigendian=False,
+        )
+    return SimpleNamespace(**fields)
 
 
 #: The fields of the Foxglove image schemas a replay reads, besides ``timestamp`` and ``data``.
@@ -155,7 +171,7 @@ _FIELDS = {
 _POSE = {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}}
 
 
-def _decoder(encoding: str):
+def decoder(encoding: str):
     """A function of (data, schema name, schema data) to the fields a replay reads, as a dict:
     ``timestamp`` as (sec, nsec), ``data`` as bytes."""
     return _from_json if encoding == "json" else _from_protobuf

@@ -14,8 +14,9 @@ uses.
 from __future__ import annotations
 
 import struct
-from dataclasses import dataclass
 from pathlib import Path
+
+from curiosity_cli.drive.foxglove_mcap import ENCODINGS, Connection, decoder, foxglove_message
 
 MAGIC = b"\x89MCAP0\r\n"
 _HEADER, _FOOTER, _SCHEMA, _CHANNEL, _MESSAGE, _CHUNK, _DATA_END = 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x0F
@@ -23,16 +24,6 @@ _HEADER, _FOOTER, _SCHEMA, _CHANNEL, _MESSAGE, _CHUNK, _DATA_END = 0x01, 0x02, 0
 
 class CutMcapError(Exception):
     """Not an MCAP file, or one whose records are not what the format says."""
-
-
-@dataclass(frozen=True)
-class Connection:
-    """A channel of the file, as ``rosbags`` names its parts."""
-
-    id: int
-    topic: str
-    msgtype: str
-    msgcount: int
 
 
 def _string(body: memoryview, at: int) -> tuple[str, int]:
@@ -90,8 +81,9 @@ class CutMcap:
     Raises
     ------
     CutMcapError
-        Not an MCAP file (its magic and header) of ROS 2 messages (profile ``ros2``), one
-        that ends as a whole file does, or a chunk the format does not allow.
+        Not an MCAP file (its magic and header), one that ends as a whole file does, or a chunk the format
+        does not allow. Its messages may be ROS 2's (CDR, as profile ``ros2`` says) or Foxglove's (protobuf or
+        JSON, as the Foxglove SDK and the drive's own ``mission.mcap`` write them).
     """
 
     def __init__(self, path: Path):
@@ -102,22 +94,24 @@ class CutMcap:
             header = file.read(9)
             if len(header) < 9 or header[0] != _HEADER:
                 raise CutMcapError("no header record after its magic")
-            profile, _ = _string(memoryview(file.read(struct.unpack_from("<Q", header, 1)[0])), 0)
-            if profile != "ros2":
-                raise CutMcapError(f"profile {profile!r}; expected ros2 (CDR messages)")
             file.seek(-8, 2)
             if file.read(8) == MAGIC:
                 raise CutMcapError("it ends with its magic: not cut short")
         self._schemas: dict[int, tuple[str, str, bytes]] = {}
-        self._channels: dict[int, tuple[str, int]] = {}
+        self._channels: dict[int, tuple[str, int, str]] = {}  # id -> (topic, schema id, message encoding)
         self.unfinished = 0
         counts: dict[int, int] = {}
         for channel, _, _ in self._scan():
             counts[channel] = counts.get(channel, 0) + 1
         self.connections = [
             Connection(key, topic, self._schemas.get(schema, ("", "", b""))[0], counts.get(key, 0))
-            for key, (topic, schema) in sorted(self._channels.items())
+            for key, (topic, schema, _) in sorted(self._channels.items())
         ]
+        # a Foxglove schema's messages, by its name: their channel's encoding and the schema's data
+        self._foxglove = {
+            self._schemas[schema][0]: (encoding, self._schemas[schema][2])
+            for topic, schema, encoding in self._channels.values() if encoding in ENCODINGS and schema in self._schemas
+        }
         self.message_count = sum(counts.values())
         self._store = None
 
@@ -171,8 +165,9 @@ class CutMcap:
             self._schemas[key] = (name, encoding, bytes(body[at + 4 : at + 4 + size]))
         elif opcode == _CHANNEL:
             key, schema = struct.unpack_from("<HH", body, 0)
-            topic, _ = _string(body, 4)
-            self._channels[key] = (topic, schema)
+            topic, at = _string(body, 4)
+            encoding, _ = _string(body, at)
+            self._channels[key] = (topic, schema, encoding)
         elif opcode == _MESSAGE:
             channel, _, log_time, _ = struct.unpack_from("<HIQQ", body, 0)
             yield channel, log_time, body[22:]
@@ -185,7 +180,11 @@ class CutMcap:
                 yield wanted[channel], log_time, bytes(data)
 
     def deserialize(self, data: bytes, msgtype: str):
-        """A message of ``msgtype`` from its CDR bytes, with the types its schema defines."""
+        """A message of ``msgtype``: from its CDR bytes, with the types its schema defines; or a Foxglove message
+        from its protobuf or JSON bytes (:func:`~curiosity_cli.drive.foxglove_mcap.foxglove_message`)."""
+        if msgtype in self._foxglove:
+            encoding, schema = self._foxglove[msgtype]
+            return foxglove_message(decoder(encoding)(data, msgtype, schema), msgtype)
         if self._store is None:
             from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
