@@ -89,6 +89,7 @@ class SharedItems:
 
     def __init__(self, cache_dir: Path):
         self.root = Path(cache_dir) / SHARED_FOLDER
+        self._keyless = 0  # items stored before items held their key, found by this object
 
     def writable(self) -> str | None:
         """None when items can be stored here; else why not, in words (checked before any work, so that a
@@ -131,8 +132,17 @@ class SharedItems:
             made_for = str(npz[KEY_FIELD]) if KEY_FIELD in npz.files else None
             arrays = {name: npz[name] for name in npz.files if not name.startswith(_EXAMPLE) and name != KEY_FIELD}
             examples = {int(name[len(_EXAMPLE):]): npz[name] for name in npz.files if name.startswith(_EXAMPLE)}
+        if made_for is None:  # a cache from before keys: every item is so, and named once, not once each
+            self._keyless += 1
+            if self._keyless == 1:
+                note(
+                    f"{display_path(path)}: stored before shared items held the key they were made for; it and any "
+                    "other such item are computed again, once"
+                )
+            path.unlink(missing_ok=True)
+            return None
         if made_for != key:
-            self.discard(path, "made for another run's labels" if made_for else "stored without the key it was made for")
+            self.discard(path, "made for another run's labels")
             return None
         return arrays, examples
 

@@ -153,6 +153,25 @@ def test_a_cache_whose_shared_items_cannot_be_written_is_refused_before_any_labe
     assert done.exit_code == 0, done.output
 
 
+def test_items_of_a_cache_from_before_keys_are_computed_again_once_named_once(tmp_path, capsys):
+    shared = SharedItems(tmp_path)
+    arrays = {"lengths": np.arange(3, dtype=np.int32)}
+
+    def old_format(tmp):  # as every item was stored before items held their key
+        with open(tmp, "wb") as handle:
+            np.savez_compressed(handle, **arrays)
+
+    for key in ("a" * 32, "b" * 32):
+        shared._keep(LABELS, key, old_format)
+    capsys.readouterr()
+    assert shared.labels("a" * 32) is None and shared.labels("b" * 32) is None
+    assert capsys.readouterr().err.count("stored before shared items held the key they were made for") == 1
+    assert not list((tmp_path / SHARED_FOLDER / LABELS).glob("*.npz"))
+    shared.keep_labels("a" * 32, arrays, {})
+    found = shared.labels("a" * 32)
+    assert found is not None and set(found[0]) == {"lengths"}, "the key is not one of the label arrays"
+
+
 def test_two_writers_of_one_item_leave_one_whole_file(tmp_path):
     shared = SharedItems(tmp_path)
     arrays = {"lengths": np.arange(3, dtype=np.int32), "batch": np.random.default_rng(0).integers(0, 9, (3, 8, 8))}
