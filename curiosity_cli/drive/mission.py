@@ -180,13 +180,29 @@ class MissionFile:
             )
 
     def close(self) -> None:
-        """Finish the file (its summary and index) and stop the live view."""
+        """Finish the file (its summary and index) and stop the live view.
+
+        Raises
+        ------
+        CuriosityError
+            The file could not be finished (a full disk: the SDK's ``MCAP error``), naming it; what was written
+            before stays, and replays to its last whole message.
+        """
+        from curiosity_cli.errors import CuriosityError
+        from curiosity_cli.files import display_path
+
         if self._server is not None:
             self._server.stop()
             self._server = None
         if self._writer is not None:
-            self._writer.close()
-            self._writer = None
+            writer, self._writer = self._writer, None
+            try:
+                writer.close()
+            except Exception as exc:  # the SDK's FoxgloveError, whatever the OS said beneath it
+                raise CuriosityError(
+                    f"{display_path(self.path)}: cannot be finished ({' '.join(str(exc).split())}; a full disk?); "
+                    "what was written before stays, and replays to its last whole message"
+                ) from None
 
 
 def _timestamp(time_ns: int):

@@ -416,3 +416,22 @@ def test_the_live_view_serves_the_surprise_over_foxglove_websocket_and_changes_n
     subprocess.run([*command, "--out", str(tmp_path / "alone")], check=True, capture_output=True)
     assert (tmp_path / "live" / "mission.mcap").read_bytes() == (tmp_path / "alone" / "mission.mcap").read_bytes()
     assert Counter(r["event"] for r in read_log(tmp_path / "live"))["frame"] == 150
+
+
+def test_a_mission_file_that_cannot_be_finished_is_one_error_naming_it(tmp_path):
+    """Issue 64: a disk filling during a replay ended in a traceback (FoxgloveError: MCAP error)."""
+    from curiosity_cli.drive.mission import MissionFile
+    from curiosity_cli.errors import CuriosityError
+
+    mission = MissionFile(tmp_path / "mission.mcap")
+    real = mission._writer
+
+    class Full:
+        def close(self):
+            real.close()
+            raise RuntimeError("MCAP error: No space left on device (os error 28)")
+
+    mission._writer = Full()
+    with pytest.raises(CuriosityError, match=r"mission.mcap: cannot be finished \(MCAP error: No space left on device"):
+        mission.close()
+    mission.close()  # closed once: a second close is nothing
