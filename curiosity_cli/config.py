@@ -14,6 +14,7 @@ are :mod:`curiosity_cli.schema`'s; the maps a config names, :mod:`curiosity_cli.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import os
 import re
 import typing
@@ -284,9 +285,22 @@ _NAMED_UNLESS = {"orb_detector": "keypoints"}
 _NO_DEFAULT = object()
 
 
+@functools.lru_cache(maxsize=1)
+def _shipped_words() -> dict:
+    """The shipped ``words`` section (``configs/paper.yaml``), read once."""
+    return read_yaml(CONFIG_DIR / "paper.yaml", "config file")["words"]
+
+
 def _check_words(words: WordsConfig, raw: Raw) -> None:
-    """ORB keys that tie together: the grid takes no keypoint cap; a top-up fills capped
+    """ORB keys that tie together: the grid takes no keypoint cap, and the keypoints detector no grid step other
+    than the shipped one (it reads none: a step set for it would be taken in silence); a top-up fills capped
     tiles, below the FAST threshold."""
+    if words.orb_detector == "keypoints" and words.orb_grid_step != (shipped := _shipped_words()["orb_grid_step"]):
+        raise invalid(
+            raw, ("words", "orb_grid_step"),
+            f"got {words.orb_grid_step}, but words.orb_detector keypoints reads no grid step; expected {shipped} "
+            "(the shipped value), or words.orb_detector: grid",
+        )
     if words.orb_detector == "grid":
         for key in ("orb_per_tile", "orb_max_features"):
             value = getattr(words, key)

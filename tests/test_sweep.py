@@ -280,12 +280,18 @@ def test_a_declared_sweep_reads_as_sweep_options_and_the_command_line_replaces_a
 
 
 def test_a_swept_key_that_nothing_reads_under_the_other_settings_is_refused_before_anything_runs(tmp_path):
-    # issue 44: the grid step with the keypoints detector gave two identical treatments reported as two
+    # issue 44: the grid step with the keypoints detector gave two identical treatments reported as two; issue 63:
+    # a step the keypoints detector does not read is refused by the config itself, as a single experiment's is
     with pytest.raises(ConfigError, match=(
-        r"^sweeps: words.orb_grid_step=1 and words.orb_grid_step=2 make the same experiment: "
-        r"words.orb_grid_step changes nothing under the other settings; sweep only values that are read$"
+        r"^sweeps: words.orb_grid_step: got 2, but words.orb_detector keypoints reads no grid step; expected 1"
     )):
         plan_sweep(CONFIG_DIR / "quick.yaml", parse_sweeps(["words.orb_grid_step=1,2"]))
+    # a floor on d^2 the reading does not read: the same experiment twice
+    with pytest.raises(ConfigError, match=(
+        r"^sweeps: explore.min_d2=0.25 and explore.min_d2=0.5 make the same experiment: "
+        r"explore.min_d2 changes nothing under the other settings; sweep only values that are read$"
+    )):
+        plan_sweep(CONFIG_DIR / "quick.yaml", parse_sweeps(["explore.min_d2=0.25,0.5"]), ["explore.coverage=others"])
     # under the grid detector it is read: two experiments
     sweep = plan_sweep(
         CONFIG_DIR / "quick.yaml", parse_sweeps(["words.orb_grid_step=1,2"]),

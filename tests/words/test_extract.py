@@ -10,7 +10,7 @@ import yaml
 
 from curiosity_cli.config import CONFIG_DIR, load_words_config
 from curiosity_cli.maps.map_data import load_map
-from curiosity_cli.errors import CuriosityError
+from curiosity_cli.errors import ConfigError, CuriosityError
 from curiosity_cli.words.extract import extract_words, store_name
 from curiosity_cli.words.store import load_store
 
@@ -191,8 +191,9 @@ def test_the_default_store_names_are_todays(own_map):
     assert store_name(m, WORDS)[0] == "own-e270caf4de777d2e.npz"
     capped = load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_per_tile=2", "words.orb_fill_threshold=1"])
     assert store_name(m, capped)[0] == "own-8628354b94992909.npz"
-    # the grid's step is read by the grid only
-    assert store_name(m, load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_grid_step=7"]))[0] == store_name(m, WORDS)[0]
+    # the grid's step is read by the grid only: under the keypoints detector another one is refused (issue 63)
+    with pytest.raises(ConfigError, match="words.orb_grid_step: got 7, but words.orb_detector keypoints reads no grid step"):
+        load_words_config(CONFIG_DIR / "paper.yaml", ["words.orb_grid_step=7"])
 
 
 def test_the_grid_and_its_step_name_their_own_stores(own_map):
