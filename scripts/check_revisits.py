@@ -14,8 +14,8 @@ by side on the same run (a recorded mission does not steer, so the model is the 
 - ``predictive``: each word of the frame scored under the model before the frame joins it,
   ``p(w) = Σ_k θ_k φ_k(w)`` with θ the topic mix of the same image cell's neighbourhood one frame
   earlier, a cell's surprise its words' perplexity;
-- ``recent``: eq. 12 against the topic mix of the last ``drive.recent_frames`` frames instead of
-  the whole memory's;
+- ``recent``: eq. 12 against the topic mix of the newest 20 frames
+  (``curiosity_cli.drive.surprise.RECENT_FRAMES``) instead of the whole memory's;
 - ``bayesian``: how far the frame moves each cell's belief, the KL divergence (bits) of its topic
   mix after the frame from the one predicted before it (Itti & Baldi's Bayesian surprise).
 
@@ -167,7 +167,8 @@ def figure(results: list[dict], n: int, out: Path) -> None:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--maps", nargs="+", default=["aerial-mosaic", "reef-mosaic"])
+    parser.add_argument("--maps", nargs="+", default=["aerial-mosaic", "reef-mosaic"], choices=sorted(PATCH_SOURCE),
+                        help="maps whose laps are driven (each has a map of another texture for its patch)")
     parser.add_argument("--frames", type=int, default=100, help="frames a lap (default 100)")
     parser.add_argument("--seeds", type=int, default=5, help="seeds 0 .. N-1 (default 5)")
     parser.add_argument("--config", default="quick", help="the config whose model, words and drive settings run")
@@ -180,8 +181,18 @@ def main() -> int:
         args.maps, args.frames, args.seeds, args.jobs = ["aerial-mosaic"], 12, 1, 1
     if args.frames < 2 * PATCH_FRAMES:
         parser.error(f"--frames: expected at least {2 * PATCH_FRAMES}")
+    if args.seeds < 1 or args.jobs < 1:
+        parser.error(f"--seeds, --jobs: got {args.seeds} and {args.jobs}, expected at least 1 each")
 
     from curiosity_cli.config import DRIVE_SURPRISES as READINGS
+    from curiosity_cli.config import load_config
+    from curiosity_cli.errors import CuriosityError
+
+    try:  # refused here in one line, not in each worker
+        load_config(args.config, args.set)
+    except CuriosityError as exc:
+        print(f"Error: {exc}", file=sys.stderr)
+        return 1
 
     tasks = [(args.config, args.set, name, args.frames, seed) for name in args.maps for seed in range(args.seeds)]
     with ProcessPoolExecutor(args.jobs) as pool:

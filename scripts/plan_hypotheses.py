@@ -37,6 +37,12 @@ def leads_of(record: Path, specification: str, seeds: list[int], measure: str, a
     from curiosity_cli.evaluate.tables import read_table
 
     chosen = measure_named(measure)
+    if against not in chosen.columns:
+        raise CuriosityError(f"--against: got {against!r}, expected one of {', '.join(chosen.columns)} for {measure}")
+    if walker in comparators:
+        raise CuriosityError(f"--comparators: {walker} is the walker itself; expected the walkers it is compared with")
+    if not record.is_dir():
+        raise CuriosityError(f"{record}: not a folder; expected a study's record, e.g. studies/validated")
     column = chosen.columns[against]
     tables = []
     for seed in seeds:
@@ -47,6 +53,8 @@ def leads_of(record: Path, specification: str, seeds: list[int], measure: str, a
         tables.append(mi)
     mi = pd.concat(tables, ignore_index=True)
     mi = mi[(mi["path_length"] == length) & mi["weight_function"].isin([walker, *comparators])]
+    if mi.empty:
+        raise CuriosityError(f"{record}: no runs of {walker} or {', '.join(comparators)} at {length} steps (--path-length)")
     leads = {}
     for name in maps or list(dict.fromkeys(mi["dataset"])):
         block = mi[mi["dataset"] == name].pivot_table(index=["replicate", "restart"], columns="weight_function",
@@ -102,6 +110,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--power-seed", type=int, default=0)
     parser.add_argument("--smoke", action="store_true", help="the multiverse's default seeds on mean recall")
     args = parser.parse_args(argv)
+    if not 0 < args.alpha <= 0.5:  # NaN too
+        parser.error(f"--alpha: got {args.alpha}, expected a one-sided level above 0 and at most 0.5")
+    if args.pairs < 2 or args.replicates < 1:
+        parser.error(f"--pairs, --replicates: got {args.pairs} and {args.replicates}, expected at least 2 and 1")
     if args.smoke:
         args.record, args.measure, args.replicates = ROOT / "studies" / "multiverse", "mean_recall", 20
     elif args.record is None:

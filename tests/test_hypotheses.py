@@ -42,10 +42,11 @@ def declared(own_map: Path, folder: Path, **changes) -> dict:
     return {"alpha": 0.025, "H1": {k: v for k, v in h1.items() if v is not ...}, "H2": h2, "H3": h3}
 
 
-def hypotheses_yaml(own_map: Path, folder: Path, hypotheses: dict | None = None) -> Path:
+def hypotheses_yaml(own_map: Path, folder: Path, hypotheses=...) -> Path:
+    """The tiny study declaring ``hypotheses`` (by default :func:`declared`'s; None: the key left empty)."""
     config = study_yaml(own_map, folder)
     text = yaml.safe_load(config.read_text())
-    text["hypotheses"] = hypotheses if hypotheses is not None else declared(own_map, folder)
+    text["hypotheses"] = hypotheses if hypotheses is not ... else declared(own_map, folder)
     config.write_text(yaml.safe_dump(text, sort_keys=False))
     return config
 
@@ -190,7 +191,7 @@ def test_a_hypothesis_with_a_seed_missing_is_not_tested_and_no_primary_one_is_de
     assert head.loc["H2", "decision"] == "not tested: seed 2 not finished"
     # a seed the sweep does not run now is as missing: the hypothesis is never tested on fewer than declared
     config = hypotheses_yaml(own_map, tmp_path, {"alpha": 0.025, "H1": declared(own_map, tmp_path, seeds=[1, 2, 3])["H1"]})
-    assert heads(hypothesis_table(planned(config), outcomes, None)[0]).loc["H1", "decision"] == "not tested: seed 3 not finished"
+    assert heads(hypothesis_table(planned(config), outcomes, None)[0]).loc["H1", "decision"] == "not tested: seed 3 not in this sweep"
     # Holm over one of the two declared would test H1 at twice the level declared
     assert head.loc["H1", "decision"] == "not decided: H2 not tested" and np.isnan(head.loc["H1", "p_holm"])
 
@@ -273,7 +274,17 @@ def _error(own_map, tmp_path, hypotheses) -> str:
         ({"seeds": [1, -1]}, "H1.seeds: got [1, -1], expected a list of seeds (whole numbers >= 0), each once"),
         ({"seeds": [1, 1]}, "H1.seeds: got [1, 1], expected a list of seeds (whole numbers >= 0), each once"),
         ({"scale": {"zurich-zh17": 1.0}}, "H1.scale: 'zurich-zh17': not a map of the study; expected some of own"),
-        ({"scale": {"own": -1}}, "H1.scale.own: got -1, expected a positive number"),
+        ({"scale": {"own": -1}}, "H1.scale.own: got -1, expected a number above 1e-09 and at most 1e+09"),
+        # the hostile round of issue 64: each took a traceback, or was taken and gave a hypothesis that could never pass
+        ({"scale": {"own": float("inf")}}, "H1.scale.own: got inf, expected a number above 1e-09"),
+        ({"scale": {"own": 1e-320}}, "H1.scale.own: got 1e-320, expected a number above 1e-09"),
+        ({"specification": ["default"]}, "H1.specification: got ['default'], expected one of default, clamp"),
+        ({"against": ["human"]}, "H1.against: got ['human'], expected one of human for time_to_find"),
+        ({"comparators": [{"a": 1}]}, "H1.comparators: got [{'a': 1}], expected a list of other walkers"),
+        ({"reading": ["frozen"]}, "H1.reading: got ['frozen'], expected a labelling reading's name, e.g. frozen"),
+        ({"path_length": 80.0}, "H1.path_length: got 80.0, expected one of default's checkpoints: 80"),
+        ({"label_schedule": {"sweeps": 2.0, "warm_sweeps": 1}}, "H1.label_schedule: got {'sweeps': 2.0, 'warm_sweeps': 1}"),
+        ({"claim": "two\nlines"}, "H1.claim: expected the claim in words, on one line"),
     ],
 )
 def test_a_bad_hypothesis_is_refused_in_one_line_naming_the_file_the_hypothesis_and_the_field(
@@ -295,3 +306,18 @@ def test_a_family_level_out_of_range_and_hypotheses_without_specifications_are_r
     result = sweep(config, tmp_path / "results")
     assert result.exit_code == 1 and "hypotheses: a hypothesis names a specification; declare specifications too" in result.stderr
     assert not (tmp_path / "results").exists()
+
+
+def test_hypotheses_left_empty_are_refused_not_taken_for_none(own_map, tmp_path):
+    line = _error(own_map, tmp_path, None)  # `hypotheses:` with nothing after it
+    assert "tiny.yaml: hypotheses: expected alpha and a mapping of names to hypotheses" in line
+
+
+def test_a_claim_with_a_table_s_bar_keeps_sweep_md_s_table_whole(own_map, tmp_path):
+    from curiosity_cli.study.hypotheses import Declaration, hypothesis_lines
+
+    config = hypotheses_yaml(own_map, tmp_path, {"alpha": 0.025, "H1": declared(own_map, tmp_path, claim="a | b")["H1"]})
+    plan = planned(config)
+    table, _ = hypothesis_table(plan, fabricated(plan, tmp_path / "results", datetime.now().astimezone()), None)
+    row = next(line for line in hypothesis_lines(plan, table, Declaration(None, None, "x")) if line.startswith("| H1 |"))
+    assert "| a \\| b |" in row and row.count(" | ") == 10

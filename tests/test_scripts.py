@@ -96,3 +96,26 @@ def test_the_smoke_mode_runs_to_its_end(script, environment, tmp_path):
     )
     assert done.returncode == 0, done.stdout + done.stderr
     assert SMOKED[script] in done.stdout, done.stdout
+
+
+@pytest.mark.parametrize(
+    "script, arguments, code, says",
+    [  # the hostile round of issue 64: tracebacks, or an answer from nothing
+        ("plan_hypotheses.py", ["--smoke", "--alpha", "2"], 2, "--alpha: got 2.0, expected a one-sided level"),
+        ("plan_hypotheses.py", ["--smoke", "--alpha", "nan"], 2, "--alpha: got nan"),
+        ("plan_hypotheses.py", ["--smoke", "--against", "nope"], 1, "Error: --against: got 'nope', expected one of human"),
+        ("plan_hypotheses.py", ["--smoke", "--path-length", "7"], 1, "at 7 steps (--path-length)"),
+        ("plan_hypotheses.py", ["--smoke", "--comparators", "topic-perplexity"], 1, "is the walker itself"),
+        ("check_revisits.py", ["--seeds", "0"], 2, "--seeds, --jobs: got 0 and 2, expected at least 1 each"),
+        ("check_revisits.py", ["--jobs", "0"], 2, "--seeds, --jobs: got 5 and 0"),
+        ("check_revisits.py", ["--maps", "planted-disjoint"], 2, "invalid choice: 'planted-disjoint'"),
+        ("check_revisits.py", ["--set", "drive.surprise=nope", "--seeds", "1"], 1, "Error: overrides: drive.surprise: got 'nope'"),
+    ],
+)
+def test_a_script_s_bad_arguments_are_one_line(script, arguments, code, says, environment, tmp_path):
+    done = subprocess.run(
+        [sys.executable, str(SCRIPTS / script), *arguments], env=environment, cwd=tmp_path, capture_output=True,
+        text=True, timeout=120,
+    )
+    assert done.returncode == code and "Traceback" not in done.stderr, done.stderr
+    assert says in done.stderr, done.stderr

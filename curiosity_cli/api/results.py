@@ -5,7 +5,7 @@ from __future__ import annotations
 import typing
 from pathlib import Path
 
-from curiosity_cli.api.arguments import folder_argument, name_or_path
+from curiosity_cli.api.arguments import folder_argument, name_or_path, path_argument
 from curiosity_cli.paths import DEFAULT_RESULTS, experiment_root
 
 if typing.TYPE_CHECKING:
@@ -141,7 +141,7 @@ def verdict(source: Evaluation | Path | str) -> list[str]:
 
     if isinstance(source, Evaluation):
         return [map_verdict(row, source.effects) for row in source.headline.to_dict("records")]
-    report = folder_argument(source, "source")
+    report = path_argument(source, "source", "a REPORT.md or SWEEP.md, or the folder holding one")
     try:
         return read_verdict(report)
     except (OSError, UnicodeDecodeError) as exc:

@@ -75,6 +75,9 @@ ROLES = ("primary", "secondary")
 DRAWS, MIN_DRAWS, MAX_DRAWS = 100_000, 1_000, 10_000_000
 #: What the study's sweep folder holds of its hypotheses.
 TABLE = "hypotheses.csv"
+#: A map's scale, in its measure's unit: a lead divided by less than this, or by more than its largest, overflows
+#: or vanishes.
+MIN_SCALE, MAX_SCALE = 1e-9, 1e9
 
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,39}$")
 _REQUIRED = ("claim", "specification", "comparators", "measure", "reading", "path_length", "label_schedule", "seeds", "scale")
@@ -114,9 +117,10 @@ def declared_hypotheses(
     from curiosity_cli.yamlfile import read_yaml
 
     config_path = config_file(config_path)
-    declared = read_yaml(config_path, "config file").get(HYPOTHESES_KEY)
-    if declared is None:
+    data = read_yaml(config_path, "config file")
+    if HYPOTHESES_KEY not in data:
         return ()
+    declared = data[HYPOTHESES_KEY]
     where = f"{display_path(config_path)}: {HYPOTHESES_KEY}"
     if not isinstance(declared, dict) or not set(declared) - {"alpha"}:
         raise ConfigError(f"{where}: expected alpha and a mapping of names to hypotheses, e.g. H1: {{claim: ...}}")
@@ -152,17 +156,17 @@ def _hypothesis(name: str, fields: dict, at: str, alpha: float, configs: dict) -
     from curiosity_cli.maps.datasets import dataset_path, load_dataset_config
 
     specification = fields["specification"]
-    if specification not in configs:
+    if not isinstance(specification, str) or specification not in configs:
         raise ConfigError(f"{at}.specification: got {specification!r}, expected one of {', '.join(configs)}")
     config = next(iter(configs[specification].values()))  # its seeds differ in the seed alone
     walkers = list(config.explore.weight_functions)
     walker = fields.get("walker", "topic-perplexity")
-    if walker not in walkers:
+    if not isinstance(walker, str) or walker not in walkers:
         raise ConfigError(f"{at}.walker: got {walker!r}, expected a walker {specification} runs: {', '.join(walkers)}")
     comparators = fields["comparators"]
     if (
-        not isinstance(comparators, list) or not comparators or len(set(map(str, comparators))) != len(comparators)
-        or walker in comparators or not set(comparators) <= set(walkers)
+        not isinstance(comparators, list) or not comparators or not all(isinstance(c, str) for c in comparators)
+        or len(set(comparators)) != len(comparators) or walker in comparators or not set(comparators) <= set(walkers)
     ):
         raise ConfigError(
             f"{at}.comparators: got {comparators!r}, expected a list of other walkers {specification} runs, each once: "
@@ -173,21 +177,26 @@ def _hypothesis(name: str, fields: dict, at: str, alpha: float, configs: dict) -
     except ParameterError as exc:
         raise ConfigError(f"{at}.{exc}") from None
     against = fields.get("against", next(iter(measure.columns)))
-    if against not in measure.columns:
+    if not isinstance(against, str) or against not in measure.columns:
         raise ConfigError(f"{at}.against: got {against!r}, expected one of {', '.join(measure.columns)} for {measure.name}")
+    if not isinstance(fields["reading"], str):
+        raise ConfigError(f"{at}.reading: got {fields['reading']!r}, expected a labelling reading's name, e.g. frozen")
     if fields["reading"] != config.label.reading:
         raise ConfigError(
             f"{at}.reading: got {fields['reading']!r}, but {specification} labels {config.label.reading!r} (label.reading)"
         )
     length = fields["path_length"]
-    if length not in config.explore.checkpoints:
+    if isinstance(length, bool) or not isinstance(length, int) or length not in config.explore.checkpoints:
         raise ConfigError(
             f"{at}.path_length: got {length!r}, expected one of {specification}'s checkpoints: "
             f"{', '.join(map(str, config.explore.checkpoints))}"
         )
     schedule = fields["label_schedule"]
     given = {key: getattr(config.label, key) for key in _SCHEDULE}
-    if not isinstance(schedule, dict) or set(schedule) != set(_SCHEDULE) or any(schedule[k] != given[k] for k in _SCHEDULE):
+    if (
+        not isinstance(schedule, dict) or set(schedule) != set(_SCHEDULE)
+        or any(type(schedule[k]) is not type(given[k]) or schedule[k] != given[k] for k in _SCHEDULE)
+    ):
         raise ConfigError(
             f"{at}.label_schedule: got {schedule!r}, but {specification} labels with "
             f"{{sweeps: {given['sweeps']}, warm_sweeps: {given['warm_sweeps']}}}"
@@ -215,10 +224,10 @@ def _hypothesis(name: str, fields: dict, at: str, alpha: float, configs: dict) -
     for entry, value in scale.items():
         if entry not in maps:
             raise ConfigError(f"{at}.scale: {entry!r}: not a map of the study; expected some of {', '.join(maps)}")
-        _number(value, f"{at}.scale.{entry}", 0.0, math.inf, "a positive number")
+        _number(value, f"{at}.scale.{entry}", MIN_SCALE, MAX_SCALE, f"a number above {MIN_SCALE:g} and at most {MAX_SCALE:g}")
     claim = fields["claim"]
-    if not isinstance(claim, str) or not claim.strip():
-        raise ConfigError(f"{at}.claim: expected the claim in words")
+    if not isinstance(claim, str) or not claim.strip() or "\n" in claim.strip():
+        raise ConfigError(f"{at}.claim: expected the claim in words, on one line")
     return Hypothesis(
         name, claim.strip(), role == "primary", specification, walker, tuple(comparators), measure.name, against,
         fields["reading"], length, dict(schedule), test, draws, tuple(seeds), {k: float(v) for k, v in scale.items()}, alpha,
@@ -226,8 +235,11 @@ def _hypothesis(name: str, fields: dict, at: str, alpha: float, configs: dict) -
 
 
 def _number(value, at: str, low: float, high: float, expected: str) -> float:
-    """``value`` as a float in ``(low, high]``, else refused naming ``at``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not low < value <= high or value != value:
+    """``value`` as a finite float in ``(low, high]``, else refused naming ``at``."""
+    if (
+        isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value)
+        or not low < value <= high
+    ):
         raise ConfigError(f"{at}: got {value!r}, expected {expected}")
     return float(value)
 
@@ -328,13 +340,19 @@ def hypothesis_table(sweep: Sweep, outcomes: Sequence[Outcome], record: Path | N
         finished = {
             c.config.seed for c in combinations if by_index.get(c.index) is not None and by_index[c.index].error is None
         }
+        swept = {c.config.seed for c in combinations}
         missing = sorted(set(hypothesis.seeds) - finished)
+        outside = sorted(set(hypothesis.seeds) - swept)
         base = {
             "hypothesis": hypothesis.name, "role": "primary" if hypothesis.primary else "secondary",
             "specification": hypothesis.specification, "walker": hypothesis.walker, "measure": hypothesis.measure,
             "against": hypothesis.against, "reading": hypothesis.reading, "path_length": hypothesis.path_length,
             "test": hypothesis.test, "seeds": " ".join(map(str, hypothesis.seeds)), "alpha": hypothesis.alpha,
         }
+        if outside:
+            seeds = ", ".join(map(str, outside))
+            rows.append({**base, "scope": "pooled", "decision": f"not tested: seed {seeds} not in this sweep"})
+            continue
         if missing:
             seeds = ", ".join(map(str, missing))
             rows.append({**base, "scope": "pooled", "decision": f"not tested: seed {seeds} not finished"})
@@ -610,7 +628,7 @@ def hypothesis_lines(sweep: Sweep, table, declared: Declaration) -> list[str]:
         measure = measure_named(hypothesis.measure)
         decision = f"**{row.decision}**" if row.decision == "confirmed" else row.decision
         lines.append(
-            f"| {hypothesis.name} | {hypothesis.claim} | {row.role} | `{hypothesis.specification}` | {measure.title} "
+            f"| {hypothesis.name} | {hypothesis.claim.replace('|', chr(92) + '|')} | {row.role} | `{hypothesis.specification}` | {measure.title} "
             f"({hypothesis.against}) at {hypothesis.path_length} | {row.seeds} | {number(row.pairs, 0)} | "
             f"{_p(row.p_value)} | {_p(row.p_holm)} | {decision} | {row.status if row.status == row.status else ''} |"
         )

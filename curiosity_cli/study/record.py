@@ -137,13 +137,15 @@ class StudyRecord:
         """
         import tempfile
 
+        from curiosity_cli.files import os_error_message
+
         try:
             self.root.mkdir(parents=True, exist_ok=True)
             with tempfile.NamedTemporaryFile(dir=self.root, prefix=".writable-"):
                 pass
         except OSError as exc:
             raise RecordError(
-                f"--record {display_path(self.root)}: cannot be written ({exc.strerror or exc}); give a folder this "
+                f"--record {display_path(self.root)}: cannot be written ({os_error_message(exc)}); give a folder this "
                 "user can write"
             ) from None
 
