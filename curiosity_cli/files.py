@@ -54,7 +54,8 @@ def os_error_message(exc: OSError) -> str:
         return reason
     path = Path(os.fsdecode(exc.filename))
     if exc.errno in (errno.ENOTDIR, errno.EEXIST, errno.ELOOP):
-        blocking = _in_the_way(path)
+        # a file that is itself a loop keeps the system's words; a folder above it in the way is named
+        blocking = _in_the_way(path if exc.errno != errno.ELOOP else path.parent)
         if blocking is not None:
             where, what = blocking
             return f"{display_path(where)}: {what}; expected a folder"

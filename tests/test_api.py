@@ -404,9 +404,9 @@ def test_a_file_where_a_folder_goes_is_refused_by_its_name(tmp_path):
     """Issue 64's hostile round: api.explore(results_dir=FILE) and api.init_config(folder=FILE) raised raw OS errors."""
     afile = tmp_path / "afile"
     afile.write_text("")
-    with pytest.raises(ParameterError, match=r"^results_dir: got .*afile, which is a file; expected the path of a folder"):
+    with pytest.raises(ParameterError, match=r"^results_dir: got .*afile, which is a file; expected a folder"):
         api.explore("quick", results_dir=afile)
-    with pytest.raises(ParameterError, match=r"^folder: got .*afile, which is a file; expected the path of a folder"):
+    with pytest.raises(ParameterError, match=r"^folder: got .*afile, which is a file; expected a folder"):
         api.init_config("x", folder=afile)
     with pytest.raises(ParameterError, match=r"^folder: got .*afile, which is a file"):
         api.label(afile)

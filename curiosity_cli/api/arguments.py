@@ -35,7 +35,7 @@ def folder_argument(folder, name: str = "folder") -> Path:
     """A folder's path, given as a string or a path, not an empty one (:func:`path_argument`), nor a file's."""
     path = path_argument(folder, name, "the path of a folder")
     if path.exists() and not path.is_dir():
-        raise ParameterError(f"{name}: got {path}, which is a file; expected the path of a folder")
+        raise ParameterError(f"{name}: got {path}, which is a file; expected a folder")
     return path
 
 
