@@ -73,6 +73,19 @@ def _in_the_way(path: Path) -> tuple[Path, str] | None:
     return None
 
 
+def unwritable(folder: Path) -> str | None:
+    """None when files can be written in ``folder`` (made if missing); else why not, as :func:`os_error_message`
+    words it. A stage that writes there after its work asks first, so that a read-only folder, one under a file or
+    a link that leads nowhere is found before the work, not after it."""
+    try:
+        Path(folder).mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".writable-"):
+            pass
+    except OSError as exc:
+        return os_error_message(exc)
+    return None
+
+
 def note(line: str) -> None:
     """Tell the user, in one line on stderr, something the command did that they did not ask for."""
     print(line, file=sys.stderr, flush=True)

@@ -78,14 +78,19 @@ def test_a_stage_written_to_a_file_gets_a_line_when_it_starts_every_few_seconds_
     assert lines[-1] == "labelling runs: 5/10 in 50 s"
 
 
-def test_a_watched_stage_is_one_line_rewritten_in_place():
+def watched_stage() -> str:
+    """What a watched stage of 4 units, one a second, draws."""
     out, clock = io.StringIO(), Clock()
     with Progress(out, watched=True, clock=clock) as progress:
         progress.stage("exploring", 4)
         for _ in range(4):
             clock.now += 1
             progress.advance()
-    text = out.getvalue()
+    return out.getvalue()
+
+
+def test_a_watched_stage_is_one_line_rewritten_in_place():
+    text = watched_stage()
     assert text.count("\n") == 1 and text.endswith(" in 4 s\n")
     assert text.split("\r")[-1].startswith("exploring [########################] 4/4 (100 %), 1.00/s, about 0 s left")
 
@@ -93,13 +98,7 @@ def test_a_watched_stage_is_one_line_rewritten_in_place():
 def test_a_watched_line_is_cut_to_the_terminal_s_width_so_it_never_wraps(monkeypatch):
     """Issue 64: with COLUMNS=5 the line stayed about 80 columns and wrapped, a new row at every redraw."""
     monkeypatch.setenv("COLUMNS", "30")
-    out, clock = io.StringIO(), Clock()
-    with Progress(out, watched=True, clock=clock) as progress:
-        progress.stage("exploring", 4)
-        for _ in range(4):
-            clock.now += 1
-            progress.advance()
-    drawn = [part for part in out.getvalue().split("\r") if part]
+    drawn = [part for part in watched_stage().split("\r") if part]
     assert drawn and all(len(part.split(" in ")[0].rstrip()) <= 29 for part in drawn)
     assert drawn[-1].startswith("exploring [##################")
 

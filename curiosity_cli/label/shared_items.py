@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli.experiment.wholeness import record
-from curiosity_cli.files import display_path, note, open_npz
+from curiosity_cli.files import display_path, note, open_npz, unwritable
 
 #: Where under the cache folder (``cache_dir``, beside the word stores) shared items live.
 SHARED_FOLDER = "shared"
@@ -94,15 +94,8 @@ class SharedItems:
     def writable(self) -> str | None:
         """None when items can be stored here; else why not, in words (checked before any work, so that a
         read-only cache or one under a file is not found after the labelling)."""
-        import tempfile
-
-        try:
-            self.root.mkdir(parents=True, exist_ok=True)
-            with tempfile.NamedTemporaryFile(dir=self.root, prefix=".writable-"):
-                pass
-        except OSError as exc:
-            return f"{display_path(self.root)}: cannot be written ({exc.strerror or exc})"
-        return None
+        why = unwritable(self.root)
+        return None if why is None else f"{display_path(self.root)}: cannot be written ({why})"
 
     def find(self, kind: str, key: str) -> Path | None:
         """The stored file of an item, if there is one whose bytes still match its name; one that does not is

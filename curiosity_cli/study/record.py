@@ -135,19 +135,12 @@ class StudyRecord:
         ------
         RecordError
         """
-        import tempfile
+        from curiosity_cli.files import unwritable
 
-        from curiosity_cli.files import os_error_message
-
-        try:
-            self.root.mkdir(parents=True, exist_ok=True)
-            with tempfile.NamedTemporaryFile(dir=self.root, prefix=".writable-"):
-                pass
-        except OSError as exc:
+        if (why := unwritable(self.root)) is not None:
             raise RecordError(
-                f"--record {display_path(self.root)}: cannot be written ({os_error_message(exc)}); give a folder this "
-                "user can write"
-            ) from None
+                f"--record {display_path(self.root)}: cannot be written ({why}); give a folder this user can write"
+            )
 
     def folder(self, combination: Combination) -> Path:
         """Where ``combination``'s tables are recorded: ``<record>/seed-<S>/<specification>``."""
