@@ -7,6 +7,25 @@ Library messages name the library's own arguments, never command-line options: t
 command line knows which option gave an argument, and says so (:meth:`CuriosityError.render`).
 """
 
+
+def unwinding_interrupt(error: BaseException) -> bool:
+    """Whether ``error`` was raised while a KeyboardInterrupt (Ctrl-C or SIGTERM) unwound the command.
+
+    A library's clean-up can raise its own error as the interrupt passes through it
+    (``np.savez_compressed`` closing a half-opened zip member raises ValueError), and
+    that error, not the interrupt, is what comes up; it is the interrupt's echo, not a
+    fault to report. Numba's dispatcher, interrupted in a kernel call, raises SystemError
+    from the interrupt.
+    """
+    seen = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return False
+
+
 #: Where a message says which stage to run (again), with its ``force`` argument or without.
 RERUN = "{rerun}"
 

@@ -53,7 +53,7 @@ import warnings
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
-from curiosity_cli.errors import CuriosityError, ParameterError
+from curiosity_cli.errors import CuriosityError, ParameterError, unwinding_interrupt
 
 #: Where the tasks of a command can be computed: joblib's loky processes, or a Dask cluster.
 BACKENDS = ("loky", "dask")
@@ -327,6 +327,8 @@ def _outcome(index: int, function: Callable, task, threads: int, *args) -> tuple
     try:
         return index, function(task, *args, threads=threads)
     except Exception as exc:  # noqa: BLE001 - reported with the task's name, the others go on
+        if unwinding_interrupt(exc):  # in this process (one job): the command stops, not the task
+            raise
         return index, f"{type(exc).__name__}: {exc}"
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import typer
 
-from curiosity_cli.cli.app import _unwinding_interrupt, app
+from curiosity_cli.cli.app import app
 
 # Registration order is the order `--help` lists the commands: the pipeline's order.
 from curiosity_cli.cli import datasets, vocab, extract, explore, label, evaluate, plot, reproduce, drive, config_cmd  # noqa: E402,F401
@@ -29,6 +29,8 @@ def main() -> None:
     import signal
     import sys
 
+    from curiosity_cli.errors import unwinding_interrupt
+
     # OpenCV and its FFmpeg print their own lines for a camera they cannot open, before
     # our one Error line says the same; a user who wants them sets the variables
     os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
@@ -44,7 +46,7 @@ def main() -> None:
     try:
         app()
     except BaseException as error:  # typer turns KeyboardInterrupt into exit code 130
-        if not received or not (isinstance(error, SystemExit) or _unwinding_interrupt(error)):
+        if not received or not (isinstance(error, SystemExit) or unwinding_interrupt(error)):
             raise
         typer.echo("Interrupted; finished work is kept, run the same command again to resume.", err=True)
         sys.exit(128 + received[0])

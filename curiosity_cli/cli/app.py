@@ -13,7 +13,7 @@ import typer
 from typer.core import TyperGroup
 
 from curiosity_cli import __version__
-from curiosity_cli.errors import CuriosityError, UsageError, with_options
+from curiosity_cli.errors import CuriosityError, UsageError, unwinding_interrupt, with_options
 
 
 class _ErrorMappingGroup(TyperGroup):
@@ -31,14 +31,14 @@ class _ErrorMappingGroup(TyperGroup):
         try:
             return super().invoke(ctx)
         except CuriosityError as exc:
-            if _unwinding_interrupt(exc):
+            if unwinding_interrupt(exc):
                 raise
             typer.echo(f"Error: {_command_line_message(exc, self.get_command(ctx, ctx.invoked_subcommand or ''))}", err=True)
             raise typer.Exit(1) from None
         except BrokenPipeError:
             raise
         except OSError as exc:
-            if _unwinding_interrupt(exc):
+            if unwinding_interrupt(exc):
                 raise
             typer.echo(f"Error: {os_error_message(exc)}", err=True)
             raise typer.Exit(1) from None
@@ -128,20 +128,3 @@ def _root(
     ),
 ) -> None:
     """Curiosity-driven exploration experiments on map mosaics."""
-
-
-def _unwinding_interrupt(error: BaseException) -> bool:
-    """Whether ``error`` was raised while a KeyboardInterrupt (a signal, see :func:`main`) unwound the command.
-
-    A library's clean-up can raise its own error as the interrupt passes through it
-    (``np.savez_compressed`` closing a half-opened zip member raises ValueError), and
-    that error, not the interrupt, is what comes up; it is the interrupt's echo, not a
-    fault to report.
-    """
-    seen = set()
-    while error is not None and id(error) not in seen:
-        if isinstance(error, KeyboardInterrupt):
-            return True
-        seen.add(id(error))
-        error = error.__cause__ or error.__context__
-    return False

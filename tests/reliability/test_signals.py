@@ -118,6 +118,39 @@ def test_sigterm_stops_the_workers_too_and_exits_143(exploring):
     assert run.remaining_workers() == []
 
 
+
+@pytest.mark.slow
+def test_sigterm_inside_a_kernel_of_one_job_stops_the_grid_within_a_second(tmp_path, cache):
+    # one job explores in the command's own process; 1,000 candidate sweeps make the
+    # kernel call long, so the signal lands in it: numba raised SystemError from the
+    # interrupt, which was taken for the run's failure while the other runs went on
+    command = [
+        sys.executable, "-m", "curiosity_cli", "explore", "--map", "aerial-mosaic", "--weights", "topic-perplexity",
+        "--restarts", "4", "--jobs", "1", "--cache-dir", str(cache), "--set", "name=kernel",
+        "--set", "explore.candidate_sweeps=1000",
+    ]
+    stderr = tmp_path / "stderr.txt"
+    with open(stderr, "w") as err:
+        process = subprocess.Popen(command, cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=err)
+    try:
+        deadline = time.monotonic() + 180
+        while not list(tmp_path.glob("results/kernel/runs/*/*/*/run.json")):
+            assert time.monotonic() < deadline and process.poll() is None, stderr.read_text()
+            time.sleep(0.1)
+        time.sleep(1.0)  # into the next run's kernels
+        sent = time.monotonic()
+        process.terminate()
+        code = process.wait(timeout=60)
+        took = time.monotonic() - sent
+    finally:
+        process.kill()
+    text = stderr.read_text()
+    assert code == 143 and "SystemError" not in text and "failed" not in text, text
+    assert text.rstrip().endswith(INTERRUPTED), text
+    assert len(list(tmp_path.glob("results/kernel/runs/*/*/*/run.json"))) < 4
+    # 0.75-0.86 s here with a labelling study beside it; 60 s when the grid went on
+    assert took < 3, f"{took:.1f} s from SIGTERM to exit"
+
 # A command whose clean-up fails as Ctrl-C passes through it, as np.savez_compressed
 # does when the signal lands between opening a zip member and writing it (CI saw it).
 _FAILING_CLEAN_UP = """
@@ -234,6 +267,29 @@ def test_one_job_runs_in_this_process_without_watching_its_parent():
         assert [pid for _, pid in outcomes] == [os.getpid()] * 2
     time.sleep(2 * ORPHAN_POLL_SECONDS)  # still alive: no parent watch runs in the command's own process
 
+
+
+def _interrupted_in_a_kernel(task, threads):
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt:  # as numba's dispatcher answers a signal that lands in a kernel call
+        raise SystemError("CPUDispatcher(<function kernel>) returned a result with an exception set")  # noqa: B904
+
+
+def _failed_in_a_kernel(task, threads):
+    raise SystemError("CPUDispatcher(<function kernel>) returned a result with an exception set")
+
+
+def test_an_interrupt_in_a_task_of_one_job_stops_the_command_not_just_the_task():
+    with Workers("loky", jobs=1) as workers, workers.compute(_interrupted_in_a_kernel, [1, 2]) as outcomes:
+        with pytest.raises(SystemError) as raised:
+            list(outcomes)
+    assert isinstance(raised.value.__context__, KeyboardInterrupt)
+    # an error with no interrupt behind it is the task's outcome, and the others go on
+    with Workers("loky", jobs=1) as workers, workers.compute(_failed_in_a_kernel, [1, 2]) as outcomes:
+        assert [outcome for _, outcome in outcomes] == [
+            "SystemError: CPUDispatcher(<function kernel>) returned a result with an exception set"
+        ] * 2
 
 @pytest.mark.slow
 @TWO_JOBS
