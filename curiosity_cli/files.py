@@ -79,11 +79,16 @@ def unwritable(folder: Path) -> str | None:
     a link that leads nowhere is found before the work, not after it."""
     try:
         Path(folder).mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=folder, prefix=".writable-"):
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=_PROBE):
             pass
     except OSError as exc:
+        if exc.filename is not None and Path(os.fsdecode(exc.filename)).name.startswith(_PROBE):
+            exc.filename = os.fspath(folder)  # the folder refused the file: name it, not the probe's random name
         return os_error_message(exc)
     return None
+
+
+_PROBE = ".writable-"
 
 
 def note(line: str) -> None:

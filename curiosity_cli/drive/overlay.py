@@ -14,7 +14,7 @@ import numpy as np
 
 from curiosity_cli.maps.cell_grid import SquareGrid
 from curiosity_cli.drive.controller import Command
-from curiosity_cli.files import atomic_path, display_path
+from curiosity_cli.files import atomic_path, display_path, unwritable
 from curiosity_cli.errors import CuriosityError, UsageError
 
 MAX_OPACITY = 0.6
@@ -92,17 +92,26 @@ VIDEO_CODECS = {".mp4": "mp4v", ".avi": "MJPG", ".mkv": "mp4v"}
 
 
 def check_video_out(path: Path) -> None:
-    """Refuse a video file name whose suffix is no container of :data:`VIDEO_CODECS`.
+    """Refuse a video file name whose suffix is no container of :data:`VIDEO_CODECS`, or whose folder
+    cannot take files (made if missing).
+
+    OpenCV opens a writer in a read-only folder without a word and writes nothing, so the
+    folder is asked first: the run would otherwise end on its missing temporary file.
 
     Raises
     ------
     UsageError
-        Naming ``video_out``.
+        Naming ``video_out``: no video file name.
+    CuriosityError
+        Naming ``video_out``: its folder cannot take files, and why.
     """
     if Path(path).suffix.lower() not in VIDEO_CODECS:
         raise UsageError(
             f"video_out: got {display_path(Path(path))}, expected a .mp4, .avi or .mkv file name", parameter="video_out"
         )
+    reason = unwritable(Path(path).parent)
+    if reason is not None:
+        raise CuriosityError(f"video_out {display_path(Path(path))}: {reason}", parameter="video_out")
 
 
 class VideoSink:
@@ -125,7 +134,6 @@ class VideoSink:
     def __init__(self, path: Path, fps: float):
         self.path = Path(path)
         check_video_out(self.path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self._tmp = self.path.with_name(f".{self.path.stem}.tmp{self.path.suffix}")
         self._fps = fps
         self._writer = None

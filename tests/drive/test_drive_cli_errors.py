@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from typer.testing import CliRunner
 
@@ -163,3 +165,19 @@ def test_a_video_out_that_is_no_video_is_a_usage_error_before_anything_is_writte
     corrected = runner.invoke(app, [*drive, "--video-out", str(tmp_path / "v.avi")])
     assert corrected.exit_code == 0, corrected.output
     assert (tmp_path / "v.avi").is_file()
+
+
+@pytest.mark.parametrize("folder", ["file", "sysfs"])
+def test_a_video_out_whose_folder_takes_no_files_is_named_with_the_cause_before_the_run(tmp_path, folder):
+    """Hostile-user audit (issue 64): OpenCV opened a writer in a read-only folder without a word, and the run
+    ended on its missing temporary file ("No such file or directory")."""
+    video = _video(tmp_path / "clip.avi")
+    # a file where the folder goes, and a file system that takes no new files (sysfs: refused even to root)
+    target, says = {
+        "file": (video / "v.avi", f"{video}: is a file; expected a folder"), "sysfs": (Path("/sys/v.avi"), "/sys: "),
+    }[folder]
+    drive = ["drive", "--dry-run", "--camera", str(video), "--out", str(tmp_path / "run"), "--max-frames", "1"]
+    result = runner.invoke(app, [*drive, "--video-out", str(target)])
+    assert result.exit_code == 1, result.output
+    assert one_line_error(result).startswith(f"Error: --video-out {target}: {says}")
+    assert not (tmp_path / "run").exists() and not target.exists()
