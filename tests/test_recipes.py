@@ -24,6 +24,11 @@ def test_changes_say_what_differs_in_words():
     assert Recipe({"seed": 0, "model": {"topics": 32, "eta": 0.5}, "run": "abc"}).changes(made) == (
         "model.eta was absent, now 0.5"
     )
+    # a setting a recipe leaves out at its default reads as that default, not as absent
+    with_reading = {"recipe": Recipe({"label": {"reading": "used-topics"}, "explore": {"candidate_sweeps": 10}}).record()}
+    assert Recipe({"label": {}, "explore": {}}).changes(with_reading) == (
+        "explore.candidate_sweeps was 10, now 1, label.reading was 'used-topics', now 'frozen'"
+    )
     assert Recipe({"seed": 0}).changes({"seed": 0}) == "made before recipes were recorded"
     # a recorded digest that its own inputs do not give
     tampered = {"recipe": {"digest": "0" * 16, "inputs": {"seed": 0}}}

@@ -30,7 +30,7 @@ import json
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from curiosity_cli.config import LABEL_READINGS, READS_TRUTH, ExperimentConfig
+from curiosity_cli.config import LABEL_READINGS, READS_TRUTH, UNRECORDED_READINGS, ExperimentConfig
 from curiosity_cli.config_yaml import to_dict
 
 #: Where a file's meta (``run.json``, an ``.npz``'s ``meta``) holds its recipe.
@@ -87,7 +87,7 @@ class Recipe:
             return "made before recipes were recorded"
         if recorded_digest(meta) == self.digest:
             return None
-        changed = [_in_words(keys, old, new) for keys, old, new in differences(inputs, self.inputs)]
+        changed = [change_in_words(keys, old, new) for keys, old, new in differences(inputs, self.inputs)]
         return ", ".join(changed) or "its recorded digest does not match its inputs (edited by hand?)"
 
 
@@ -131,11 +131,22 @@ def first_of(lines: list[str]) -> str:
     return lines[0] + (f"; and {len(lines) - 1} more" if len(lines) > 1 else "")
 
 
-def _in_words(keys: tuple, old, new) -> str:
+def change_in_words(keys: tuple, old, new) -> str:
+    """One difference of two recipes (:func:`differences`) as a user reads it: ``explore.candidates was 4, now 8``."""
     name = ".".join(map(str, keys))
     if name in _DIGEST_INPUTS:
         return f"{_DIGEST_INPUTS[name]} changed"
-    return f"{name} was {old!r}, now {new!r}"
+    return f"{name} was {_as_set(keys, old)}, now {_as_set(keys, new)}"
+
+
+def _as_set(keys: tuple, value) -> str:
+    """A recipe's value as the config set it: a setting a recipe leaves out at its default is that default."""
+    if value is ABSENT:
+        if keys == ("label", "reading"):
+            return repr(LABEL_READINGS[0])
+        if len(keys) == 2 and keys[0] == "explore" and keys[1] in UNRECORDED_READINGS:
+            return repr(UNRECORDED_READINGS[keys[1]])
+    return repr(value)
 
 
 def run_recipe(

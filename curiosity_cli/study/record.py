@@ -45,7 +45,7 @@ import numpy as np
 
 from curiosity_cli.errors import CuriosityError
 from curiosity_cli.experiment.experiment import Experiment
-from curiosity_cli.experiment.recipes import ABSENT, differences, label_recipe
+from curiosity_cli.experiment.recipes import ABSENT, change_in_words, differences, label_recipe
 from curiosity_cli.experiment.wholeness import changed, records
 from curiosity_cli.files import display_path
 
@@ -363,5 +363,5 @@ def _in_words(keys: tuple, old, new) -> str:
     if keys[0] == "maps" and len(keys) == 2:
         return f"map {keys[1]} {'is not recorded' if old is ABSENT else 'is not in the study now'}"
     if keys[0] == "maps":
-        return f"{keys[1]}'s {keys[2]} recipe: {'.'.join(map(str, keys[3:]))} was {old!r}, now {new!r}"
-    return f"{'.'.join(map(str, keys))} was {old!r}, now {new!r}"
+        return f"{keys[1]}'s {keys[2]} recipe: {change_in_words(keys[3:], old, new)}"
+    return change_in_words(keys, old, new)

@@ -154,7 +154,8 @@ def write_sweep_report(
         "",
         f"Config `{display_path(sweep.config_path)}`; --set: {sets}. Each combination is an experiment folder "
         f"here, named by its values (`sweep.yaml` lists them). The headline is the mean MI of {HEADLINE_WEIGHT} "
-        f"exploration against human labels at {HEADLINE_LENGTH} steps over the next best weight function's.",
+        f"exploration against human labels at {HEADLINE_LENGTH} steps (or a map's longest path below it) over the "
+        "next best weight function's.",
         "",
         *kept,
         "Run again (finished runs and labels are kept):",

@@ -193,9 +193,9 @@ def test_a_label_file_is_current_only_for_the_recipe_it_was_made_from(tmp_path):
     # another reading is, and used-topics' share with it
     assert "reading" not in recipe.inputs["label"] and "used_share" not in recipe.inputs["label"]
     for changed, change in (
-        ({"used_share": 0.2}, None), ({"reading": "unseen-topic"}, "label.reading was absent, now 'unseen-topic'"),
-        ({"reading": "used-topics"}, "label.reading was absent, now 'used-topics', label.used_share was absent, now 0.01"),
-        ({"reading": "thawed"}, "label.reading was absent, now 'thawed', label.thaw_sweeps was absent, now 4"),
+        ({"used_share": 0.2}, None), ({"reading": "unseen-topic"}, "label.reading was 'frozen', now 'unseen-topic'"),
+        ({"reading": "used-topics"}, "label.reading was 'frozen', now 'used-topics', label.used_share was absent, now 0.01"),
+        ({"reading": "thawed"}, "label.reading was 'frozen', now 'thawed', label.thaw_sweeps was absent, now 4"),
     ):
         other = SimpleNamespace(label=dataclasses.replace(label, **changed))
         assert label_changes(path, label_recipe("run-digest", "batch-digest", other, "human-digest", 1)) == change
