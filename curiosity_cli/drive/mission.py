@@ -2,23 +2,30 @@
 
 Written with the Foxglove SDK (``foxglove-sdk``): it writes MCAP and serves Foxglove's
 WebSocket protocol from the same channels, so a mission file and a live view show the
-same messages, encoded with Foxglove's own schemas (protobuf, the schemas embedded in
-the file) where one fits and as JSON with a JSON schema where none does. Each message's
-log time is the frame's time in nanoseconds: a replay's bag time, or the host's clock
-for a live camera. The channels, per frame:
+same messages. Every channel is protobuf with its schema embedded in the file, Foxglove's
+own where one fits and this module's (:data:`CUSTOM_PROTO`, package ``curiosity``) where
+none does, so the mcap project's protobuf decoder reads all of them. Each message's log
+time is the frame's time in nanoseconds: a replay's bag time, or the host's clock for a
+live camera. The channels, per frame:
 
-- :data:`CAMERA` ``foxglove.CompressedImage``: the frame as JPEG, stamped with its
-  image message's header stamp where it has one;
-- :data:`SURPRISE` (JSON): the frame's surprise and its parts
+- :data:`CAMERA` ``foxglove.CompressedImage``: the frame as JPEG in frame :data:`CAMERA_FRAME`,
+  stamped with its image message's header stamp where it has one;
+- :data:`SURPRISE` ``curiosity.Surprise``: the frame's surprise and its parts
   (:func:`~curiosity_cli.drive.frames_table.frame_summary`), for the Plot panel;
 - :data:`PERPLEXITY` ``foxglove.RawImage`` (``32FC1``): the image cells' topic perplexity,
   one pixel a cell, for the Image panel's colour map;
 - :data:`CELLS` ``foxglove.ImageAnnotations``: the target cell outlined over the frame;
-- :data:`COMMAND` (JSON): the target cell and the velocity command;
-- :data:`POSE` ``foxglove.PoseInFrame``: the frame's pose, where it has one.
+- :data:`COMMAND` ``curiosity.Command``: the target cell and the velocity command;
+- :data:`POSE` ``foxglove.PoseInFrame``: the frame's pose, where it has one;
+- :data:`TRANSFORMS` ``foxglove.FrameTransforms``: what links the pose's frame, the robot and
+  the camera for the 3D panel: the pose as the transform from its frame (e.g. ``odom``) to
+  :data:`ROBOT_FRAME`, where the frame has one, and :data:`CAMERA_MOUNT` from the robot to the
+  camera, a stated default (the camera at the robot's origin, looking along its x axis),
+  with every frame so that a reader that seeks finds it.
 
-Every number comes from the frame's record in ``log.jsonl``, so the file and the log
-agree value for value.
+The run's config and provenance are the file's metadata (``config``, ``provenance``), and
+:func:`write_layout` writes a Foxglove layout for the file beside it. Every number comes
+from the frame's record in ``log.jsonl``, so the file and the log agree value for value.
 """
 
 from __future__ import annotations
@@ -29,40 +36,53 @@ import numpy as np
 
 from curiosity_cli.drive.frames_table import frame_summary
 
-#: A run folder's mission file.
+#: A run folder's mission file, and the Foxglove layout written beside it.
 MISSION_FILE = "mission.mcap"
-CAMERA, SURPRISE, PERPLEXITY, CELLS, COMMAND, POSE = (
+LAYOUT_FILE = "mission.layout.json"
+CAMERA, SURPRISE, PERPLEXITY, CELLS, COMMAND, POSE, TRANSFORMS = (
     "/camera/image", "/curiosity/surprise", "/curiosity/perplexity", "/curiosity/cells", "/curiosity/command", "/pose",
+    "/tf",
 )
+#: The robot's frame (ROS's REP 105 name) and the camera's, which the transforms link to the pose's frame.
+ROBOT_FRAME, CAMERA_FRAME = "base_link", "camera"
+#: The camera's place on the robot, (x, y, z) metres and the quaternion (x, y, z, w): a stated default, the
+#: robot's origin and axes, where a recording gives none.
+CAMERA_MOUNT = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
 #: JPEG quality of the frames in the file: near the camera's own, at a tenth of raw RGB's size.
 JPEG_QUALITY = 90
 #: The port a live view is served on when none is given (Foxglove's default).
 DEFAULT_PORT = 8765
 
-_SURPRISE_SCHEMA = {
-    "type": "object",
-    "title": "curiosity.Surprise",
-    "properties": {
-        "frame": {"type": "integer"},
-        "surprise": {"type": "number", "description": "mean topic perplexity of the frame's image cells"},
-        "perplexity_max": {"type": "number"},
-        "score_max": {"type": "number", "description": "the decayed curiosity score that steered"},
-        "refined": {"type": "integer", "description": "word samples of the frame's own refinement"},
-        "words": {"type": "integer"},
-    },
-}
-_COMMAND_SCHEMA = {
-    "type": "object",
-    "title": "curiosity.Command",
-    "properties": {
-        "frame": {"type": "integer"},
-        "target_row": {"type": "integer"},
-        "target_col": {"type": "integer"},
-        "surge": {"type": "number", "description": "m/s"},
-        "yaw_rate": {"type": "number", "description": "rad/s"},
-        "pitch_rate": {"type": "number", "description": "rad/s"},
-    },
-}
+#: The custom channels' messages: (name, [(field, protobuf type)]), numbered in order. Their descriptions:
+#: surprise, the mean topic perplexity of the frame's image cells; score_max, the decayed curiosity score that
+#: steered; refined, the word samples of the frame's own refinement; surge in m/s, the rates in rad/s.
+CUSTOM_PROTO = (
+    ("Surprise", [("frame", "uint64"), ("surprise", "double"), ("perplexity_max", "double"), ("score_max", "double"),
+                  ("refined", "int64"), ("words", "int64")]),
+    ("Command", [("frame", "uint64"), ("target_row", "int32"), ("target_col", "int32"), ("surge", "double"),
+                 ("yaw_rate", "double"), ("pitch_rate", "double")]),
+)
+
+
+def custom_messages() -> tuple[bytes, dict]:
+    """The serialized ``FileDescriptorSet`` of :data:`CUSTOM_PROTO` (package ``curiosity``, proto3), which a
+    channel's schema embeds, and each message's class by name."""
+    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+
+    kinds = descriptor_pb2.FieldDescriptorProto
+    file = descriptor_pb2.FileDescriptorProto(name="curiosity/mission.proto", package="curiosity", syntax="proto3")
+    for name, fields in CUSTOM_PROTO:
+        message = file.message_type.add(name=name)
+        for number, (field, kind) in enumerate(fields, start=1):
+            message.field.add(
+                name=field, number=number, label=kinds.LABEL_OPTIONAL, type=getattr(kinds, f"TYPE_{kind.upper()}")
+            )
+    pool = descriptor_pool.DescriptorPool()
+    pool.Add(file)
+    classes = {
+        name: message_factory.GetMessageClass(pool.FindMessageTypeByName(f"curiosity.{name}")) for name, _ in CUSTOM_PROTO
+    }
+    return descriptor_pb2.FileDescriptorSet(file=[file]).SerializeToString(), classes
 
 
 class MissionFile:
@@ -75,6 +95,8 @@ class MissionFile:
     live_port : int, optional
         Serve the same channels over Foxglove's WebSocket protocol on localhost at this
         port (0: any free one, :attr:`port` says which) while the drive runs.
+    metadata : dict of str to dict of str to str, optional
+        MCAP metadata records, by name (a drive's: ``config`` and ``provenance``).
 
     Raises
     ------
@@ -83,7 +105,7 @@ class MissionFile:
         cannot be made, a port that cannot be served on.
     """
 
-    def __init__(self, path: Path, live_port: int | None = None):
+    def __init__(self, path: Path, live_port: int | None = None, metadata: dict[str, dict[str, str]] | None = None):
         from curiosity_cli.errors import CuriosityError
         from curiosity_cli.files import display_path
 
@@ -91,6 +113,7 @@ class MissionFile:
             import foxglove
             from foxglove.channels import (
                 CompressedImageChannel,
+                FrameTransformsChannel,
                 ImageAnnotationsChannel,
                 PoseInFrameChannel,
                 RawImageChannel,
@@ -101,6 +124,8 @@ class MissionFile:
         self._context = foxglove.Context()
         try:
             self._writer = foxglove.open_mcap(self.path, context=self._context)
+            for name, record in (metadata or {}).items():
+                self._writer.write_metadata(name, record)
         except Exception as exc:  # the SDK's own error for a path it cannot create
             raise CuriosityError(f"{display_path(self.path)}: cannot be written ({' '.join(str(exc).split())})") from None
         self._server = None
@@ -119,11 +144,18 @@ class MissionFile:
             self.port = self._server.port
         c = self._context
         self._camera = CompressedImageChannel(CAMERA, context=c)
-        self._surprise = foxglove.Channel(SURPRISE, schema=_SURPRISE_SCHEMA, context=c)
+        descriptors, self._messages = custom_messages()
+
+        def custom(topic: str, name: str):
+            schema = foxglove.Schema(name=f"curiosity.{name}", encoding="protobuf", data=descriptors)
+            return foxglove.Channel(topic, schema=schema, message_encoding="protobuf", context=c)
+
+        self._surprise = custom(SURPRISE, "Surprise")
         self._perplexity = RawImageChannel(PERPLEXITY, context=c)
         self._cells = ImageAnnotationsChannel(CELLS, context=c)
-        self._command = foxglove.Channel(COMMAND, schema=_COMMAND_SCHEMA, context=c)
+        self._command = custom(COMMAND, "Command")
         self._pose = PoseInFrameChannel(POSE, context=c)
+        self._transforms = FrameTransformsChannel(TRANSFORMS, context=c)
 
     def frame(self, row: dict, image: np.ndarray) -> None:
         """Log one frame: its record in the drive's log and the (H, W, 3) uint8 RGB image it was made from."""
@@ -131,6 +163,8 @@ class MissionFile:
         from foxglove.messages import (
             Color,
             CompressedImage,
+            FrameTransform,
+            FrameTransforms,
             ImageAnnotations,
             Point2,
             PointsAnnotation,
@@ -145,12 +179,15 @@ class MissionFile:
         at = row["time_ns"]
         stamp = _timestamp(row.get("header_time_ns", at))
         ok, jpeg = cv2.imencode(".jpg", image[:, :, ::-1], [cv2.IMWRITE_JPEG_QUALITY, JPEG_QUALITY])
-        self._camera.log(CompressedImage(timestamp=stamp, frame_id="camera", data=jpeg.tobytes(), format="jpeg"), log_time=at)
-        self._surprise.log({"frame": row["frame"], **frame_summary(row)}, log_time=at)
+        self._camera.log(
+            CompressedImage(timestamp=stamp, frame_id=CAMERA_FRAME, data=jpeg.tobytes(), format="jpeg"), log_time=at
+        )
+        surprise = self._messages["Surprise"](frame=row["frame"], **frame_summary(row))
+        self._surprise.log(surprise.SerializeToString(), log_time=at)
         perplexity = np.asarray(row["perplexity"], "<f4")
         rows, cols = perplexity.shape
         self._perplexity.log(
-            RawImage(timestamp=stamp, frame_id="camera", width=cols, height=rows, encoding="32FC1", step=4 * cols,
+            RawImage(timestamp=stamp, frame_id=CAMERA_FRAME, width=cols, height=rows, encoding="32FC1", step=4 * cols,
                      data=perplexity.tobytes()),
             log_time=at,
         )
@@ -164,20 +201,26 @@ class MissionFile:
             outline_color=Color(r=1.0, g=0.85, b=0.0, a=1.0),
         )
         self._cells.log(ImageAnnotations(points=[outline]), log_time=at)
-        command = row["command"]
-        self._command.log(
-            {"frame": row["frame"], "target_row": row_at, "target_col": col_at, **command}, log_time=at
-        )
+        command = self._messages["Command"](frame=row["frame"], target_row=row_at, target_col=col_at, **row["command"])
+        self._command.log(command.SerializeToString(), log_time=at)
+        (mx, my, mz), (qx, qy, qz, qw) = CAMERA_MOUNT
+        links = [FrameTransform(
+            timestamp=_timestamp(at), parent_frame_id=ROBOT_FRAME, child_frame_id=CAMERA_FRAME,
+            translation=Vector3(x=mx, y=my, z=mz), rotation=Quaternion(x=qx, y=qy, z=qz, w=qw),
+        )]
         pose = row.get("pose")
         if pose is not None:
+            position = Vector3(x=pose["x"], y=pose["y"], z=pose["z"])
+            orientation = Quaternion(x=pose["qx"], y=pose["qy"], z=pose["qz"], w=pose["qw"])
             self._pose.log(
-                PoseInFrame(
-                    timestamp=_timestamp(at), frame_id=pose["frame_id"],
-                    pose=Pose(position=Vector3(x=pose["x"], y=pose["y"], z=pose["z"]),
-                              orientation=Quaternion(x=pose["qx"], y=pose["qy"], z=pose["qz"], w=pose["qw"])),
-                ),
+                PoseInFrame(timestamp=_timestamp(at), frame_id=pose["frame_id"], pose=Pose(position=position, orientation=orientation)),
                 log_time=at,
             )
+            links.insert(0, FrameTransform(
+                timestamp=_timestamp(at), parent_frame_id=pose["frame_id"], child_frame_id=ROBOT_FRAME,
+                translation=position, rotation=orientation,
+            ))
+        self._transforms.log(FrameTransforms(transforms=links), log_time=at)
 
     def close(self) -> None:
         """Finish the file (its summary and index) and stop the live view.
@@ -203,6 +246,44 @@ class MissionFile:
                     f"{display_path(self.path)}: cannot be finished ({' '.join(str(exc).split())}; a full disk?); "
                     "what was written before stays, and replays to its last whole message"
                 ) from None
+
+
+def write_layout(folder: Path) -> Path:
+    """Write :data:`LAYOUT_FILE` into ``folder``: a Foxglove layout for its mission file (import it with Foxglove's
+    layout menu, "Import from file").
+
+    The frame with its perplexity grid and the target cell over it; the surprise and its largest
+    cell perplexity against time; the 3D scene of the transforms and the poses, following the robot.
+    """
+    import foxglove.layouts as fl
+
+    from curiosity_cli.files import atomic_path
+
+    image = fl.ImagePanel(title="frame and target cell", config=fl.ImageConfig(image_mode=fl.ImageModeConfig(
+        image_topic=CAMERA, annotations={CELLS: fl.ImageAnnotationSettings(visible=True)},
+    )))
+    perplexity = fl.ImagePanel(title="topic perplexity per cell", config=fl.ImageConfig(image_mode=fl.ImageModeConfig(
+        image_topic=PERPLEXITY, color_mode="colormap", color_map="turbo",
+    )))
+    plot = fl.PlotPanel(title="surprise", config=fl.PlotConfig(paths=[
+        fl.PlotSeries(value=f"{SURPRISE}.surprise", label="surprise (mean cell perplexity)"),
+        fl.PlotSeries(value=f"{SURPRISE}.perplexity_max", label="largest cell perplexity"),
+    ]))
+    scene = fl.ThreeDeePanel(title="trajectory", config=fl.ThreeDeeConfig(
+        follow_tf=ROBOT_FRAME, topics={POSE: fl.BaseRendererPoseTopicSettings(visible=True)},
+    ))
+    layout = fl.Layout(content=fl.SplitContainer(direction="row", items=[
+        fl.SplitItem(proportion=2, content=fl.SplitContainer(direction="column", items=[
+            fl.SplitItem(proportion=2, content=image), fl.SplitItem(content=perplexity),
+        ])),
+        fl.SplitItem(proportion=2, content=fl.SplitContainer(direction="column", items=[
+            fl.SplitItem(content=plot), fl.SplitItem(content=scene),
+        ])),
+    ]))
+    path = Path(folder) / LAYOUT_FILE
+    with atomic_path(path) as tmp:
+        tmp.write_text(layout.to_json())
+    return path
 
 
 def _timestamp(time_ns: int):

@@ -32,7 +32,7 @@ from curiosity_cli.drive.driver import RUN_LOG, Outcome, Outputs, StopRequest, p
 from curiosity_cli.drive.frames_table import FRAMES_CSV, FRAMES_PARQUET
 from curiosity_cli.drive.jsonlines import JsonLines
 from curiosity_cli.drive.link import LinkTiming, RobotLink
-from curiosity_cli.drive.mission import MISSION_FILE, MissionFile
+from curiosity_cli.drive.mission import LAYOUT_FILE, MISSION_FILE, MissionFile, write_layout
 from curiosity_cli.drive.overlay import check_video_out
 from curiosity_cli.drive.pipeline import CuriosityPipeline, warm_up
 from curiosity_cli.drive.sim import Body, Pose
@@ -130,13 +130,13 @@ def check_run_folder(out: Path | None, *, force: bool = False) -> None:
 
 #: The files a drive writes at the top of its run folder (besides the folder lock).
 RUN_FILES = (
-    RUN_LOG, "config.yaml", "provenance.yaml", "timeline.png", "timeline.pdf", MISSION_FILE, FRAMES_PARQUET, FRAMES_CSV,
-    TRAJECTORY_FILE,
+    RUN_LOG, "config.yaml", "provenance.yaml", "timeline.png", "timeline.pdf", MISSION_FILE, LAYOUT_FILE, FRAMES_PARQUET,
+    FRAMES_CSV, TRAJECTORY_FILE,
 )
 
 #: What a drive leaves for a reader, named on its last line: a replay's timeline, the mission file Foxglove
-#: opens, the frames table, and the trajectory where frames have a pose.
-PRODUCTS = ("timeline.png", MISSION_FILE, FRAMES_PARQUET, TRAJECTORY_FILE)
+#: opens and its layout, the frames table, and the trajectory where frames have a pose.
+PRODUCTS = ("timeline.png", MISSION_FILE, LAYOUT_FILE, FRAMES_PARQUET, TRAJECTORY_FILE)
 
 #: Its folders of frames: ``png_every``'s annotated ones, and a replay's most surprising.
 FRAME_FOLDERS = ("frames", "surprising")
@@ -445,7 +445,8 @@ def drive_session(
         )
         robot = mission = None
         try:
-            mission = MissionFile(out / MISSION_FILE, live_port=foxglove)
+            mission = MissionFile(out / MISSION_FILE, live_port=foxglove, metadata=_run_metadata(out))
+            write_layout(out)
             if mission.port is not None:
                 on_status(f"live view: open ws://127.0.0.1:{mission.port} in Foxglove")
             if port is not None:
@@ -499,6 +500,18 @@ def drive_session(
             log.close()
     products = tuple(name for name in PRODUCTS if (out / name).is_file())
     return dataclasses.replace(outcome, products=products, log=out / RUN_LOG), out
+
+
+def _run_metadata(out: Path) -> dict[str, dict[str, str]]:
+    """The run's config and provenance (as :func:`~curiosity_cli.drive.driver.prepare_folder` wrote them) as a
+    mission file's metadata records: ``config`` holds the YAML, ``provenance`` each of its lines' value."""
+    import yaml
+
+    provenance = yaml.safe_load((out / "provenance.yaml").read_text())
+    return {
+        "config": {"config.yaml": (out / "config.yaml").read_text()},
+        "provenance": {str(key): str(value) for key, value in provenance.items()},
+    }
 
 
 def _write_tables(out: Path) -> None:

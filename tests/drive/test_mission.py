@@ -29,6 +29,7 @@ from drive_processes import CURIOSITY, START_SECONDS, read_log
 pytest.importorskip("rosbags")
 pytest.importorskip("foxglove")
 from mcap.reader import make_reader  # noqa: E402
+from mcap.records import Schema  # noqa: E402
 from mcap_protobuf.decoder import DecoderFactory  # noqa: E402
 from rosbags.rosbag2 import StoragePlugin, Writer  # noqa: E402
 from rosbags.typesys import Stores, get_typestore  # noqa: E402
@@ -148,19 +149,33 @@ def frame_records(out: Path) -> list[dict]:
 
 
 def decoded(mission: Path) -> dict[str, list]:
-    """Every message of a mission file by topic: (schema name, log time, decoded message), protobuf
-    through the mcap project's decoder from the schemas the file embeds, JSON as JSON."""
+    """Every message of a mission file by topic: (schema name, log time, decoded message), each through the
+    mcap project's protobuf decoder from the schema the file embeds (every channel is protobuf)."""
     by_topic: dict[str, list] = {}
     protobuf = DecoderFactory()
     with mission.open("rb") as file:
         for schema, channel, message in make_reader(file).iter_messages():
-            if channel.message_encoding == "json":
-                assert schema.encoding == "jsonschema"
-                body = json.loads(message.data)
-            else:
-                body = protobuf.decoder_for(channel.message_encoding, schema)(message.data)
+            assert channel.message_encoding == "protobuf" and schema.encoding == "protobuf", channel.topic
+            body = protobuf.decoder_for(channel.message_encoding, schema)(message.data)
             by_topic.setdefault(channel.topic, []).append((schema.name, message.log_time, body))
     return by_topic
+
+
+def contents(mission: Path) -> tuple[list, dict]:
+    """A mission file's messages (topic, log time, bytes) in order, and its metadata but the moment and the command
+    line of the run (``provenance``'s ``started`` and ``command``), which two runs of the same replay do not share."""
+    with mission.open("rb") as file:
+        reader = make_reader(file)
+        messages = [(channel.topic, message.log_time, message.data) for _, channel, message in reader.iter_messages()]
+        metadata = {record.name: dict(record.metadata) for record in reader.iter_metadata()}
+    for moment in ("started", "command"):
+        metadata["provenance"].pop(moment)
+    return messages, metadata
+
+
+def fields(message) -> dict:
+    """A decoded protobuf message's fields by name, those at their default (zero) included."""
+    return {field.name: getattr(message, field.name) for field in message.DESCRIPTOR.fields}
 
 
 @pytest.fixture(scope="module")
@@ -170,7 +185,7 @@ def replayed(tmp_path_factory) -> Path:
     bag = write_ros2_mission(folder / "bag", mission_frames(12))
     result = replay(bag, folder / "out")
     assert result.exit_code == 0, result.output
-    assert "wrote timeline.png, mission.mcap, frames.parquet, trajectory.png in" in result.output
+    assert "wrote timeline.png, mission.mcap, mission.layout.json, frames.parquet, trajectory.png in" in result.output
     assert "poses from /odom: 24 messages" in result.output
     return folder / "out"
 
@@ -186,6 +201,7 @@ def test_the_mission_file_decodes_with_foxglove_schemas_and_agrees_with_the_log(
         "/curiosity/cells": ("foxglove.ImageAnnotations", 12),
         "/curiosity/command": ("curiosity.Command", 12),
         "/pose": ("foxglove.PoseInFrame", 12),
+        "/tf": ("foxglove.FrameTransforms", 12),
     }
     times = [START + i * PERIOD for i in range(12)]
     for rows in channels.values():
@@ -194,14 +210,14 @@ def test_the_mission_file_decodes_with_foxglove_schemas_and_agrees_with_the_log(
         assert image.format == "jpeg" and image.timestamp.ToNanoseconds() == record["header_time_ns"]
         assert cv2.imdecode(np.frombuffer(image.data, np.uint8), cv2.IMREAD_COLOR).shape == (120, 160, 3)
     for record, (_, _, surprise) in zip(records, channels["/curiosity/surprise"]):
-        assert surprise == {"frame": record["frame"], **frame_summary(record)}
+        assert fields(surprise) == {"frame": record["frame"], **frame_summary(record)}
     for record, (_, _, grid) in zip(records, channels["/curiosity/perplexity"]):
         assert (grid.width, grid.height, grid.encoding) == (4, 4, "32FC1")
         values = np.frombuffer(grid.data, "<f4").reshape(4, 4)
         np.testing.assert_array_equal(values, np.asarray(record["perplexity"], np.float32))
     for record, (_, _, command) in zip(records, channels["/curiosity/command"]):
-        assert command == {"frame": record["frame"], "target_row": record["target"][0],
-                           "target_col": record["target"][1], **record["command"]}
+        assert fields(command) == {"frame": record["frame"], "target_row": record["target"][0],
+                                   "target_col": record["target"][1], **record["command"]}
     for record, (_, _, cells) in zip(records, channels["/curiosity/cells"]):
         corners = [(p.x, p.y) for p in cells.points[0].points]
         row, col = record["target"]
@@ -210,6 +226,40 @@ def test_the_mission_file_decodes_with_foxglove_schemas_and_agrees_with_the_log(
         p = record["pose"]
         assert pose.frame_id == "odom"
         assert (pose.pose.position.x, pose.pose.position.y, pose.pose.orientation.z) == (p["x"], p["y"], p["qz"])
+    # the transforms link the pose's frame to the robot (the pose itself) and the robot to the camera (the default)
+    for record, (_, _, tf) in zip(records, channels["/tf"]):
+        robot, camera = tf.transforms
+        assert (robot.parent_frame_id, robot.child_frame_id, camera.parent_frame_id, camera.child_frame_id) == (
+            "odom", "base_link", "base_link", "camera"
+        )
+        assert (robot.translation.x, robot.rotation.z) == (record["pose"]["x"], record["pose"]["qz"])
+        assert (camera.translation.x, camera.rotation.w) == (0.0, 1.0)
+
+
+@pytest.mark.slow
+def test_the_mission_file_holds_the_runs_config_and_provenance_and_a_layout_beside_it(replayed):
+    with (replayed / "mission.mcap").open("rb") as file:
+        metadata = {record.name: record.metadata for record in make_reader(file).iter_metadata()}
+    assert metadata["config"] == {"config.yaml": (replayed / "config.yaml").read_text()}
+    assert metadata["provenance"]["seed"] == "0" and metadata["provenance"]["curiosity"]
+    layout = json.loads((replayed / "mission.layout.json").read_text())
+    panels = []
+
+    def walk(content):
+        if content["type"] == "split":
+            for item in content["items"]:
+                walk(item["content"])
+        else:
+            panels.append(content)
+
+    walk(layout["content"])
+    # each panel shows a channel the file holds
+    held = set(decoded(replayed / "mission.mcap"))
+    assert [panel["panelType"] for panel in panels] == ["Image", "Image", "Plot", "ThreeDee"]
+    assert {panels[0]["config"]["imageMode"]["imageTopic"], panels[1]["config"]["imageMode"]["imageTopic"]} <= held
+    assert set(panels[0]["config"]["imageMode"]["annotations"]) <= held
+    assert {path["value"].split(".")[0] for path in panels[2]["config"]["paths"]} <= held
+    assert panels[3]["config"]["followTf"] == "base_link" and set(panels[3]["config"]["topics"]) <= held
 
 
 @pytest.mark.slow
@@ -289,7 +339,7 @@ def test_a_bag_without_odometry_has_frames_without_pose_and_no_trajectory(tmp_pa
     assert "frames have no pose: " in result.output and "has no odometry topic" in result.output
     assert all(r["pose"] is None for r in frame_records(tmp_path / "out"))
     assert not (tmp_path / "out" / "trajectory.png").exists()
-    assert "wrote timeline.png, mission.mcap, frames.parquet in" in result.output
+    assert "wrote timeline.png, mission.mcap, mission.layout.json, frames.parquet in" in result.output
     assert "/pose" not in decoded(tmp_path / "out" / "mission.mcap")
 
 
@@ -330,7 +380,7 @@ def test_an_mcap_of_foxglove_images_replays_as_the_same_frames_in_a_ros_bag(tmp_
     for column in ("time_ns", "header_time_ns", "surprise", "refined", "words", "target_row", "target_col"):
         assert ours[column].tolist() == ros[column].tolist(), column
     # its poses as a bag's odometry: the nearest in time (7 ms after), its frame, the identity where none is given
-    assert "wrote timeline.png, mission.mcap, frames.parquet, trajectory.png in" in result.output
+    assert "wrote timeline.png, mission.mcap, mission.layout.json, frames.parquet, trajectory.png in" in result.output
     assert ours["pose_frame"].eq("map").all() and ours["pose_gap_ms"].eq(7.0).all() and ours["yaw"].eq(0.0).all()
     assert ours["x"].tolist() == pytest.approx([0.1 * i for i in range(12)]) and ours["y"].eq(0.0).all()
 
@@ -359,7 +409,7 @@ def test_a_simulated_drive_writes_its_mission_with_the_robots_pose(tmp_path):
         "--out", str(tmp_path / "out"), *GRID,
     ])
     assert result.exit_code == 0, result.output
-    assert "wrote mission.mcap, frames.parquet, trajectory.png in" in result.output
+    assert "wrote mission.mcap, mission.layout.json, frames.parquet, trajectory.png in" in result.output
     table = api.open_mission(tmp_path / "out")
     assert table["pose_source"].eq("robot").all() and table["x"].notna().all()
     live_times = table["time_ns"].tolist()
@@ -394,13 +444,18 @@ def test_the_live_view_serves_the_surprise_over_foxglove_websocket_and_changes_n
                     if isinstance(message, str):
                         control = json.loads(message)
                         if control["op"] == "advertise":
-                            ids = {c["topic"]: c["id"] for c in control["channels"]}
-                            assert {"/camera/image", "/curiosity/surprise", "/pose"} <= set(ids)
+                            channels = {c["topic"]: c for c in control["channels"]}
+                            assert {"/camera/image", "/curiosity/surprise", "/pose", "/tf"} <= set(channels)
+                            surprise = channels["/curiosity/surprise"]
+                            # decoded from the schema the server advertises, by the mcap project's decoder
+                            schema = Schema(id=1, name=surprise["schemaName"], encoding=surprise["schemaEncoding"],
+                                            data=base64.b64decode(surprise["schema"]))
+                            decode = DecoderFactory().decoder_for(surprise["encoding"], schema)
                             socket.send(json.dumps({"op": "subscribe", "subscriptions": [
-                                {"id": 7, "channelId": ids["/curiosity/surprise"]}]}))
+                                {"id": 7, "channelId": surprise["id"]}]}))
                     else:
                         assert message[0] == 1 and struct.unpack_from("<I", message, 1)[0] == 7  # message data, ours
-                        received.append((struct.unpack_from("<Q", message, 5)[0], json.loads(message[13:])))
+                        received.append((struct.unpack_from("<Q", message, 5)[0], fields(decode(message[13:]))))
             process.wait(timeout=START_SECONDS * 3)
         finally:
             if process.poll() is None:
@@ -414,7 +469,8 @@ def test_the_live_view_serves_the_surprise_over_foxglove_websocket_and_changes_n
         record = records[body["frame"]]
         assert log_time == record["time_ns"] and body == {"frame": body["frame"], **frame_summary(record)}
     subprocess.run([*command, "--out", str(tmp_path / "alone")], check=True, capture_output=True)
-    assert (tmp_path / "live" / "mission.mcap").read_bytes() == (tmp_path / "alone" / "mission.mcap").read_bytes()
+    live, alone = (contents(tmp_path / name / "mission.mcap") for name in ("live", "alone"))
+    assert live == alone and len(live[0]) == 7 * 150  # seven channels a frame
     assert Counter(r["event"] for r in read_log(tmp_path / "live"))["frame"] == 150
 
 
