@@ -45,9 +45,18 @@ def drive_yaml(config, seed: int) -> str:
     """
     data = to_dict(config)
     return (
-        f"# the settings of {config.name}'s config that this drive ran with (its maps, exploration and labels are not used)\n"
+        f"# the settings of {config.name}'s config {_DRIVE_MARK} (its maps, exploration and labels are not used)\n"
         + dump_yaml({"seed": seed, **{key: data[key] for key in DRIVE_SECTIONS}})
     )
+
+
+def is_drive_yaml(text: str) -> bool:
+    """Whether a saved config's ``text`` is a drive run folder's (:func:`drive_yaml`), not an experiment's."""
+    first = text.partition("\n")[0]
+    return first.startswith("# the settings of ") and _DRIVE_MARK in first
+
+
+_DRIVE_MARK = "that this drive ran with"
 
 
 def saved_yaml(config) -> str:

@@ -11,11 +11,12 @@ already there (:func:`check_saved_config`).
 
 from __future__ import annotations
 
+import contextlib
 import typing
 from pathlib import Path
 
 from curiosity_cli.config import ExperimentConfig, load_config
-from curiosity_cli.config_yaml import saved_yaml, to_dict
+from curiosity_cli.config_yaml import is_drive_yaml, saved_yaml, to_dict
 from curiosity_cli.errors import RERUN, ConfigError
 from curiosity_cli.experiment.layout import ExperimentFolder
 from curiosity_cli.experiment.recipes import SELECTION_KEYS, differences
@@ -36,6 +37,12 @@ def load_saved_config(folder: str | Path, overrides: typing.Iterable[str] = ()) 
     saved = ExperimentFolder(folder).config
     if not saved.is_file():
         raise ConfigError(f"{display_path(saved)}: not found; {RERUN} makes the experiment", rerun="explore", force=False)
+    with contextlib.suppress(OSError, UnicodeDecodeError):  # an unreadable file is load_config's to name
+        if is_drive_yaml(saved.read_text()):
+            raise ConfigError(
+                f"{display_path(Path(folder))}: a drive's run folder, not an experiment; its frames are read with "
+                "curiosity_cli.api.open_mission (frames.parquet), its timeline drawn by curiosity drive --timeline"
+            )
     config = load_config(saved)  # the file alone first: a broken one is named, not an override that met it
     return load_config(saved, overrides) if overrides else config
 

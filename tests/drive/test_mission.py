@@ -332,6 +332,21 @@ def test_open_mission_of_a_folder_that_is_no_run_is_one_error(tmp_path):
 
 
 @pytest.mark.slow
+def test_a_drive_folder_given_as_an_experiment_points_to_open_mission_and_force_is_the_apis_word(replayed):
+    """Issue 62, item 4: open_experiment on a drive folder said ``config.yaml: name: missing key``, and the API told
+    a Python caller to use ``--force``."""
+    from curiosity_cli.errors import CuriosityError
+
+    says = f"{replayed}: a drive's run folder, not an experiment; its frames are read with curiosity_cli.api.open_mission"
+    with pytest.raises(CuriosityError, match=re.escape(says)):
+        api.open_experiment(replayed)
+    evaluated = runner.invoke(app, ["evaluate", str(replayed)])
+    assert evaluated.exit_code == 1 and f"Error: {says}" in evaluated.stderr
+    with pytest.raises(CuriosityError, match=r"holds an earlier run \(log.jsonl and \d+ more\); give a new folder, or `force` to "):
+        api.drive(camera=str(replayed / "mission.mcap"), out=replayed, dry_run=True, max_frames=1)
+
+
+@pytest.mark.slow
 def test_a_bag_without_odometry_has_frames_without_pose_and_no_trajectory(tmp_path):
     bag = write_ros2_mission(tmp_path / "bag", mission_frames(3), odometry=())
     result = replay(bag, tmp_path / "out")
