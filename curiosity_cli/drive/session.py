@@ -44,11 +44,8 @@ from curiosity_cli.files import display_path
 from curiosity_cli.paths import DEFAULT_RESULTS
 
 
-def open_camera(
-    camera: str, topic: str | None = None, odom_topic: str | None = None, ros_domain_id: int | None = None
-):
-    """A ROS 2 image topic's frames (``ros2:/TOPIC``, :class:`~curiosity_cli.drive.ros2.Ros2Camera`), a bag's
-    (:class:`~curiosity_cli.drive.bags.BagCamera`) or an OpenCV source's.
+def open_camera(camera: str, topic: str | None = None, odom_topic: str | None = None):
+    """A bag's frames (:class:`~curiosity_cli.drive.bags.BagCamera`) or an OpenCV source's.
 
     Raises
     ------
@@ -56,10 +53,7 @@ def open_camera(
         As the camera.
     """
     from curiosity_cli.drive.bags import BagCamera, is_bag
-    from curiosity_cli.drive.ros2 import PREFIX, Ros2Camera, is_ros2
 
-    if is_ros2(camera):
-        return Ros2Camera(camera[len(PREFIX):], odom_topic, ros_domain_id)
     if is_bag(camera):
         return BagCamera(camera, topic, odom_topic)
     return cameras.OpenCVCamera(camera)
@@ -68,8 +62,7 @@ def open_camera(
 def check_replay_options(
     camera: str, *, topic: str | None = None, odom_topic: str | None = None, strict: bool = False, clock: str = "bag"
 ) -> None:
-    """Refuse a bag replay's options for a ``camera`` that is not a bag (a device, a video, a stream, ``sim``); a
-    ROS 2 topic (``ros2:/TOPIC``) takes ``odom_topic`` alone.
+    """Refuse a bag replay's options for a ``camera`` that is not a bag (a device, a video, a stream, ``sim``).
 
     Each would be ignored there: a video has no topics, no damaged messages to skip and no
     header stamps, so a run would not do what the command says.
@@ -80,19 +73,15 @@ def check_replay_options(
         Naming the first such option given.
     """
     from curiosity_cli.drive.bags import is_bag
-    from curiosity_cli.drive.ros2 import is_ros2
 
-    ros = is_ros2(camera)
-    if camera != "sim" and not ros and is_bag(camera):
+    if camera != "sim" and is_bag(camera):
         return
     not_a_bag = f"camera {camera!r} is not a bag"
     if topic is not None:
-        named = "; a ROS 2 camera's topic is the camera's own name" if ros else "; a topic names a bag's images"
-        raise ParameterError(f"topic: got {topic!r}, but {not_a_bag}{named}", parameter="topic")
-    if odom_topic is not None and not ros:
+        raise ParameterError(f"topic: got {topic!r}, but {not_a_bag}; a topic names a bag's images", parameter="topic")
+    if odom_topic is not None:
         raise ParameterError(
-            f"odom_topic: got {odom_topic!r}, but {not_a_bag} or a ROS 2 topic; it names their odometry",
-            parameter="odom_topic",
+            f"odom_topic: got {odom_topic!r}, but {not_a_bag}; it names a bag's odometry", parameter="odom_topic"
         )
     if clock != "bag":
         raise ParameterError(
