@@ -31,6 +31,7 @@ SMOKED = {
     "bench_label_profile.py": "of the stage's wall time",
     "bench_long_mission.py": "timeline:",
     "bench_pipeline.py": "batch reference, 1 sweeps",
+    "bench_replay.py": "frames/s, ratio",  # HEAD against itself, each in a `git worktree` of the repository's .git
     "bench_scaleout.py": "overhead per task",
     "bench_study_reuse.py": "--reuse",
     "check_drive_surprise.py": "target <= 1.5: met",
