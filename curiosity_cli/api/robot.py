@@ -79,6 +79,7 @@ def _check_start(start) -> None:
 
 def drive(
     *, serial: str | None = None, baud: int | None = None, dry_run: bool = False, camera: str = "0",
+    cmd_vel: str | None = None, cmd_vel_stamped: bool = False, ros_domain_id: int | None = None,
     topic: str | None = None, odom_topic: str | None = None, foxglove: int | None = None, sim_map: str | None = None, start: tuple[float, float] | None = None,
     heading_deg: float | None = None, config: Config = ROBOT_CONFIG, overrides: typing.Iterable[str] = (),
     seed: int | None = None, out: Path | None = None, force: bool = False, clock: str = "bag", strict: bool = False,
@@ -97,7 +98,11 @@ def drive(
         No serial port: commands are computed and logged, not sent (with
         ``camera="sim"`` the robot is simulated in this process).
     camera : str
-        A device index, a video file, a stream URL, a recorded bag, or ``sim``.
+        A device index, a video file, a stream URL, a recorded bag, a ROS 2 image topic ``ros2:/TOPIC``, or ``sim``.
+    cmd_vel : str, optional
+        A ROS 2 robot's velocity topic, the robot instead of ``serial`` (the config's ``drive.port`` is not used).
+    ros_domain_id : int, optional
+        With a ROS 2 camera or ``cmd_vel``: the ROS domain, 0..232; default ``ROS_DOMAIN_ID``, else 0.
     sim_map : str, optional
         With ``camera="sim"`` (and only then): the simulated robot's map.
     start, heading_deg : optional
@@ -145,6 +150,7 @@ def drive(
     camera = str(camera) if isinstance(camera, int) and not isinstance(camera, bool) else name_or_path(camera, "camera")
     if dry_run and serial is not None:
         raise UsageError("dry_run: `dry_run` sends nothing; leave out `serial`", parameter="dry_run")
+    _check_ros(camera, cmd_vel, cmd_vel_stamped, ros_domain_id, serial=serial, dry_run=dry_run)
     if (camera == "sim") != (sim_map is not None):
         raise UsageError("sim_map: `camera` sim and `sim_map` go together", parameter="sim_map")
     if (start is not None or heading_deg is not None) and not (dry_run and camera == "sim"):
@@ -154,8 +160,8 @@ def drive(
             parameter=parameter,
         )
     resolved = load(config, overrides)
-    port = serial or resolved.drive.port
-    if not dry_run and port is None:
+    port = None if cmd_vel is not None else serial or resolved.drive.port
+    if not dry_run and port is None and cmd_vel is None:
         raise UsageError(
             "serial: give the robot's port with `serial` (or drive.port in the config), or `dry_run`", parameter="serial"
         )
@@ -171,11 +177,38 @@ def drive(
             start_at = _start(start, map_data.image.shape[:2])
     return drive_session(
         resolved, seed=resolved.seed if seed is None else seed, camera=camera, topic=topic, odom_topic=odom_topic,
-        foxglove=foxglove,
+        foxglove=foxglove, cmd_vel=cmd_vel, cmd_vel_stamped=cmd_vel_stamped, ros_domain_id=ros_domain_id,
         port=None if dry_run else port, baud=baud, sim_map=map_data, start=start_at, heading_deg=heading_deg or 0.0,
         out=out, force=force, strict=strict, clock=clock, video_out=video_out, png_every=png_every, max_frames=max_frames,
         on_status=on_status, on_frame=on_frame, on_replay=on_replay,
     )
+
+
+def _check_ros(camera: str, cmd_vel, cmd_vel_stamped, ros_domain_id, *, serial: str | None, dry_run: bool) -> None:
+    """The ROS 2 arguments of :func:`drive`: each of the right type, and only with what it goes with."""
+    from curiosity_cli.checks import check_int
+    from curiosity_cli.drive.ros2 import MAX_DOMAIN_ID, is_ros2
+
+    if cmd_vel is not None:
+        name_text(cmd_vel, "cmd_vel")
+        if serial is not None:
+            raise UsageError("cmd_vel: `cmd_vel` is the robot, a ROS 2 one; leave out `serial`", parameter="cmd_vel")
+        if dry_run:
+            raise UsageError("dry_run: `dry_run` sends nothing; leave out `cmd_vel`", parameter="dry_run")
+        if camera == "sim":
+            raise UsageError(
+                "cmd_vel: `camera` sim views the simulated robot, not a ROS 2 one; give the robot's camera",
+                parameter="cmd_vel",
+            )
+    if boolean(cmd_vel_stamped, "cmd_vel_stamped") and cmd_vel is None:
+        raise UsageError("cmd_vel_stamped: goes with `cmd_vel`, the topic it stamps", parameter="cmd_vel_stamped")
+    if ros_domain_id is not None:
+        check_int("ros_domain_id", ros_domain_id, 0, MAX_DOMAIN_ID)
+        if cmd_vel is None and not is_ros2(camera):
+            raise UsageError(
+                "ros_domain_id: goes with a ROS 2 `camera` (ros2:/TOPIC) or `cmd_vel`; neither is given",
+                parameter="ros_domain_id",
+            )
 
 
 def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:

@@ -55,9 +55,12 @@ def drive(
     serial: str = typer.Option(None, "--serial", metavar="PORT", help="Serial device or pyserial URL of the robot; default the config's drive.port."),
     baud: int = typer.Option(None, "--baud", min=1, help="Serial speed; default the config's drive.baud (115200)."),
     dry_run: bool = typer.Option(False, "--dry-run", help="No serial port: commands are computed and logged, not sent (with --camera sim the robot is simulated in this process, one frame period per command)."),
-    camera: str = typer.Option("0", "--camera", help="A device index, a video file, a stream URL, a recorded bag (ROS 1 .bag, ROS 2 bag folder, .mcap; needs the bags extra), or 'sim' for the simulated robot's camera."),
+    camera: str = typer.Option("0", "--camera", help="A device index, a video file, a stream URL, a recorded bag (ROS 1 .bag, ROS 2 bag folder, .mcap; needs the bags extra), a live ROS 2 image topic ros2:/TOPIC (CompressedImage if it ends in /compressed, else Image; needs the ros2 extra), or 'sim' for the simulated robot's camera."),
+    cmd_vel: str = typer.Option(None, "--cmd-vel", metavar="TOPIC", help="Steer a ROS 2 robot instead of --serial: publish each command as geometry_msgs/msg/Twist on TOPIC (e.g. /cmd_vel), and each frame's surprise and target on /curiosity/surprise and /curiosity/target; needs the ros2 extra."),
+    cmd_vel_stamped: bool = typer.Option(False, "--cmd-vel-stamped", help="With --cmd-vel: publish geometry_msgs/msg/TwistStamped instead."),
+    ros_domain_id: int = typer.Option(None, "--ros-domain-id", min=0, max=232, help="With a ros2: camera or --cmd-vel: the ROS 2 domain; default ROS_DOMAIN_ID, else 0. The network is Cyclone DDS's: CYCLONEDDS_URI."),
     topic: str = typer.Option(None, "--topic", help="With a bag: its image topic; may be left out when it has one."),
-    odom_topic: str = typer.Option(None, "--odom-topic", help="With a bag: its nav_msgs/msg/Odometry topic, whose nearest pose in time each frame gets (frames.parquet, mission.mcap, trajectory.png); default the bag's only one."),
+    odom_topic: str = typer.Option(None, "--odom-topic", help="With a bag: its nav_msgs/msg/Odometry topic, whose nearest pose in time each frame gets (frames.parquet, mission.mcap, trajectory.png); default the bag's only one. With a ros2: camera: the robot's odometry topic, matched by header stamps."),
     foxglove: int = typer.Option(None, "--foxglove", min=0, max=65535, metavar="PORT", help="Serve the drive live to Foxglove over its WebSocket protocol on localhost at PORT (8765 is Foxglove's default; 0: any free one, printed)."),
     sim_map: str = typer.Option(None, "--sim-map", help="With --camera sim: the map the simulated robot is on (name or dataset YAML)."),
     start: str = typer.Option(None, "--start", metavar="ROW,COL", help="With --dry-run --camera sim: start position ROW,COL in map pixels; default the map's centre."),
@@ -107,7 +110,8 @@ def drive(
 
     with bar:
         outcome, folder = api.drive(
-            serial=serial, baud=baud, dry_run=dry_run, camera=camera, topic=topic, odom_topic=odom_topic,
+            serial=serial, baud=baud, dry_run=dry_run, camera=camera, cmd_vel=cmd_vel, cmd_vel_stamped=cmd_vel_stamped,
+            ros_domain_id=ros_domain_id, topic=topic, odom_topic=odom_topic,
             foxglove=foxglove, sim_map=sim_map,
             start=_parse_start(start), heading_deg=heading_deg, config=config, overrides=overrides, seed=seed, out=out,
             force=force, clock=clock.value, strict=strict, video_out=video_out, png_every=png_every, max_frames=max_frames,

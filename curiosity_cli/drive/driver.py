@@ -134,8 +134,8 @@ def run(
         ``read()`` returns ``(frame, capture_time)`` or None; ``close()``.
     robot
         A :class:`~curiosity_cli.drive.link.RobotLink`, a
-        :class:`~curiosity_cli.drive.camera.LockstepRobot`, or None (dry run: commands
-        are logged, not sent).
+        :class:`~curiosity_cli.drive.ros2.Ros2Robot` (which also gets each frame's record: ``publish_frame``), a
+        :class:`~curiosity_cli.drive.camera.LockstepRobot`, or None (dry run: commands are logged, not sent).
     outputs : Outputs
     log : JsonLines
     max_frames : int or None
@@ -225,6 +225,8 @@ def run(
             }
             if mission is not None:
                 mission.frame(pending, image)
+            if hasattr(robot, "publish_frame"):  # a ROS 2 robot's network sees each frame's surprise and target too
+                robot.publish_frame(pending)
             png_now = outputs.png_every and frames % outputs.png_every == 0
             if video is not None or png_now:
                 annotated = draw_overlay(image, decision.scores, decision.target, caption_for(frames, command))

@@ -4,7 +4,8 @@ A bag's ``nav_msgs/msg/Odometry`` messages (or a Foxglove recording's ``foxglove
 are read once, before the first frame (they
 are small: a pose and a twist each), and every frame is given the pose recorded nearest
 its own bag time, with the gap between the two, so surprise can be put on a map of where
-the robot went and a reader can see how far to trust the match.
+the robot went and a reader can see how far to trust the match. A live ROS 2 topic's odometry
+(:class:`RecentPoses`) is matched the same way, on the messages' header stamps.
 """
 
 from __future__ import annotations
@@ -92,6 +93,31 @@ class Odometry:
         )
 
 
+def message_pose(message) -> tuple[tuple[float, float, float], tuple[float, float, float, float], str]:
+    """(position x, y, z; orientation x, y, z, w; frame id) of a ``nav_msgs/msg/Odometry`` (or ``foxglove.PoseInFrame``)
+    message, as any reader gives it: its ``pose.pose`` and its ``header.frame_id``.
+
+    Raises
+    ------
+    AttributeError
+        A message without those fields.
+    """
+    pose = message.pose.pose
+    position = (float(pose.position.x), float(pose.position.y), float(pose.position.z))
+    orientation = tuple(float(v) for v in (pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w))
+    return position, orientation, message.header.frame_id
+
+
+def pose_problem(position, orientation) -> str | None:
+    """What keeps a pose out: ``damaged`` (a value that is not finite), ``senseless`` (a coordinate beyond
+    :data:`MAX_COORDINATE`, a quaternion of no length), or None for a pose in physical sense."""
+    if not all(math.isfinite(v) for v in (*position, *orientation)):
+        return "damaged"
+    if max(abs(v) for v in position) > MAX_COORDINATE or sum(v * v for v in orientation) < 1e-12:
+        return "senseless"
+    return None
+
+
 def read_odometry(reader, connections) -> tuple[Odometry | None, int, int]:
     """The odometry of ``connections`` of a bag ``reader`` (rosbags' ``AnyReader`` or one like it), how many of
     its messages did not decode and how many held a pose outside physical sense (a coordinate beyond
@@ -109,19 +135,14 @@ def read_odometry(reader, connections) -> tuple[Odometry | None, int, int]:
     damaged = senseless = 0
     for connection, stamp, data in reader.messages(connections=connections):
         try:
-            message = reader.deserialize(data, connection.msgtype)
-            pose = message.pose.pose
-            position = (pose.position.x, pose.position.y, pose.position.z)
-            orientation = (pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
-            frame_id = message.header.frame_id
+            position, orientation, frame_id = message_pose(reader.deserialize(data, connection.msgtype))
         except Exception:  # rosbags' own errors for bytes that are no Odometry: that pose is missing, not the mission
             damaged += 1
             continue
-        if not all(math.isfinite(v) for v in (*position, *orientation)):
-            damaged += 1
-            continue
-        if max(abs(v) for v in position) > MAX_COORDINATE or sum(v * v for v in orientation) < 1e-12:
-            senseless += 1
+        problem = pose_problem(position, orientation)
+        damaged += problem == "damaged"
+        senseless += problem == "senseless"
+        if problem is not None:
             continue
         times.append(stamp)
         positions.append(position)
@@ -131,3 +152,54 @@ def read_odometry(reader, connections) -> tuple[Odometry | None, int, int]:
         return None, damaged, senseless
     odometry = Odometry(np.array(times, np.int64), np.array(positions), np.array(orientations), frame_ids)
     return odometry, damaged, senseless
+
+
+#: Odometry messages a live topic's frames are matched against: the newest ones (50 s at 20 Hz).
+MAX_LIVE_POSES = 1000
+
+
+class RecentPoses:
+    """A live topic's newest odometry, each at its header stamp, and a frame's pose: the nearest to its own stamp.
+
+    A live camera's frames and the robot's odometry carry stamps of the robot's clock; matched on
+    them as a replay matches bag times (:meth:`Odometry.nearest`), within :data:`MAX_POSE_GAP_NS`.
+
+    Attributes
+    ----------
+    kept, damaged, senseless : int
+        Messages kept, and left out as :func:`pose_problem` says.
+    """
+
+    def __init__(self):
+        from collections import deque
+
+        self._poses = deque(maxlen=MAX_LIVE_POSES)
+        self._odometry: Odometry | None = None
+        self.kept = self.damaged = self.senseless = 0
+
+    def add(self, message) -> None:
+        """Keep an odometry message (any object with its fields) at its header stamp, unless :func:`pose_problem`
+        leaves it out."""
+        try:
+            position, orientation, frame_id = message_pose(message)
+            stamp = message.header.stamp
+            time_ns = int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+        except (AttributeError, TypeError, ValueError):
+            self.damaged += 1
+            return
+        problem = pose_problem(position, orientation)
+        self.damaged += problem == "damaged"
+        self.senseless += problem == "senseless"
+        if problem is None:
+            self._poses.append((time_ns, position, orientation, frame_id))
+            self._odometry = None
+            self.kept += 1
+
+    def nearest(self, time_ns: int) -> FramePose | None:
+        """The kept pose nearest ``time_ns`` (:meth:`Odometry.nearest`); None without one within :data:`MAX_POSE_GAP_NS`."""
+        if not self._poses:
+            return None
+        if self._odometry is None:  # made again only once new poses came: a frame asks once, odometry comes often
+            times, positions, orientations, frame_ids = zip(*self._poses)
+            self._odometry = Odometry(np.array(times, np.int64), np.array(positions), np.array(orientations), list(frame_ids))
+        return self._odometry.nearest(time_ns)

@@ -1,10 +1,10 @@
 """Sessions of the two programs, ``curiosity drive`` and ``curiosity simrobot``: what they open, run and close.
 
-:func:`drive_session` opens the camera (an OpenCV source or the simulated camera), the
-robot (the serial link, an in-process simulated robot for a dry run on a map, or none),
-the run folder and its log, runs :func:`~curiosity_cli.drive.driver.run`, and closes what
-it opened whatever happens; a failure before the loop starts is logged as the run's
-``end`` row too, so every log ends with one.
+:func:`drive_session` opens the camera (an OpenCV source, a bag, a ROS 2 topic or the simulated
+camera), the robot (the serial link, a ROS 2 robot's ``cmd_vel``, an in-process simulated robot
+for a dry run on a map, or none), the run folder and its log, runs
+:func:`~curiosity_cli.drive.driver.run`, and closes what it opened whatever happens; a failure
+before the loop starts is logged as the run's ``end`` row too, so every log ends with one.
 
 :func:`simrobot_session` puts a :class:`~curiosity_cli.drive.simrobot.SimRobot` on a new
 pseudo-terminal and serves it until it is told to stop, then closes the terminal and
@@ -44,8 +44,11 @@ from curiosity_cli.files import display_path
 from curiosity_cli.paths import DEFAULT_RESULTS
 
 
-def open_camera(camera: str, topic: str | None = None, odom_topic: str | None = None):
-    """A bag's frames (:class:`~curiosity_cli.drive.bags.BagCamera`) or an OpenCV source's.
+def open_camera(
+    camera: str, topic: str | None = None, odom_topic: str | None = None, ros_domain_id: int | None = None
+):
+    """A ROS 2 image topic's frames (``ros2:/TOPIC``, :class:`~curiosity_cli.drive.ros2.Ros2Camera`), a bag's
+    (:class:`~curiosity_cli.drive.bags.BagCamera`) or an OpenCV source's.
 
     Raises
     ------
@@ -53,7 +56,10 @@ def open_camera(camera: str, topic: str | None = None, odom_topic: str | None = 
         As the camera.
     """
     from curiosity_cli.drive.bags import BagCamera, is_bag
+    from curiosity_cli.drive.ros2 import PREFIX, Ros2Camera, is_ros2
 
+    if is_ros2(camera):
+        return Ros2Camera(camera[len(PREFIX):], odom_topic, ros_domain_id)
     if is_bag(camera):
         return BagCamera(camera, topic, odom_topic)
     return cameras.OpenCVCamera(camera)
@@ -62,7 +68,8 @@ def open_camera(camera: str, topic: str | None = None, odom_topic: str | None = 
 def check_replay_options(
     camera: str, *, topic: str | None = None, odom_topic: str | None = None, strict: bool = False, clock: str = "bag"
 ) -> None:
-    """Refuse a bag replay's options for a ``camera`` that is not a bag (a device, a video, a stream, ``sim``).
+    """Refuse a bag replay's options for a ``camera`` that is not a bag (a device, a video, a stream, ``sim``); a
+    ROS 2 topic (``ros2:/TOPIC``) takes ``odom_topic`` alone.
 
     Each would be ignored there: a video has no topics, no damaged messages to skip and no
     header stamps, so a run would not do what the command says.
@@ -73,15 +80,19 @@ def check_replay_options(
         Naming the first such option given.
     """
     from curiosity_cli.drive.bags import is_bag
+    from curiosity_cli.drive.ros2 import is_ros2
 
-    if camera != "sim" and is_bag(camera):
+    ros = is_ros2(camera)
+    if camera != "sim" and not ros and is_bag(camera):
         return
     not_a_bag = f"camera {camera!r} is not a bag"
     if topic is not None:
-        raise ParameterError(f"topic: got {topic!r}, but {not_a_bag}; a topic names a bag's images", parameter="topic")
-    if odom_topic is not None:
+        named = "; a ROS 2 camera's topic is the camera's own name" if ros else "; a topic names a bag's images"
+        raise ParameterError(f"topic: got {topic!r}, but {not_a_bag}{named}", parameter="topic")
+    if odom_topic is not None and not ros:
         raise ParameterError(
-            f"odom_topic: got {odom_topic!r}, but {not_a_bag}; it names a bag's odometry", parameter="odom_topic"
+            f"odom_topic: got {odom_topic!r}, but {not_a_bag} or a ROS 2 topic; it names their odometry",
+            parameter="odom_topic",
         )
     if clock != "bag":
         raise ParameterError(
@@ -305,6 +316,9 @@ def drive_session(
     seed: int,
     camera: str,
     port: str | None,
+    cmd_vel: str | None = None,
+    cmd_vel_stamped: bool = False,
+    ros_domain_id: int | None = None,
     topic: str | None = None,
     odom_topic: str | None = None,
     foxglove: int | None = None,
@@ -333,16 +347,26 @@ def drive_session(
         Seeds the stream's topic models.
     camera : str
         A device index, a video file, a stream URL, a recorded bag
-        (:mod:`~curiosity_cli.drive.bags`), or ``sim`` for the simulated camera over ``sim_map``.
+        (:mod:`~curiosity_cli.drive.bags`), a ROS 2 image topic ``ros2:/TOPIC``
+        (:mod:`~curiosity_cli.drive.ros2`), or ``sim`` for the simulated camera over ``sim_map``.
     port : str or None
         Serial device or pyserial URL of the robot; None for a dry run (commands are
-        logged, not sent).
+        logged, not sent) or a ROS 2 robot (``cmd_vel``).
+    cmd_vel : str, optional
+        Instead of ``port``: a ROS 2 robot's velocity topic (``/cmd_vel``), each command a
+        ``geometry_msgs/msg/Twist`` (:class:`~curiosity_cli.drive.ros2.Ros2Robot`, which also publishes each frame's
+        surprise and target).
+    cmd_vel_stamped : bool
+        With ``cmd_vel``: ``geometry_msgs/msg/TwistStamped`` instead.
+    ros_domain_id : int, optional
+        The ROS domain of a ROS 2 camera and robot, 0..232; default ``ROS_DOMAIN_ID``, else 0.
     topic : str, optional
         With a bag: its image topic, which may be left out when it has one.
     odom_topic : str, optional
         With a bag: its ``nav_msgs/msg/Odometry`` topic that gives each frame its pose
-        (:mod:`~curiosity_cli.drive.odometry`); default its only one, if it has one. A live
-        robot's frames take their pose from its reported state.
+        (:mod:`~curiosity_cli.drive.odometry`); default its only one, if it has one. With a
+        ROS 2 camera: the robot's odometry topic, none by default. A serial robot's frames
+        take their pose from its reported state.
     foxglove : int, optional
         Serve the mission live over Foxglove's WebSocket protocol on this localhost port
         while it runs (:mod:`~curiosity_cli.drive.mission`; 0: any free port).
@@ -400,7 +424,7 @@ def drive_session(
         ``camera="sim"`` without ``sim_map`` or the other way round; a dry run on
         ``sim_map`` without ``start``; a replay's ``topic``, ``strict`` or ``clock`` with a
         camera that is not a bag (:func:`check_replay_options`); an ``out`` that is not new
-        or empty (:func:`check_run_folder`).
+        or empty (:func:`check_run_folder`); ``cmd_vel`` with ``port`` or the simulated camera.
     UsageError
         A ``video_out`` that is no video file name (:func:`~curiosity_cli.drive.overlay.check_video_out`).
     LinkError
@@ -410,6 +434,13 @@ def drive_session(
     """
     if (camera == "sim") != (sim_map is not None):
         raise ParameterError(f"camera: got {camera!r}; camera 'sim' and a sim_map go together")
+    if cmd_vel is not None and (port is not None or camera == "sim"):
+        robot = f"port {port!r}" if port is not None else "the simulated robot (camera 'sim')"
+        raise ParameterError(f"cmd_vel: got {cmd_vel!r}, but the robot is {robot}; steer one robot", parameter="cmd_vel")
+    if cmd_vel is not None:  # before the camera and the model: the robot opens after both
+        from curiosity_cli.drive.ros2 import require_dds
+
+        require_dds("cmd_vel", cmd_vel)
     d = config.drive
     lockstep = port is None and sim_map is not None
     if lockstep and start is None:
@@ -419,7 +450,7 @@ def drive_session(
     check_replay_options(camera, topic=topic, odom_topic=odom_topic, strict=strict, clock=clock)
     check_run_folder(out, force=force)  # before the camera and the model: a folder in use is the only message
     with stopping_on_signals(StopRequest()) as stop, contextlib.ExitStack() as held:
-        source = None if camera == "sim" else open_camera(camera, topic, odom_topic)
+        source = None if camera == "sim" else open_camera(camera, topic, odom_topic, ros_domain_id)
         if getattr(source, "note", ""):  # a bag read otherwise than named (a recording cut short)
             on_status(source.note)
         if getattr(source, "pose_note", ""):
@@ -440,8 +471,11 @@ def drive_session(
         map_name = None if sim_map is None else sim_map.config.name
         log.write(
             "start", seed=seed, camera=camera, topic=getattr(source, "topic", None), sim_map=map_name, serial=port,
-            dry_run=port is None, **({"bag": bag_fingerprint(camera)} if isinstance(source, BagCamera) else {}),
-            **({"odom_topic": source.odom_topic, "poses": source.pose_note} if isinstance(source, BagCamera) else {}),
+            dry_run=port is None and cmd_vel is None,
+            **({"bag": bag_fingerprint(camera)} if isinstance(source, BagCamera) else {}),
+            **({"odom_topic": source.odom_topic, "poses": source.pose_note} if hasattr(source, "odom_topic") else {}),
+            **({"cmd_vel": cmd_vel} if cmd_vel is not None else {}),
+            **({"ros_domain_id": source.domain_id} if hasattr(source, "domain_id") else {}),
         )
         robot = mission = None
         try:
@@ -454,6 +488,18 @@ def drive_session(
                 robot = RobotLink.open(port, baud or d.baud, timing, log=log.write)
                 on_status(f"connected to {robot.robot_name or 'the robot'} on {port}")
                 log.write("hello", robot=robot.robot_name)
+            elif cmd_vel is not None:
+                from curiosity_cli.drive.ros2 import Ros2Robot
+
+                robot = Ros2Robot(cmd_vel, cmd_vel_stamped, ros_domain_id, keepalive=d.keepalive, log=log.write)
+                on_status(
+                    f"publishing {robot.message_type} on {robot.topic} (ROS domain {robot.domain_id}) to "
+                    f"{robot.subscribers} subscriber{'s' * (robot.subscribers != 1)}"
+                )
+                log.write(
+                    "ros2", cmd_vel=robot.topic, message_type=robot.message_type, ros_domain_id=robot.domain_id,
+                    subscribers=robot.subscribers,
+                )
             elif lockstep:
                 robot = cameras.LockstepRobot(_body(sim_map, start, heading_deg, config), d.sim_frame_interval)
             if camera == "sim":
