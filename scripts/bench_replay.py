@@ -4,7 +4,8 @@ One ROS 2 MCAP bag of 640 x 480 frames is written once (``sensor_msgs/msg/Compre
 JPEG, cut from the reef mosaic along a diagonal, 10 frames a second of bag time). Each
 commit is checked out with ``git worktree`` into a temporary folder and replays it with
 ``curiosity drive --dry-run --camera BAG`` in its own process, imported ahead of this
-checkout's package (``PYTHONPATH``), with this virtual environment. The commits take
+checkout's package (``PYTHONPATH``), with this virtual environment and the commit's own configs
+and data (linked into its shipped package, as a study's clone does). The commits take
 turns, the order swapped each repeat, after an untimed replay each that compiles their
 kernels. A replay's speed is read from its log: frames after the first ``--skip`` (the
 model's arrays grow over the first frames) over the log's seconds between them, so the
@@ -98,6 +99,9 @@ def main() -> None:
                 versions[f"{role} {commit}"] = Path(tmp) / role
                 subprocess.run(["git", "worktree", "add", "--detach", str(Path(tmp) / role), commit], cwd=ROOT,
                                check=True, capture_output=True)
+                # its own configs and data: an editable install maps the shipped ones to this checkout's
+                for shipped in ("configs", "data"):
+                    (Path(tmp) / role / "curiosity_cli" / "shipped" / shipped).symlink_to(Path("..", "..", shipped))
             runs = iter(range(10**6))
             for code in versions.values():  # each version's kernels compiled, untimed
                 replay(code, bag, Path(tmp) / f"run-{next(runs)}", args.skip + 2, 0)
