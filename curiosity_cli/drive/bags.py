@@ -174,8 +174,8 @@ class BagCamera:
         the bag does not have as odometry (``parameter="odom_topic"``).
     """
 
-    #: What the drive's last line says when the frames run out.
-    ending = "end of the bag"
+    #: What ran out when the frames do: the run's outcome is ``end of bag``.
+    kind = "bag"
 
     def __init__(self, source: str, topic: str | None = None, odom_topic: str | None = None):
         try:

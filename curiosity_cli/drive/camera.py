@@ -61,8 +61,8 @@ class OpenCVCamera:
         When OpenCV cannot open the source.
     """
 
-    #: What the drive's last line says when the frames run out.
-    ending = "end of the video"
+    #: What ran out when the frames do: the run's outcome is ``end of video``.
+    kind = "video"
 
     def __init__(self, source: str):
         import cv2

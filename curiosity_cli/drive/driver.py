@@ -97,7 +97,8 @@ def prepare_folder(folder: Path, config: ExperimentConfig, seed: int) -> None:
 
 @dataclass(frozen=True)
 class Outcome:
-    """How a run ended: ``reason`` is ``end of video``, ``max frames``, ``estop``, ``SIGINT`` or ``SIGTERM``."""
+    """How a run ended: ``reason`` is ``end of video`` or ``end of bag`` (the camera's frames ran out), ``max frames``,
+    ``estop``, ``SIGINT`` or ``SIGTERM``."""
 
     reason: str
     frames: int
@@ -189,7 +190,7 @@ def run(
             if got is None:
                 if frames == 0 and skipped:  # nothing replayed is no result, not a quiet one
                     raise CameraError(f"every one of the {skipped} messages held no usable frame; the first: {first_bad}")
-                outcome = Outcome("end of video", frames, camera.ending, None)
+                outcome = Outcome(f"end of {camera.kind}", frames, f"end of the {camera.kind}", None)
                 break
             image, captured, recorded, header, pose = got
             state = robot.state() if robot is not None else None

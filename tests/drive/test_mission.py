@@ -273,6 +273,7 @@ def test_each_frame_gets_the_nearest_odometry_in_time_with_its_gap(replayed):
         assert pose["yaw"] == pytest.approx(0.01 * 2 * i)
         assert pose["gap_ms"] == 7.0
     assert (replayed / "trajectory.png").stat().st_size > 10_000
+    assert read_log(replayed)[-1]["outcome"] == "end of bag"  # issue 62: it was logged as "end of video"
 
 
 @pytest.mark.slow
