@@ -163,6 +163,11 @@ class BagCamera:
     ----------
     odometry : Odometry or None
         The poses frames are given; None: frames have none, and :attr:`pose_note` says why.
+    transforms : Transforms or None
+        The bag's ``/tf_static`` and ``/tf`` (:mod:`~curiosity_cli.drive.transforms`), for the mission file; None
+        without either.
+    image_frame_id : str or None
+        The image messages' frame, once a frame with one is read.
 
     Raises
     ------
@@ -239,9 +244,13 @@ class BagCamera:
         self.messages = images[topic]
         try:
             self.odom_topic, self.odometry, self.pose_note = self._read_odometry(odom_topic, counts, where)
+            self.transforms, frames_note = self._read_transforms(counts)
         except BaseException:
             self.close()
             raise
+        if frames_note:
+            self.pose_note = f"{self.pose_note}; {frames_note}"
+        self.image_frame_id = None  # the image messages' header frame id, once a frame is read
         connections = [c for c in self._reader.connections if c.topic == topic]
         self._messages = self._reader.messages(connections=connections)
         self._index = 0
@@ -278,6 +287,20 @@ class BagCamera:
             f"{MAX_POSE_GAP_NS / 1e9:g} s (none beyond)"
         )
 
+    def _read_transforms(self, counts: dict):
+        """(the bag's :class:`~curiosity_cli.drive.transforms.Transforms` or None, what to know of them or '')."""
+        from curiosity_cli.drive.transforms import DYNAMIC_TOPIC, STATIC_TOPIC, TF_TYPES, read_transforms
+
+        topics = [name for name in (STATIC_TOPIC, DYNAMIC_TOPIC) if counts.get(name, ("", 0))[0] in TF_TYPES]
+        if not topics:
+            return None, ""
+        connections = [c for c in self._reader.connections if c.topic in topics]
+        transforms, damaged, senseless = read_transforms(self._reader, connections)
+        parts = [f"{damaged} damaged messages"] * bool(damaged) + [f"{senseless} transforms outside physical sense"] * bool(senseless)
+        left_out = f" ({' and '.join(parts)} left out)" if parts else ""
+        links = len(transforms.static) + len(transforms.moving)
+        return transforms, f"frames linked by {links} transforms of {' and '.join(topics)}{left_out}"
+
     def read(self) -> Frame | None:
         """The next frame, with its bag time and pose; None after the last.
 
@@ -309,6 +332,8 @@ class BagCamera:
         except BadMessage as exc:
             exc.index, exc.bag_time = index, stamp / 1e9
             raise
+        if self.image_frame_id is None and getattr(getattr(message, "header", None), "frame_id", ""):
+            self.image_frame_id = str(message.header.frame_id).lstrip("/")
         header = getattr(getattr(message, "header", None), "stamp", None)
         header = None if header is None else int(header.sec) * 1_000_000_000 + int(header.nanosec)
         pose = None if self.odometry is None else self.odometry.nearest(stamp)

@@ -18,10 +18,13 @@ live camera. The channels, per frame:
 - :data:`COMMAND` ``curiosity.Command``: the target cell and the velocity command;
 - :data:`POSE` ``foxglove.PoseInFrame``: the frame's pose, where it has one;
 - :data:`TRANSFORMS` ``foxglove.FrameTransforms``: what links the pose's frame, the robot and
-  the camera for the 3D panel: the pose as the transform from its frame (e.g. ``odom``) to
-  :data:`ROBOT_FRAME`, where the frame has one, and :data:`CAMERA_MOUNT` from the robot to the
-  camera, a stated default (the camera at the robot's origin, looking along its x axis),
-  with every frame so that a reader that seeks finds it.
+  the camera for the 3D panel, with every frame so that a reader that seeks finds it. From a
+  recording with ``/tf_static`` or ``/tf`` (:mod:`~curiosity_cli.drive.transforms`): its
+  transforms at the frame's time, and the image messages' frame linked to
+  :data:`CAMERA_FRAME` as the same place. Without: :data:`CAMERA_MOUNT` from
+  :data:`ROBOT_FRAME` to the camera, a stated default (the camera at the robot's origin and
+  axes). Either way the pose, as the transform from its frame (e.g. ``odom``) to
+  :data:`ROBOT_FRAME`, where the frame has one and the recording does not place the robot itself.
 
 The run's config and provenance are the file's metadata (``config``, ``provenance``), and
 :func:`write_layout` writes a Foxglove layout for the file beside it. Every number comes
@@ -97,6 +100,10 @@ class MissionFile:
         port (0: any free one, :attr:`port` says which) while the drive runs.
     metadata : dict of str to dict of str to str, optional
         MCAP metadata records, by name (a drive's: ``config`` and ``provenance``).
+    recording : optional
+        The camera, when it is a recording with coordinate frames: its ``transforms``
+        (:class:`~curiosity_cli.drive.transforms.Transforms` or None) and ``image_frame_id``
+        (str or None, known once a frame is read) link the frames.
 
     Raises
     ------
@@ -105,7 +112,10 @@ class MissionFile:
         cannot be made, a port that cannot be served on.
     """
 
-    def __init__(self, path: Path, live_port: int | None = None, metadata: dict[str, dict[str, str]] | None = None):
+    def __init__(
+        self, path: Path, live_port: int | None = None, metadata: dict[str, dict[str, str]] | None = None,
+        recording=None,
+    ):
         from curiosity_cli.errors import CuriosityError
         from curiosity_cli.files import display_path
 
@@ -156,6 +166,9 @@ class MissionFile:
         self._command = custom(COMMAND, "Command")
         self._pose = PoseInFrameChannel(POSE, context=c)
         self._transforms = FrameTransformsChannel(TRANSFORMS, context=c)
+        self._recording = recording
+        recorded = getattr(recording, "transforms", None)
+        self._placed = set() if recorded is None else recorded.children()
 
     def frame(self, row: dict, image: np.ndarray) -> None:
         """Log one frame: its record in the drive's log and the (H, W, 3) uint8 RGB image it was made from."""
@@ -203,11 +216,6 @@ class MissionFile:
         self._cells.log(ImageAnnotations(points=[outline]), log_time=at)
         command = self._messages["Command"](frame=row["frame"], target_row=row_at, target_col=col_at, **row["command"])
         self._command.log(command.SerializeToString(), log_time=at)
-        (mx, my, mz), (qx, qy, qz, qw) = CAMERA_MOUNT
-        links = [FrameTransform(
-            timestamp=_timestamp(at), parent_frame_id=ROBOT_FRAME, child_frame_id=CAMERA_FRAME,
-            translation=Vector3(x=mx, y=my, z=mz), rotation=Quaternion(x=qx, y=qy, z=qz, w=qw),
-        )]
         pose = row.get("pose")
         if pose is not None:
             position = Vector3(x=pose["x"], y=pose["y"], z=pose["z"])
@@ -216,11 +224,30 @@ class MissionFile:
                 PoseInFrame(timestamp=_timestamp(at), frame_id=pose["frame_id"], pose=Pose(position=position, orientation=orientation)),
                 log_time=at,
             )
-            links.insert(0, FrameTransform(
-                timestamp=_timestamp(at), parent_frame_id=pose["frame_id"], child_frame_id=ROBOT_FRAME,
-                translation=position, rotation=orientation,
-            ))
+        links = [
+            FrameTransform(
+                timestamp=_timestamp(at), parent_frame_id=parent, child_frame_id=child,
+                translation=Vector3(x=x, y=y, z=z), rotation=Quaternion(x=qx, y=qy, z=qz, w=qw),
+            )
+            for parent, child, (x, y, z), (qx, qy, qz, qw) in self._links(at, pose)
+        ]
         self._transforms.log(FrameTransforms(transforms=links), log_time=at)
+
+    def _links(self, at: int, pose: dict | None) -> list[tuple]:
+        """The frame's transforms as (parent, child, translation, rotation): the recording's, or the stated camera
+        mount; and the pose, unless the recording places the robot itself."""
+        recorded = getattr(self._recording, "transforms", None)
+        if recorded is None:
+            links = [(ROBOT_FRAME, CAMERA_FRAME, *CAMERA_MOUNT)]
+        else:
+            links = [(t.parent, t.child, t.translation, t.rotation) for t in recorded.at(at)]
+            image_frame = getattr(self._recording, "image_frame_id", None)
+            if image_frame and image_frame != CAMERA_FRAME:  # the frames this file shows are where the recording's were
+                links.append((image_frame, CAMERA_FRAME, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
+        if pose is not None and ROBOT_FRAME not in self._placed:
+            position = (pose["x"], pose["y"], pose["z"])
+            links.insert(0, (pose["frame_id"], ROBOT_FRAME, position, (pose["qx"], pose["qy"], pose["qz"], pose["qw"])))
+        return links
 
     def close(self) -> None:
         """Finish the file (its summary and index) and stop the live view.

@@ -479,7 +479,9 @@ def drive_session(
         )
         robot = mission = None
         try:
-            mission = MissionFile(out / MISSION_FILE, live_port=foxglove, metadata=_run_metadata(out))
+            mission = MissionFile(
+                out / MISSION_FILE, live_port=foxglove, metadata=_run_metadata(out), recording=source
+            )
             write_layout(out)
             if mission.port is not None:
                 on_status(f"live view: open ws://127.0.0.1:{mission.port} in Foxglove")

@@ -54,9 +54,14 @@ def _png(frame: np.ndarray) -> bytes:
     return png.tobytes()
 
 
-def write_ros2_mission(path: Path, frames: list[np.ndarray], odometry: tuple[str, ...] = ("/odom",)) -> Path:
+def write_ros2_mission(
+    path: Path, frames: list[np.ndarray], odometry: tuple[str, ...] = ("/odom",), transforms: bool = False
+) -> Path:
     """A ROS 2 MCAP bag: PNG frames on /camera/image and, on each of ``odometry``'s topics, a pose at twice
-    the frame rate moving 0.1 m along x and 0.05 m along y each, turning 0.01 rad each."""
+    the frame rate moving 0.1 m along x and 0.05 m along y each, turning 0.01 rad each. With ``transforms``,
+    the images are in frame ``camera_optical``, /tf_static places it on ``base_link`` (0.2 m ahead, 0.5 m up,
+    the optical axes: z forward, x right), and /tf moves ``base_link`` in ``odom`` 1 m along x each frame
+    period, at each frame's time plus 1 ms, with one transform at infinity among them (left out)."""
     store = get_typestore(Stores.ROS2_HUMBLE)
     t = store.types
 
@@ -85,10 +90,34 @@ def write_ros2_mission(path: Path, frames: list[np.ndarray], odometry: tuple[str
                     ),
                 )
                 writer.write(connection, stamp, store.serialize_cdr(message, "nav_msgs/msg/Odometry"))
+        if transforms:
+            def link(stamp: int, parent: str, child: str, xyz, quaternion):
+                return t["geometry_msgs/msg/TransformStamped"](
+                    header=header(stamp, parent), child_frame_id=child,
+                    transform=t["geometry_msgs/msg/Transform"](
+                        translation=t["geometry_msgs/msg/Vector3"](x=xyz[0], y=xyz[1], z=xyz[2]),
+                        rotation=t["geometry_msgs/msg/Quaternion"](
+                            x=quaternion[0], y=quaternion[1], z=quaternion[2], w=quaternion[3]
+                        ),
+                    ),
+                )
+
+            def tf(connection, stamp: int, links) -> None:
+                message = t["tf2_msgs/msg/TFMessage"](transforms=links)
+                writer.write(connection, stamp, store.serialize_cdr(message, "tf2_msgs/msg/TFMessage"))
+
+            static = writer.add_connection("/tf_static", "tf2_msgs/msg/TFMessage", typestore=store)
+            tf(static, START, [link(START, "base_link", "camera_optical", (0.2, 0.0, 0.5), (-0.5, 0.5, -0.5, 0.5))])
+            moving = writer.add_connection("/tf", "tf2_msgs/msg/TFMessage", typestore=store)
+            for i in range(len(frames)):
+                stamp = START + i * PERIOD + 1_000_000
+                tf(moving, stamp, [link(stamp, "odom", "base_link", (1.0 * i, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)),
+                                   link(stamp, "odom", "far", (float("inf"), 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))])
         for i, frame in enumerate(frames):
             stamp = START + i * PERIOD
             message = t["sensor_msgs/msg/CompressedImage"](
-                header=header(stamp, "camera"), format="png", data=np.frombuffer(_png(frame), np.uint8)
+                header=header(stamp, "camera_optical" if transforms else "camera"), format="png",
+                data=np.frombuffer(_png(frame), np.uint8),
             )
             writer.write(camera, stamp, store.serialize_cdr(message, "sensor_msgs/msg/CompressedImage"))
     return path
@@ -345,6 +374,31 @@ def test_a_drive_folder_given_as_an_experiment_points_to_open_mission_and_force_
     assert evaluated.exit_code == 1 and f"Error: {says}" in evaluated.stderr
     with pytest.raises(CuriosityError, match=r"holds an earlier run \(log.jsonl and \d+ more\); give a new folder, or `force` to "):
         api.drive(camera=str(replayed / "mission.mcap"), out=replayed, dry_run=True, max_frames=1)
+
+
+@pytest.mark.slow
+def test_a_bags_own_transforms_link_the_frames_in_place_of_the_stated_default(tmp_path):
+    """Issue 62, item 2: the mission file's transforms come from the bag's /tf_static and /tf where it has them."""
+    bag = write_ros2_mission(tmp_path / "bag", mission_frames(4), transforms=True)
+    result = replay(bag, tmp_path / "out")
+    assert result.exit_code == 0, result.output
+    assert "frames linked by 2 transforms of /tf_static and /tf (4 transforms outside physical sense left out)" in (
+        result.output
+    )
+    frames = decoded(tmp_path / "out" / "mission.mcap")["/tf"]
+    assert len(frames) == 4
+    for i, (_, _, message) in enumerate(frames):
+        links = {(t.parent_frame_id, t.child_frame_id): t for t in message.transforms}
+        # the bag's mount; the image's frame as the file's camera; the robot in odom as the bag's /tf had it at the
+        # frame's time (its message 1 ms after the frame is the next frame's), and before its first, nowhere: the
+        # odometry's pose does not place the robot again where the bag places it
+        placed = {("odom", "base_link")} if i else set()
+        assert set(links) == {("base_link", "camera_optical"), ("camera_optical", "camera")} | placed
+        mount = links["base_link", "camera_optical"]
+        assert (mount.translation.x, mount.translation.z, mount.rotation.x, mount.rotation.w) == (0.2, 0.5, -0.5, 0.5)
+        assert links["camera_optical", "camera"].rotation.w == 1.0
+        if i:
+            assert links["odom", "base_link"].translation.x == i - 1.0
 
 
 @pytest.mark.slow
