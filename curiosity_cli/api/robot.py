@@ -212,8 +212,8 @@ def _check_ros(camera: str, cmd_vel, cmd_vel_stamped, ros_domain_id, *, serial: 
 
 
 def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
-    """``curiosity drive --timeline``: a replay's surprise timeline drawn again from its run folder's log; the
-    files written. As :func:`~curiosity_cli.drive.session.redraw_timeline`."""
+    """``curiosity drive --timeline``: a run's figures drawn again from its run folder (a replay's surprise timeline,
+    the trajectory where frames have a pose); the files written. As :func:`~curiosity_cli.drive.session.redraw_timeline`."""
     from curiosity_cli.drive.session import redraw_timeline as redraw
 
     return redraw(folder_argument(folder), _clock(clock))

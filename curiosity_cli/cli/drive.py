@@ -70,7 +70,7 @@ def drive(
     seed: int = typer.Option(None, "--seed", min=0, help="Seed of the topic models; default the config's seed."),
     out: Path = typer.Option(None, "--out", help="Run folder (log.jsonl, config, provenance, frames/), new or empty; default a new results/drive/<date-time>."),
     force: bool = typer.Option(False, "--force", help="With --out: replace the earlier run in that folder."),
-    timeline: Path = typer.Option(None, "--timeline", metavar="RUN_FOLDER", help="Instead of driving, draw a replay's surprise timeline again from its run folder's log.jsonl (the bag must still be where it was)."),
+    timeline: Path = typer.Option(None, "--timeline", metavar="RUN_FOLDER", help="Instead of driving, draw a run's figures again from its run folder: a replay's surprise timeline (the bag must still be where it was) and the trajectory where frames have a pose (a drive stopped by Ctrl-C leaves them out)."),
     clock: Clock = typer.Option(Clock.bag, "--clock", help="A replay's timeline against the bag's record times (bag) or the messages' header stamps (header); both are logged."),
     strict: bool = typer.Option(False, "--strict", help="Stop a replay at its first message that holds no usable frame (damaged or empty), instead of skipping it with a `skipped` record in the log."),
     video_out: Path = typer.Option(None, "--video-out", help="Write the annotated video here (.mp4, .avi or .mkv)."),

@@ -249,7 +249,8 @@ def claimed_run_folder(out: Path | None, *, force: bool = False):
 
 
 def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
-    """Draw a replay's surprise timeline again from its run folder's log (``curiosity drive --timeline``).
+    """Draw a run's figures again from its run folder (``curiosity drive --timeline``): a replay's surprise timeline
+    from its log, and the trajectory where its frames have a pose (a live drive's alone).
 
     The bag and topic come from the log's ``start`` record; the bag must still be where it was.
     ``clock``: ``bag`` or ``header`` (:func:`~curiosity_cli.drive.timeline.surprise_series`).
@@ -274,10 +275,20 @@ def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
         raise CuriosityError(f"{display_path(log)}: not found; give a run folder of `curiosity drive`") from None
     except (ValueError, UnicodeDecodeError) as exc:
         raise CuriosityError(f"{display_path(log)}: its first line is not a JSON record ({exc})") from None
-    if not isinstance(start, dict) or start.get("event") != "start" or not start.get("topic"):
-        raise CuriosityError(f"{display_path(log)}: not the log of a replayed bag (no start record with a bag's topic)")
+    if not isinstance(start, dict) or start.get("event") != "start":
+        raise CuriosityError(f"{display_path(log)}: not the log of a drive (no start record)")
     from curiosity_cli.drive.bags import bag_fingerprint, fingerprint_change
+    from curiosity_cli.drive.frames_table import read_frames_table
     from curiosity_cli.drive.timeline import surprise_series
+    from curiosity_cli.drive.trajectory import write_trajectory
+
+    if not start.get("topic"):  # a live drive: its trajectory is all there is to draw
+        trajectory = write_trajectory(Path(folder), read_frames_table(Path(folder)))
+        if trajectory is None:
+            raise CuriosityError(
+                f"{display_path(log)}: not the log of a replayed bag, and its frames have no pose: nothing to draw"
+            )
+        return [trajectory]
 
     frames = surprise_series(log)["frame"].size
     if frames == 0:
@@ -288,7 +299,9 @@ def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
             f"{display_path(Path(start['camera']))}: not the bag {display_path(log)} replayed ({change}); "
             "put that recording back, or replay this one with `curiosity drive`"
         )
-    return _draw_timeline(Path(folder), start["camera"], start["topic"], f"{frames} frames", clock)
+    written = _draw_timeline(Path(folder), start["camera"], start["topic"], f"{frames} frames", clock)
+    trajectory = write_trajectory(Path(folder), read_frames_table(Path(folder)))
+    return written + [trajectory] * (trajectory is not None)
 
 
 def _draw_timeline(out: Path, bag: str, topic: str, what: str, clock: str = "bag") -> list[Path]:
@@ -519,9 +532,16 @@ def drive_session(
                 mission=mission, on_frame=on_frame,
             )
             mission.close()
-            _write_tables(out)
-            if hasattr(source, "messages"):
+            # a drive stopped by a signal exits at once: its data is written, its figures left for --timeline
+            drawn = outcome.reason not in _SIGNALS
+            _write_tables(out, figures=drawn)
+            if drawn and hasattr(source, "messages"):
                 _draw_timeline(out, camera, source.topic, f"{outcome.frames} frames", clock)
+            if not drawn:
+                on_status(
+                    f"stopped by {outcome.reason}: its figures are left out, to exit at once; "
+                    f"curiosity drive --timeline {display_path(out)} draws them"
+                )
         except BaseException as exc:
             if not log.ended:
                 # run() closes both and logs its end itself; this covers a failure before its loop
@@ -562,12 +582,18 @@ def _run_metadata(out: Path) -> dict[str, dict[str, str]]:
     }
 
 
-def _write_tables(out: Path) -> None:
-    """The run's frames table and, where its frames have a pose, its trajectory figure."""
+def _write_tables(out: Path, figures: bool = True) -> None:
+    """The run's frames table and, with ``figures`` and where its frames have a pose, its trajectory figure."""
     from curiosity_cli.drive.frames_table import write_frames_table
     from curiosity_cli.drive.trajectory import write_trajectory
 
-    write_trajectory(out, write_frames_table(out))
+    table = write_frames_table(out)
+    if figures:
+        write_trajectory(out, table)
+
+
+#: The outcomes of a drive stopped by a signal (:class:`~curiosity_cli.drive.driver.StopRequest`).
+_SIGNALS = ("SIGINT", "SIGTERM")
 
 
 def _check_log_file(log_file: Path) -> None:

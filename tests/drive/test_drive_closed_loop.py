@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import signal
 import subprocess
+import time
 
 import cv2
 import numpy as np
 import pytest
-from drive_processes import RUN_SECONDS, drive_command, frame_rows, read_log, wait_for_frames
+from drive_processes import CURIOSITY, RUN_SECONDS, drive_command, frame_rows, read_log, wait_for_frames
 from pty_robot import PtyRobot
 
 from curiosity_cli.maps.map_data import load_map
@@ -85,12 +86,20 @@ def test_sigint_sends_stop_and_exits_130(tmp_path, simrobot, warm_kernels):
     out = tmp_path / "run"
     process = subprocess.Popen(drive_command(out, "--serial", robot.port, *SIM), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     wait_for_frames(out, 3, process)
+    sent = time.monotonic()
     process.send_signal(signal.SIGINT)
     stdout, stderr = process.communicate(timeout=RUN_SECONDS)
+    took = time.monotonic() - sent
     assert process.returncode == 130, stderr
     assert "stopped by SIGINT; STOP acknowledged" in stdout
     assert robot.received()[-1] == "STOP"
     assert read_log(out)[-1]["outcome"] == "SIGINT"
+    # issue 62: it took 11 s to draw its figures before it exited; now its data, then out (2.2-2.5 s here, loaded)
+    assert f"its figures are left out, to exit at once; curiosity drive --timeline {out} draws them" in stderr
+    assert (out / "frames.parquet").is_file() and (out / "mission.mcap").is_file()
+    assert not (out / "trajectory.png").exists() and took < 10, f"{took:.1f} s from SIGINT to exit"
+    drawn = subprocess.run([CURIOSITY, "drive", "--timeline", str(out)], capture_output=True, text=True)
+    assert drawn.returncode == 0 and f"wrote {out / 'trajectory.png'}" in drawn.stdout, drawn.stderr
     # the robot too exits as a stopped process does, 128 + the signal
     robot.process.send_signal(signal.SIGTERM)
     _, robot_stderr = robot.process.communicate(timeout=RUN_SECONDS)

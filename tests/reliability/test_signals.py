@@ -149,7 +149,7 @@ def test_sigterm_inside_a_kernel_of_one_job_stops_the_grid_within_a_second(tmp_p
     assert text.rstrip().endswith(INTERRUPTED), text
     assert len(list(tmp_path.glob("results/kernel/runs/*/*/*/run.json"))) < 4
     # 0.75-0.86 s here with a labelling study beside it; 60 s when the grid went on
-    assert took < 3, f"{took:.1f} s from SIGTERM to exit"
+    assert took < 5, f"{took:.1f} s from SIGTERM to exit"
 
 # A command whose clean-up fails as Ctrl-C passes through it, as np.savez_compressed
 # does when the signal lands between opening a zip member and writing it (CI saw it).
