@@ -236,8 +236,8 @@ def test_drive_a_dry_run_on_the_simulated_camera_and_refuse_a_start_off_the_map(
     assert outcome.frames == 3 and len(frames) == 3 and folder == tmp_path / "run" and (folder / "log.jsonl").is_file()
     saved = yaml.safe_load((folder / "config.yaml").read_text())
     assert list(saved) == ["seed", "model", "words", "drive"] and saved["drive"]["sim_frame_interval"] == 0.1
-    with pytest.raises(CuriosityError, match="not the log of a replayed bag"):
-        api.redraw_timeline(folder)  # a camera's run: no timeline to draw
+    # a camera's run: no timeline to draw, its trajectory (the simulated robot's poses) alone
+    assert api.redraw_timeline(folder) == [folder / "trajectory.png"]
 
 
 def test_simrobot_refuses_a_start_off_the_map_and_a_heading_that_is_no_number(own_map):
