@@ -12,6 +12,7 @@ from types import SimpleNamespace
 import cv2
 import numpy as np
 import pytest
+from test_drive_cli_errors import one_line_error, usage_error
 from typer.testing import CliRunner
 
 from curiosity_cli.cli import app
@@ -23,18 +24,6 @@ from curiosity_cli.drive.odometry import RecentPoses
 from curiosity_cli.errors import CuriosityError, ParameterError
 
 runner = CliRunner()
-
-
-def usage_error(result) -> str:
-    assert result.exit_code == 2, result.output
-    return " ".join(result.stderr.replace("│", " ").split())
-
-
-def one_line_error(result) -> str:
-    assert result.exit_code == 1, result.output
-    errors = [line for line in result.stderr.splitlines() if line.startswith("Error: ")]
-    assert len(errors) == 1 and "Traceback" not in result.stderr
-    return errors[0]
 
 
 def test_options_that_do_not_go_together_are_refused_before_anything_runs(tmp_path):
