@@ -87,10 +87,15 @@ def main() -> None:
     args = parser.parse_args()
     if args.smoke:
         args.frames, args.skip, args.repeats = 6, 1, 1
-    if args.frames < args.skip + 2 or args.repeats < 1:
-        parser.error(f"--frames must be at least --skip + 2 ({args.skip + 2}) and --repeats at least 1")
-    commits = [subprocess.run(["git", "rev-parse", "--short", c], cwd=ROOT, check=True, capture_output=True,
-                              text=True).stdout.strip() for c in (args.reference, args.candidate)]
+    if args.skip < 0 or args.frames < args.skip + 2 or args.repeats < 1:
+        parser.error("--skip must be at least 0, --frames at least --skip + 2 and --repeats at least 1")
+    commits = []
+    for given in (args.reference, args.candidate):
+        found = subprocess.run(["git", "rev-parse", "--short", "--verify", "--quiet", f"{given}^{{commit}}"], cwd=ROOT,
+                               capture_output=True, text=True)
+        if found.returncode != 0:
+            parser.error(f"{given!r} is not a commit of {ROOT}")
+        commits.append(found.stdout.strip())
     with tempfile.TemporaryDirectory(prefix="bench-replay-") as tmp:
         bag = write_bag(Path(tmp) / "bag", args.frames)
         versions = {}

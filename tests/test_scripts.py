@@ -111,6 +111,8 @@ def test_the_smoke_mode_runs_to_its_end(script, environment, tmp_path):
         ("check_revisits.py", ["--jobs", "0"], 2, "--seeds, --jobs: got 5 and 0"),
         ("check_revisits.py", ["--maps", "planted-disjoint"], 2, "invalid choice: 'planted-disjoint'"),
         ("check_revisits.py", ["--set", "drive.surprise=nope", "--seeds", "1"], 1, "Error: overrides: drive.surprise: got 'nope'"),
+        ("bench_replay.py", ["--reference", "nosuchcommit"], 2, "'nosuchcommit' is not a commit of "),
+        ("bench_replay.py", ["--skip", "-3", "--frames", "2"], 2, "--skip must be at least 0"),
     ],
 )
 def test_a_script_s_bad_arguments_are_one_line(script, arguments, code, says, environment, tmp_path):

@@ -187,10 +187,12 @@ def drive(
 def _check_ros(camera: str, cmd_vel, cmd_vel_stamped, ros_domain_id, *, serial: str | None, dry_run: bool) -> None:
     """The ROS 2 arguments of :func:`drive`: each of the right type, and only with what it goes with."""
     from curiosity_cli.checks import check_int
-    from curiosity_cli.drive.ros2 import MAX_DOMAIN_ID, is_ros2
+    from curiosity_cli.drive.ros2 import MAX_DOMAIN_ID, PREFIX, is_ros2, ros_topic
 
+    if is_ros2(camera):  # names checked before any work: a bad one found later leaves a run folder behind
+        ros_topic(camera[len(PREFIX):], "camera", PREFIX)
     if cmd_vel is not None:
-        name_text(cmd_vel, "cmd_vel")
+        ros_topic(name_text(cmd_vel, "cmd_vel"), "cmd_vel")
         if serial is not None:
             raise UsageError("cmd_vel: `cmd_vel` is the robot, a ROS 2 one; leave out `serial`", parameter="cmd_vel")
         if dry_run:

@@ -451,8 +451,8 @@ def _to_rgb8(image: np.ndarray, order: str) -> np.ndarray:
     """RGB uint8 from a mono, RGB(A) or BGR(A) image of 8 or 16 bits (16 bits: the top 8)."""
     import cv2
 
-    if image.dtype == np.uint16:
-        image = (image >> 8).astype(np.uint8)
+    if image.dtype.itemsize == 2:  # big-endian data too: its dtype is '>u2', not the native uint16
+        image = (image.astype(np.uint16) >> 8).astype(np.uint8)
     if order == "mono":
         return np.ascontiguousarray(cv2.cvtColor(image, cv2.COLOR_GRAY2RGB))
     image = image[:, :, :3]

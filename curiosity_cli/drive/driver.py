@@ -187,6 +187,12 @@ def run(
                 first_bad = first_bad or bad
                 skipped += 1
                 continue
+            except CameraError:
+                if stop.signal is None:
+                    raise
+                # a live camera's wait for its next frame, cut short by the signal: the stop, not a lost camera
+                outcome = Outcome(stop.signal, frames, f"stopped by {stop.signal}", None)
+                break
             if got is None:
                 if frames == 0 and skipped:  # nothing replayed is no result, not a quiet one
                     raise CameraError(f"every one of the {skipped} messages held no usable frame; the first: {first_bad}")

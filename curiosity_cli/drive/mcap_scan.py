@@ -126,7 +126,8 @@ class CutMcap:
                 if opcode in (_FOOTER, _DATA_END):
                     return
                 whole = at + 9 + length <= size
-                body = memoryview(file.read(length))
+                # a chunk a killed writer left open still holds its length's placeholder, 2^64 - 1: read what is there
+                body = memoryview(file.read(min(length, size - at - 9)))
                 if opcode == _CHUNK:
                     yield from self._chunk(body, whole)
                 elif whole:

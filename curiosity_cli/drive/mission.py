@@ -232,6 +232,9 @@ class MissionFile:
             for parent, child, (x, y, z), (qx, qy, qz, qw) in self._links(at, pose)
         ]
         self._transforms.log(FrameTransforms(transforms=links), log_time=at)
+        # each frame a finished chunk on disk: a drive killed (SIGKILL, a power cut) leaves a file that the mcap
+        # readers read up to its last frame, where the SDK's own chunks of about a megabyte lost every frame in it
+        self._writer.flush()
 
     def _links(self, at: int, pose: dict | None) -> list[tuple]:
         """The frame's transforms as (parent, child, translation, rotation): the recording's, or the stated camera
@@ -244,7 +247,8 @@ class MissionFile:
             image_frame = getattr(self._recording, "image_frame_id", None)
             if image_frame and image_frame != CAMERA_FRAME:  # the frames this file shows are where the recording's were
                 links.append((image_frame, CAMERA_FRAME, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)))
-        if pose is not None and ROBOT_FRAME not in self._placed:
+        # a pose in no frame, or in the robot's own, places nothing (its link would have no parent, or be a loop)
+        if pose is not None and ROBOT_FRAME not in self._placed and pose["frame_id"] not in ("", ROBOT_FRAME):
             position = (pose["x"], pose["y"], pose["z"])
             links.insert(0, (pose["frame_id"], ROBOT_FRAME, position, (pose["qx"], pose["qy"], pose["qz"], pose["qw"])))
         return links

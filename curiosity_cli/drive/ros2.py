@@ -14,7 +14,8 @@ odometry nearest its header stamp (:class:`~curiosity_cli.drive.odometry.RecentP
 
 :class:`Ros2Robot` publishes each command as ``geometry_msgs/msg/Twist`` (or ``TwistStamped``)
 with ROS's default QoS (reliable, keep last 10), again every ``keepalive`` seconds while no new
-one comes (a base's ``cmd_vel`` timeout stops it otherwise), and each frame's surprise and
+one comes (a base's ``cmd_vel`` timeout stops it otherwise) for up to :data:`STALE_AFTER` s, then
+a zero twist, and each frame's surprise and
 target on :data:`SURPRISE_TOPIC` and :data:`TARGET_TOPIC`; closing it sends STOP, a zero twist.
 """
 
@@ -39,6 +40,9 @@ MAX_DOMAIN_ID = 232
 #: Seconds a camera may go without a frame, the first one included (discovery takes part of it), before the drive
 #: stops with an error.
 FRAME_TIMEOUT = 5.0
+#: Seconds after its last command from the drive that the robot's newest twist is still published again: a drive
+#: whose camera stalls has nothing new to say, and the robot is halted (a zero twist) rather than driven blind.
+STALE_AFTER = 1.0
 #: Seconds the robot's ``cmd_vel`` may go without a subscriber before a drive starts, and before its STOP is sent.
 MATCH_TIMEOUT = 5.0
 #: STOP is a zero twist sent this many times, :data:`STOP_INTERVAL` s apart: one lost on a best-effort reader's
@@ -61,6 +65,8 @@ CAMERA_DEPTH = 5
 ODOMETRY_DEPTH = 100
 #: How long one wait for a frame lasts: SIGINT's handler runs between two.
 _WAIT_SLICE = 0.1
+#: The longest topic name taken: DDS's topic names ("rt" and the ROS name) are bounded at 256 bytes.
+MAX_TOPIC_LENGTH = 253
 #: A ROS name: tokens of letters, digits and underscores, not starting with a digit, joined by single slashes.
 _ROS_NAME = re.compile(r"/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*")
 
@@ -79,11 +85,12 @@ def ros_topic(name: str, parameter: str, prefix: str = "") -> str:
     ParameterError
         A name ROS does not allow, naming ``parameter``.
     """
-    if not _ROS_NAME.fullmatch(name):
+    if len(name) > MAX_TOPIC_LENGTH or not _ROS_NAME.fullmatch(name):
+        shown = prefix + (name if len(name) <= 80 else f"{name[:60]}... ({len(name)} characters)")
         raise ParameterError(
-            f"{parameter}: got {prefix + name!r}, expected a ROS topic name such as /camera/image/compressed "
-            "(letters, digits and underscores between single slashes, no token starting with a digit)",
-            parameter=parameter,
+            f"{parameter}: got {shown!r}, expected a ROS topic name such as /cmd_vel or /camera/image/compressed "
+            f"(letters, digits and underscores between single slashes, no token starting with a digit, at most "
+            f"{MAX_TOPIC_LENGTH} characters)", parameter=parameter,
         )
     return name if name.startswith("/") else f"/{name}"
 
@@ -101,7 +108,7 @@ def ros_domain_id(value: int | None) -> int:
         text = os.environ.get("ROS_DOMAIN_ID", "").strip()
         if not text:
             return 0
-        if not text.isdigit() or int(text) > MAX_DOMAIN_ID:
+        if not (text.isascii() and text.isdigit()) or int(text) > MAX_DOMAIN_ID:  # '²' and '٣' are digits to isdigit
             raise ParameterError(
                 f"ros_domain_id: not given, and ROS_DOMAIN_ID is {text!r} in the environment; {expected}",
                 parameter="ros_domain_id",
@@ -175,6 +182,8 @@ class Ros2Camera:
         A ``nav_msgs/msg/Odometry`` topic; each frame gets the pose nearest its header stamp.
     domain_id : int, optional
         The ROS domain (:func:`ros_domain_id`).
+    stopped : callable, optional
+        Whether the drive was asked to stop (a signal): a wait for a frame ends then.
 
     Attributes
     ----------
@@ -194,8 +203,11 @@ class Ros2Camera:
         ``cyclonedds`` is not installed, or cannot join the domain.
     """
 
-    def __init__(self, topic: str, odom_topic: str | None = None, domain_id: int | None = None):
+    def __init__(
+        self, topic: str, odom_topic: str | None = None, domain_id: int | None = None, stopped=lambda: False,
+    ):
         self.topic = ros_topic(topic, "camera", PREFIX)
+        self._stopped = stopped
         self.odom_topic = None if odom_topic is None else ros_topic(odom_topic, "odom_topic")
         self.domain_id = ros_domain_id(domain_id)
         self._participant, types = _participant(self.domain_id, "camera", f"{PREFIX}{self.topic}")
@@ -228,7 +240,8 @@ class Ros2Camera:
             )
         self._received = 0
         self._pending: list = []
-        if not self._wait():
+        self._usable_at = time.monotonic()  # the last usable frame's time (from the start: none yet)
+        if not self._wait() and not stopped():  # stopped: the drive's loop ends at once, by the signal
             self.close()
             raise CameraError(
                 f"camera {PREFIX}{self.topic}: no frame within {FRAME_TIMEOUT:g} s on ROS domain {self.domain_id}; "
@@ -246,7 +259,7 @@ class Ros2Camera:
         while not self._pending:
             self._pending = self._take()
             left = deadline - time.monotonic()
-            if self._pending or left <= 0:
+            if self._pending or left <= 0 or self._stopped():
                 break
             self._waitset.wait(duration(seconds=min(_WAIT_SLICE, left)))
         return bool(self._pending)
@@ -295,7 +308,14 @@ class Ros2Camera:
             image = decode(message, self._msgtype, f"{PREFIX}{self.topic}, message {index}")
         except BadMessage as bad:
             bad.index = index
+            # a camera sending only damaged frames is as good as none: a drive skips them, so it would never end
+            if captured - self._usable_at > FRAME_TIMEOUT:
+                raise CameraError(
+                    f"camera {PREFIX}{self.topic}: no usable frame for {FRAME_TIMEOUT:g} s on ROS domain "
+                    f"{self.domain_id}, only damaged ones (the last: {bad.reason})", parameter="camera",
+                ) from None
             raise
+        self._usable_at = captured
         stamp = message.header.stamp
         header_ns = int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
         return Frame(image, captured, None, header_ns, self._pose(header_ns))
@@ -331,7 +351,10 @@ class Ros2Robot:
     domain_id : int, optional
         The ROS domain (:func:`ros_domain_id`).
     keepalive : float
-        Seconds after which the newest command is published again while no new one comes, > 0.
+        Seconds after which the newest command is published again while no new one comes, > 0; for
+        :data:`STALE_AFTER` s after the drive's last command, then a zero twist, once.
+    stopped : callable, optional
+        Whether the drive was asked to stop (a signal): the wait for a subscriber ends then.
     surprise_topic, target_topic : str
         Where each frame's surprise and target go (:meth:`publish_frame`).
     log : callable, optional
@@ -363,6 +386,7 @@ class Ros2Robot:
     def __init__(
         self, cmd_vel_topic: str, stamped: bool = False, domain_id: int | None = None, *, keepalive: float = 0.15,
         surprise_topic: str = SURPRISE_TOPIC, target_topic: str = TARGET_TOPIC, log=lambda event, **fields: None,
+        stopped=lambda: False,
     ):
         self.topic = ros_topic(cmd_vel_topic, "cmd_vel")
         surprise_topic = ros_topic(surprise_topic, "surprise_topic")
@@ -399,8 +423,10 @@ class Ros2Robot:
         self._error: str | None = None
         self._closing = threading.Event()
         self._stop_acked: bool | None = None
+        self._stopped = stopped
+        self._commanded_at = time.monotonic()
         self.subscribers = self._matched(MATCH_TIMEOUT)
-        if not self.subscribers:
+        if not self.subscribers and not stopped():  # stopped: the drive's loop ends at once, by the signal
             self._participant = self._writer = self._surprise = self._target = None
             raise LinkError(
                 f"cmd_vel: no subscriber of {self.topic} ({self.message_type}) within {MATCH_TIMEOUT:g} s on ROS "
@@ -415,7 +441,7 @@ class Ros2Robot:
         deadline = time.monotonic() + timeout
         while True:
             count = self._writer.get_publication_matched_status().current_count
-            if count or time.monotonic() >= deadline:
+            if count or time.monotonic() >= deadline or self._stopped():
                 return count
             time.sleep(0.02)
 
@@ -444,6 +470,7 @@ class Ros2Robot:
                 )
                 return None
             self._command = (surge, yaw_rate, pitch_rate)
+            self._commanded_at = time.monotonic()
             self._publish(self._command)
             self._seq += 1
             return self._seq
@@ -526,6 +553,10 @@ class Ros2Robot:
                 since = time.monotonic() - self._last_sent
                 if since >= self._keepalive:
                     if self._command is not None and self._error is None:
-                        self._publish(self._command)
+                        if time.monotonic() - self._commanded_at <= STALE_AFTER:
+                            self._publish(self._command)
+                        elif any(self._command):  # the drive has gone quiet (its camera stalled): halt, once
+                            self._command = (0.0, 0.0, 0.0)
+                            self._publish(self._command)
                     since = 0.0
             wait = self._keepalive - since

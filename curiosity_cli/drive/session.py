@@ -45,7 +45,8 @@ from curiosity_cli.paths import DEFAULT_RESULTS
 
 
 def open_camera(
-    camera: str, topic: str | None = None, odom_topic: str | None = None, ros_domain_id: int | None = None
+    camera: str, topic: str | None = None, odom_topic: str | None = None, ros_domain_id: int | None = None,
+    stopped=lambda: False,
 ):
     """A ROS 2 image topic's frames (``ros2:/TOPIC``, :class:`~curiosity_cli.drive.ros2.Ros2Camera`), a bag's
     (:class:`~curiosity_cli.drive.bags.BagCamera`) or an OpenCV source's.
@@ -59,7 +60,7 @@ def open_camera(
     from curiosity_cli.drive.ros2 import PREFIX, Ros2Camera, is_ros2
 
     if is_ros2(camera):
-        return Ros2Camera(camera[len(PREFIX):], odom_topic, ros_domain_id)
+        return Ros2Camera(camera[len(PREFIX):], odom_topic, ros_domain_id, stopped)
     if is_bag(camera):
         return BagCamera(camera, topic, odom_topic)
     return cameras.OpenCVCamera(camera)
@@ -282,7 +283,9 @@ def redraw_timeline(folder: Path, clock: str = "bag") -> list[Path]:
     from curiosity_cli.drive.timeline import surprise_series
     from curiosity_cli.drive.trajectory import write_trajectory
 
-    if not start.get("topic"):  # a live drive: its trajectory is all there is to draw
+    from curiosity_cli.drive.ros2 import is_ros2
+
+    if not start.get("topic") or is_ros2(str(start.get("camera", ""))):  # a live drive: its trajectory alone
         trajectory = write_trajectory(Path(folder), read_frames_table(Path(folder)))
         if trajectory is None:
             raise CuriosityError(
@@ -463,7 +466,11 @@ def drive_session(
     check_replay_options(camera, topic=topic, odom_topic=odom_topic, strict=strict, clock=clock)
     check_run_folder(out, force=force)  # before the camera and the model: a folder in use is the only message
     with stopping_on_signals(StopRequest()) as stop, contextlib.ExitStack() as held:
-        source = None if camera == "sim" else open_camera(camera, topic, odom_topic, ros_domain_id)
+
+        def stopped() -> bool:  # a live camera's and robot's waits end on a signal
+            return stop.signal is not None
+
+        source = None if camera == "sim" else open_camera(camera, topic, odom_topic, ros_domain_id, stopped)
         if getattr(source, "note", ""):  # a bag read otherwise than named (a recording cut short)
             on_status(source.note)
         if getattr(source, "pose_note", ""):
@@ -506,7 +513,9 @@ def drive_session(
             elif cmd_vel is not None:
                 from curiosity_cli.drive.ros2 import Ros2Robot
 
-                robot = Ros2Robot(cmd_vel, cmd_vel_stamped, ros_domain_id, keepalive=d.keepalive, log=log.write)
+                robot = Ros2Robot(
+                    cmd_vel, cmd_vel_stamped, ros_domain_id, keepalive=d.keepalive, log=log.write, stopped=stopped
+                )
                 on_status(
                     f"publishing {robot.message_type} on {robot.topic} (ROS domain {robot.domain_id}) to "
                     f"{robot.subscribers} subscriber{'s' * (robot.subscribers != 1)}"

@@ -524,6 +524,24 @@ def test_yuv_422_frames_decode(encoding, order):
         decode(odd, "sensor_msgs/msg/Image", "here")
 
 
+@pytest.mark.parametrize("encoding, channels", [("mono16", 1), ("16UC1", 1), ("rgb16", 3), ("bgr16", 3)])
+@pytest.mark.parametrize("big_endian", [0, 1])
+def test_16_bit_frames_decode_to_their_top_8_bits_in_either_byte_order(encoding, channels, big_endian):
+    """Hostile round (issue 64): a valid mono16 frame flagged big-endian was refused as "got uint16"."""
+    from types import SimpleNamespace
+
+    rows, cols = 2, 3
+    values = np.arange(rows * cols * channels, dtype=np.uint16).reshape(rows, cols, channels) * 4099
+    data = np.frombuffer(values.astype(">u2" if big_endian else "<u2").tobytes(), np.uint8)
+    message = SimpleNamespace(
+        encoding=encoding, height=rows, width=cols, step=cols * channels * 2, is_bigendian=big_endian, data=data
+    )
+    image = decode(message, "sensor_msgs/msg/Image", "here")
+    top = (values >> 8).astype(np.uint8)
+    expected = np.repeat(top, 3, axis=2) if channels == 1 else top[:, :, ::-1] if encoding == "bgr16" else top
+    assert image.dtype == np.uint8 and np.array_equal(image, expected)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("kind, storage", [("mcap", ".mcap"), ("sqlite3", ".db3")])
 def test_a_bag_folder_without_its_metadata_is_read_through_its_storage_file(tmp_path, frames, kind, storage):

@@ -57,6 +57,29 @@ def test_an_uncompressed_mcap_cut_anywhere_replays_every_whole_message(tmp_path,
 
 
 @pytest.mark.slow
+def test_a_chunk_left_open_by_a_killed_writer_replays_the_chunks_before_it(tmp_path, views):
+    """Hostile round (issue 64): a chunk whose writer was killed still holds its length's placeholder, 2^64 - 1, and
+    the replay ended in an OverflowError."""
+    import struct
+
+    mcap = write_mcap(tmp_path / "mission", views, zstd=False)
+    data = bytearray(mcap.read_bytes())
+    at, chunks = 8, []
+    while data[at] not in (0x02, 0x0F):  # records up to the footer or the data end
+        (length,) = struct.unpack_from("<Q", data, at + 1)
+        chunks += [at] * (data[at] == 0x06)
+        at += 9 + length
+    last = chunks[-1]
+    struct.pack_into("<Q", data, last + 1, 2**64 - 1)
+    mcap.write_bytes(bytes(data[: last + 9 + 1000]))  # the chunk's first bytes written, then killed
+    whole = sum(bytes(data).find(view.tobytes()) + view.nbytes <= last for view in views)
+    assert 0 < whole < FRAMES
+    result = replay(tmp_path / "mission", tmp_path / "run")
+    assert result.exit_code == 0, result.output
+    assert len(frame_records(tmp_path / "run")) == whole
+
+
+@pytest.mark.slow
 def test_a_bag_folder_whose_mcap_is_cut_replays_as_its_mcap_would(tmp_path, views):
     """Issue 64: a bag folder with its metadata.yaml and a cut .mcap failed on the metadata ("File end magic is
     invalid"), while the same file given alone replayed to its last whole message."""

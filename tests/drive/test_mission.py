@@ -10,6 +10,7 @@ import re
 import struct
 import subprocess
 import threading
+import time
 from collections import Counter
 from pathlib import Path
 
@@ -561,3 +562,66 @@ def test_a_mission_file_that_cannot_be_finished_is_one_error_naming_it(tmp_path)
     with pytest.raises(CuriosityError, match=r"mission.mcap: cannot be finished \(MCAP error: No space left on device"):
         mission.close()
     mission.close()  # closed once: a second close is nothing
+
+
+@pytest.mark.slow
+def test_a_drive_killed_outright_leaves_a_mission_file_read_up_to_its_last_frame(tmp_path):
+    """Hostile round (issue 64): a SIGKILLed drive's mission.mcap held only a chunk header with its length's
+    placeholder (the SDK kept about a megabyte of frames in memory): no reader got a message, and a replay of it ended
+    in an OverflowError."""
+    from mcap.exceptions import EndOfFile
+    from mcap.stream_reader import StreamReader
+
+    bag = write_ros2_mission(tmp_path / "bag", mission_frames(400))  # seconds of replay: time to kill it
+    out = tmp_path / "killed"
+    with subprocess.Popen([CURIOSITY, "drive", "--dry-run", "--camera", str(bag), "--out", str(out), *GRID],
+                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) as process:
+        try:
+            deadline = time.monotonic() + START_SECONDS * 2
+            while len([r for r in read_log(out) if r["event"] == "frame"] if (out / "log.jsonl").is_file() else []) < 8:
+                assert time.monotonic() < deadline and process.poll() is None
+                time.sleep(0.05)
+        finally:
+            process.kill()
+    logged = len(frame_records(out))
+    messages = Counter()
+    with (out / "mission.mcap").open("rb") as file, pytest.raises(EndOfFile):
+        for record in StreamReader(file).records:  # the mcap project's own reader: every frame written, then the cut
+            messages[type(record).__name__] += 1
+    assert messages["Message"] >= 7 * (logged - 1) and messages["Metadata"] == 2
+    again = replay(out / "mission.mcap", tmp_path / "again", "--topic", "/camera/image")
+    assert again.exit_code == 0, again.output
+    assert len(frame_records(tmp_path / "again")) >= logged - 1
+
+
+def test_a_pose_in_no_frame_or_in_the_robots_own_places_nothing(tmp_path):
+    """Hostile round (issue 64): odometry whose frame_id was '' or base_link put a transform with no parent, or a
+    loop base_link -> base_link, into /tf."""
+    from curiosity_cli.drive.mission import MissionFile
+
+    mission = MissionFile(tmp_path / "mission.mcap")
+    pose = {"x": 1.0, "y": 2.0, "z": 0.0, "qx": 0.0, "qy": 0.0, "qz": 0.0, "qw": 1.0}
+    try:
+        for frame_id, placed in (("odom", True), ("", False), ("base_link", False)):
+            links = [(parent, child) for parent, child, _, _ in mission._links(0, {**pose, "frame_id": frame_id})]
+            assert links == [("odom", "base_link")] * placed + [("base_link", "camera")]
+    finally:
+        mission.close()
+
+
+@pytest.mark.slow
+def test_drive_timeline_of_a_live_ros_2_drive_draws_its_trajectory_alone(replayed, tmp_path):
+    """Hostile round (issue 64): a live ROS 2 drive's log names its topic, and --timeline took it for a replay's ("holds
+    no frame of the replay")."""
+    import shutil
+
+    live = Path(shutil.copytree(replayed, tmp_path / "live"))
+    for name in ("timeline.png", "timeline.pdf", "trajectory.png"):
+        (live / name).unlink(missing_ok=True)
+    lines = (live / "log.jsonl").read_text().splitlines()
+    start = json.loads(lines[0])
+    start.pop("bag", None)
+    (live / "log.jsonl").write_text("\n".join([json.dumps({**start, "camera": "ros2:/camera/image"}), *lines[1:]]) + "\n")
+    result = runner.invoke(app, ["drive", "--timeline", str(live)])
+    assert result.exit_code == 0, result.output
+    assert f"wrote {live / 'trajectory.png'}" in result.stdout and not (live / "timeline.png").exists()

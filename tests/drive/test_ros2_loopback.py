@@ -162,3 +162,23 @@ def test_a_camera_topic_that_delivers_nothing_is_a_one_line_error(tmp_path):
         "(ROS_DOMAIN_ID, CYCLONEDDS_URI)?"
     ]
     assert time.monotonic() - started >= 5 and not out.exists()  # refused before the run's folder was made
+
+
+@pytest.mark.slow
+def test_sigterm_while_the_camera_is_awaited_stops_the_drive_at_once(tmp_path):
+    """Hostile round (issue 64): SIGTERM during the wait for a first frame was ignored, and the drive exited 1 on the
+    camera's timeout 4.5 s later."""
+    out = tmp_path / "run"
+    drive = subprocess.Popen(
+        drive_command(out, "--dry-run", "--camera", "ros2:/camera/silent/compressed", "--ros-domain-id", "84"),
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=environment(),
+    )
+    time.sleep(2.0)  # the camera is opened (and awaited for 5 s) before anything else
+    sent = time.monotonic()
+    drive.send_signal(signal.SIGTERM)
+    stdout, stderr = drive.communicate(timeout=RUN_SECONDS)
+    took = time.monotonic() - sent
+    assert drive.returncode == 143, stderr
+    assert "no frame within" not in stderr and "stopped by SIGTERM" in stdout
+    # the camera's wait ends at once; the vocabularies and kernels still load (3-5 s loaded) before the run ends
+    assert took < 15, f"{took:.1f} s from SIGTERM to exit"

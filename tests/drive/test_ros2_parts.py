@@ -5,7 +5,9 @@ frame, the keepalive, each frame's surprise and target, STOP, a robot no one lis
 
 from __future__ import annotations
 
+import contextlib
 import sys
+import threading
 import time
 from types import SimpleNamespace
 
@@ -78,7 +80,7 @@ def test_without_cyclonedds_a_ros_2_camera_or_robot_names_the_extra(tmp_path, mo
 def test_ros_names_and_domains(monkeypatch):
     assert ros2.ros_topic("camera/image", "camera") == "/camera/image"
     assert ros2.ros_topic("/a_1/B/_c", "cmd_vel") == "/a_1/B/_c"
-    for bad in ("", "/", "//a", "/a/", "/a//b", "/1a", "a b", "/a-b", "~/a"):
+    for bad in ("", "/", "//a", "/a/", "/a//b", "/1a", "a b", "/a-b", "~/a", "/" + "a" * 253):
         with pytest.raises(ParameterError, match="^cmd_vel: got .* expected a ROS topic name") as info:
             ros2.ros_topic(bad, "cmd_vel")
         assert info.value.parameter == "cmd_vel"
@@ -86,7 +88,7 @@ def test_ros_names_and_domains(monkeypatch):
     assert ros2.ros_domain_id(None) == 0 and ros2.ros_domain_id(232) == 232
     monkeypatch.setenv("ROS_DOMAIN_ID", " 42 ")
     assert ros2.ros_domain_id(None) == 42 and ros2.ros_domain_id(7) == 7  # given, it wins over the environment
-    for text in ("x", "-1", "233", "4.5"):
+    for text in ("x", "-1", "233", "4.5", "\u00b2", "\u0663"):  # superscript two and Arabic-Indic three: digits to isdigit
         monkeypatch.setenv("ROS_DOMAIN_ID", text)
         with pytest.raises(ParameterError, match=rf"^ros_domain_id: not given, and ROS_DOMAIN_ID is '{text}'"):
             ros2.ros_domain_id(None)
@@ -178,8 +180,6 @@ def test_the_camera_reads_the_newest_frame_skips_a_damaged_one_and_ends_when_fra
             frames.write(png_frame(dds, 10, 1))
             time.sleep(0.02)
 
-    import threading
-
     thread = threading.Thread(target=publish)
     thread.start()
     try:
@@ -256,3 +256,56 @@ def test_a_domain_cyclone_dds_cannot_join_is_one_line(dds, monkeypatch):
     with pytest.raises(CuriosityError, match=r"^cmd_vel /cmd_vel: Cyclone DDS cannot join ROS domain 80 \(.*\); is "
                                              r"CYCLONEDDS_URI right\?$"):
         ros2.Ros2Robot("/cmd_vel", domain_id=80)
+
+
+def test_a_camera_sending_only_damaged_frames_ends_and_a_stop_ends_every_wait(dds):
+    """Hostile round (issue 64): a camera whose frames were all damaged was skipped for ever; a signal during a wait
+    for a frame or a subscriber waited it out."""
+    participant = dds.participant(82)
+    frames = dds.writer(participant, "/camera/image/compressed", dds.types.CompressedImage)
+    publishing = True
+
+    def publish():  # good frames until the camera has opened on one
+        while publishing:
+            frames.write(png_frame(dds, 10, 1))
+            time.sleep(0.02)
+
+    thread = threading.Thread(target=publish)
+    thread.start()
+    try:
+        camera = ros2.Ros2Camera("/camera/image/compressed", domain_id=82)
+        assert (camera.read().image == 10).all()
+    finally:
+        publishing = False
+        thread.join()
+    damaged = dds.types.CompressedImage(header=png_frame(dds, 0, 2).header, format="jpeg", data=b"\xff\xd8 not a jpeg")
+    deadline = time.monotonic() + 5
+    with pytest.raises(CameraError, match=r"^camera ros2:/camera/image/compressed: no usable frame for 1 s on ROS domain "
+                                          r"82, only damaged ones \(the last: format 'jpeg': 13 bytes"):
+        while time.monotonic() < deadline:  # a drive skips each, and reads on
+            frames.write(damaged)
+            with contextlib.suppress(BadMessage):
+                camera.read()
+    camera.close()
+    started = time.monotonic()
+    silent = ros2.Ros2Camera("/camera/silent/compressed", domain_id=82, stopped=lambda: True)  # no frame, no error
+    with pytest.raises(CameraError):  # the driver takes this for the stop, as its signal is set
+        silent.read()
+    nobody = ros2.Ros2Robot("/cmd_vel_nobody", domain_id=82, stopped=lambda: True)
+    assert nobody.subscribers == 0 and nobody.close() is False
+    assert time.monotonic() - started < 0.9, "a stop ends the waits at once (each is 1 s here)"
+
+
+def test_the_robot_is_halted_once_the_drive_stops_commanding(dds, monkeypatch):
+    """Hostile round (issue 64): while the camera stalled, the keepalive published the last moving twist for 5 s."""
+    monkeypatch.setattr(ros2, "STALE_AFTER", 0.3)
+    participant = dds.participant(83)
+    twists = dds.reader(participant, "/cmd_vel", dds.types.Twist)
+    robot = ros2.Ros2Robot("/cmd_vel", domain_id=83, keepalive=0.05)
+    robot.command(0.3, 0.0, 0.0)
+    time.sleep(1.0)  # no new command: the drive's camera stalled
+    received = wait_for(lambda: twists.take(200))
+    moving = [t for t in received if t.linear.x]
+    assert 2 <= len(moving) <= 12, "the command, and again every 0.05 s for 0.3 s"
+    assert received[len(moving):] == [dds.types.Twist()], "then one zero twist, and nothing more"
+    robot.close()
