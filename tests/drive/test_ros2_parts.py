@@ -166,16 +166,12 @@ def png_frame(dds, value: int, sec: int):
     return dds.types.CompressedImage(header=header, format="png", data=cv2.imencode(".png", image)[1].tobytes())
 
 
-@pytest.mark.slow  # two waits of a timeout each, 1 s here
-def test_the_camera_reads_the_newest_frame_skips_a_damaged_one_and_ends_when_frames_stop(dds):
-    participant = dds.participant(74)
-    frames = dds.writer(participant, "/camera/image/compressed", dds.types.CompressedImage)
-    frames.write(png_frame(dds, 10, 1))
-    with pytest.raises(CameraError, match=r"^camera ros2:/other/compressed: no frame within 1 s on ROS domain 74"):
-        ros2.Ros2Camera("/other/compressed", domain_id=74)
+def opened(dds, frames, topic: str, domain: int):
+    """A Ros2Camera on ``topic``, opened while ``frames`` publishes grey frames of 10 (the first is what it opens on;
+    a frame written before the camera's reader matched would be lost)."""
     publishing = True
 
-    def publish():  # a camera publishing until told to stop; the first frame is what the camera opens on
+    def publish():
         while publishing:
             frames.write(png_frame(dds, 10, 1))
             time.sleep(0.02)
@@ -183,10 +179,20 @@ def test_the_camera_reads_the_newest_frame_skips_a_damaged_one_and_ends_when_fra
     thread = threading.Thread(target=publish)
     thread.start()
     try:
-        camera = ros2.Ros2Camera("camera/image/compressed", domain_id=74)
+        return ros2.Ros2Camera(topic, domain_id=domain)
     finally:
         publishing = False
         thread.join()
+
+
+@pytest.mark.slow  # two waits of a timeout each, 1 s here
+def test_the_camera_reads_the_newest_frame_skips_a_damaged_one_and_ends_when_frames_stop(dds):
+    participant = dds.participant(74)
+    frames = dds.writer(participant, "/camera/image/compressed", dds.types.CompressedImage)
+    frames.write(png_frame(dds, 10, 1))
+    with pytest.raises(CameraError, match=r"^camera ros2:/other/compressed: no frame within 1 s on ROS domain 74"):
+        ros2.Ros2Camera("/other/compressed", domain_id=74)
+    camera = opened(dds, frames, "camera/image/compressed", 74)
     assert (camera.topic, camera.odom_topic, camera.domain_id) == ("/camera/image/compressed", None, 74)
     for value, sec in ((20, 2), (30, 3)):
         frames.write(png_frame(dds, value, sec))
@@ -263,21 +269,8 @@ def test_a_camera_sending_only_damaged_frames_ends_and_a_stop_ends_every_wait(dd
     for a frame or a subscriber waited it out."""
     participant = dds.participant(82)
     frames = dds.writer(participant, "/camera/image/compressed", dds.types.CompressedImage)
-    publishing = True
-
-    def publish():  # good frames until the camera has opened on one
-        while publishing:
-            frames.write(png_frame(dds, 10, 1))
-            time.sleep(0.02)
-
-    thread = threading.Thread(target=publish)
-    thread.start()
-    try:
-        camera = ros2.Ros2Camera("/camera/image/compressed", domain_id=82)
-        assert (camera.read().image == 10).all()
-    finally:
-        publishing = False
-        thread.join()
+    camera = opened(dds, frames, "/camera/image/compressed", 82)
+    assert (camera.read().image == 10).all()
     damaged = dds.types.CompressedImage(header=png_frame(dds, 0, 2).header, format="jpeg", data=b"\xff\xd8 not a jpeg")
     deadline = time.monotonic() + 5
     with pytest.raises(CameraError, match=r"^camera ros2:/camera/image/compressed: no usable frame for 1 s on ROS domain "
