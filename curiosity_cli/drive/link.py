@@ -332,6 +332,8 @@ class RobotLink:
             if inflight is None or item.seq != inflight.frame.seq:
                 return  # the ACK of a frame already answered (its resend crossed the first ACK)
             self.stats.acked += 1
+            if isinstance(inflight.frame, Hello):
+                return  # HELLO is answered by the robot's reply; an ACK alone means the reply was lost
             if isinstance(inflight.frame, Vel):
                 latencies = self.stats.ack_latencies
                 latencies[item.seq] = time.monotonic() - inflight.first_sent
@@ -348,6 +350,8 @@ class RobotLink:
             if item.seq == self._hello_seq and self._robot_hello is None:
                 self._robot_hello = item
                 self._hello_reply.set()
+                if inflight is not None and isinstance(inflight.frame, Hello):
+                    self._answered(item.seq)
         elif isinstance(item, Estop):
             if self._estop is None:
                 self._estop = item

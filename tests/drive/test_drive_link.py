@@ -103,6 +103,25 @@ def test_a_robot_that_never_answers_hello_is_refused_and_stopped(robots):
     assert robot.wait_for(lambda: robot.frames(Stop))
 
 
+def test_a_hello_reply_lost_after_its_ack_is_made_good_by_a_resend(robots):
+    replies = []
+
+    def reply_lost_once(frame):
+        if isinstance(frame, Hello):
+            replies.append(frame.seq)
+            return [Ack(frame.seq)] if len(replies) == 1 else polite(frame)
+        return polite(frame)
+
+    robot = robots(reply_lost_once)
+    logged, log = events()
+    link = RobotLink.open(robot.port, 115200, STRICT, log=log)
+    assert link.robot_name == "pty-robot" and replies == [0, 0]  # the same HELLO, resent once
+    assert [f for e, f in logged if e == "resend"] == [{"seq": 0, "frame": "HELLO"}]
+    seq = link.command(0.1, 0.0, 0.0)
+    assert seq == 1 and robot.wait_for(lambda: link.ack_latency(seq) is not None)
+    assert link.close() is True
+
+
 def test_a_robot_of_another_protocol_version_is_refused(robots):
     robot = robots(lambda f: [Ack(f.seq), Hello(f.seq, 2, "future")] if isinstance(f, Hello) else polite(f))
     with pytest.raises(LinkError, match="the robot speaks protocol version 2; this host speaks version 1"):

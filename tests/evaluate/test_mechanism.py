@@ -544,19 +544,37 @@ def test_a_table_from_before_the_new_measures_is_summarised_without_them():
 
 
 def test_a_recorded_studys_tables_are_summarised_as_they_were_written():
-    from curiosity_cli.evaluate.mechanism import ADDED_MEASURES
+    from curiosity_cli.evaluate.mechanism import ADDED_MEASURES, PAIR_WEIGHTED
 
     recorded = sorted(Path(__file__).resolve().parents[2].glob("studies/*/seed-*/*/mechanism.csv"))
     if not recorded:
         pytest.skip("no recorded study in this checkout")
-    table = pd.read_csv(recorded[0])
-    summary = summarise_mechanism(table)
+    tables = [pd.read_csv(path) for path in recorded]
+    # one table written before the added measures existed and one after, where the checkout has both
+    older = next((t for t in tables if not set(ADDED_MEASURES) & set(t.columns)), None)
+    newer = next((t for t in tables if set(ADDED_MEASURES) <= set(t.columns)), None)
     keys = ["dataset", "weight_function", "path_length"]
-    means = table.groupby(keys, sort=False)[["gain", "infinite_share"]].mean()
-    got = summary.set_index(keys).loc[means.index]
-    assert got["gain"].to_numpy() == pytest.approx(means["gain"].to_numpy(), nan_ok=True)
-    assert got["infinite_share"].to_numpy() == pytest.approx(means["infinite_share"].to_numpy(), nan_ok=True)
-    assert summary[list(ADDED_MEASURES)].isna().all(axis=None)
+
+    def written(table, m):
+        """A group's mean of ``m``, or its share over the pairs pooled, recomputed from the rows."""
+        groups = table.groupby(keys, sort=False)
+        if m not in PAIR_WEIGHTED:
+            return groups[m].mean()
+        pairs = table[PAIR_WEIGHTED[m]]
+        return (table[m] * pairs).where(pairs > 0).groupby([table[k] for k in keys], sort=False).sum() / groups[
+            PAIR_WEIGHTED[m]
+        ].sum()
+
+    for table, measures in ((older, ["gain", "infinite_share", "auc"]), (newer, ["gain", "auc", *ADDED_MEASURES])):
+        if table is None:
+            continue
+        summary = summarise_mechanism(table).set_index(keys)
+        for m in measures:
+            expected = written(table, m)
+            assert summary.loc[expected.index, m].to_numpy() == pytest.approx(expected.to_numpy(), nan_ok=True), m
+    assert older is not None or newer is not None
+    if older is not None:
+        assert summarise_mechanism(older)[list(ADDED_MEASURES)].isna().all(axis=None)
 
 
 def test_the_report_shows_the_new_measures_and_leaves_an_older_tables_empty():
