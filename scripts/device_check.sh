@@ -10,7 +10,8 @@
 #      does not import); the CUDA kernels against the CPU kernels, byte for byte, on tiny maps
 #   a. scripts/bench_label_devices.py: ns per word-sample per chain, CPU vs CUDA, R = 16, 64, 256
 #   b. scripts/device_compare.py: a small experiment labelled on both devices, label files
-#      compared byte for byte, and where the devices part if they do not agree
+#      compared byte for byte, and where the devices part if they do not agree; under the
+#      frozen reading and the two masked ones (unseen-topic, used-topics)
 #   d. the machine's cores (lscpu) and scripts/bench_batch_threads.py: the batch reference's sweeps on
 #      1, 4 and 16 threads, beside the reference checkout in .device/ref when there is one
 #   c. the paper grid (bench_pipeline.py --full-grid --grid-only --grids paper --jobs 16) with
@@ -89,15 +90,20 @@ part "b. a small experiment labelled on both devices, label files compared"
 if [ $gpu = 1 ]; then compare=(--devices cpu cuda); else compare=(--devices cpu cpu); echo "(no GPU: cpu against cpu, a check of the script)"; fi
 if [ $small = 1 ]; then compare+=(--restarts 1 --steps 20 --sweeps 2 --warm-sweeps 1 --batch-sweeps 2 --jobs 2 --diagnose --diagnose-chains 2 --diagnose-sweeps 1)
 else compare+=(--restarts 3 --steps 40 --jobs 16); fi
-rm -rf /tmp/device-compare
-if [[ ",$skip," == *,b,* ]]; then status=skipped
-else timeout "$(limit 200 60)" "$PY" scripts/device_compare.py --out /tmp/device-compare "${compare[@]}"; status=$?; fi
-case $status in
-    skipped) summary+=("b. label files: skipped (DEVICE_CHECK_SKIP)");;
-    0) summary+=("b. label files ${compare[1]} vs ${compare[2]}: the same bytes");;
-    1) summary+=("b. label files ${compare[1]} vs ${compare[2]}: DIFFERENT (the log says where)");;
-    *) summary+=("b. label files: failed or timed out (exit $status)");;
-esac
+# the frozen reading, then the two that give each chain a topic mask (unseen-topic with one topic more)
+for reading in frozen unseen-topic used-topics; do
+    rm -rf /tmp/device-compare
+    echo "--- label.reading=$reading"
+    if [[ ",$skip," == *,b,* ]]; then status=skipped
+    else timeout "$(limit 150 60)" "$PY" scripts/device_compare.py --out /tmp/device-compare --reading $reading "${compare[@]}"
+        status=$?; fi
+    case $status in
+        skipped) summary+=("b. label files ($reading): skipped (DEVICE_CHECK_SKIP)");;
+        0) summary+=("b. label files ($reading) ${compare[1]} vs ${compare[2]}: the same bytes");;
+        1) summary+=("b. label files ($reading) ${compare[1]} vs ${compare[2]}: DIFFERENT (the log says where)");;
+        *) summary+=("b. label files ($reading): failed or timed out (exit $status)");;
+    esac
+done
 
 part "d. the machine's cores, and the batch reference's sweeps on 1 to 16 threads"
 lscpu | grep -E "^(Model name|CPU\(s\)|Thread\(s\) per core|Core\(s\) per socket|Socket\(s\)|L3)" || echo "no lscpu"

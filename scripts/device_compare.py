@@ -16,6 +16,7 @@
 
     python scripts/device_compare.py --out /tmp/compare                 # a few minutes on a GPU machine
     python scripts/device_compare.py --out /tmp/compare --diagnose     # step 3 even if the files agree
+    python scripts/device_compare.py --out /tmp/compare --reading unseen-topic   # labelled under a masked reading
     python scripts/device_compare.py --smoke     # the CPU against itself, tiny, in a temporary folder: seconds
 
 Exits 0 when every file is the same bytes, 1 when some differ, 2 when there is no GPU.
@@ -34,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from curiosity_cli import api
+from curiosity_cli.config import LABEL_READINGS
 from curiosity_cli.topics.devices import cuda_missing
 
 WEIGHTS = ["random-walk", "stochastic-coverage", "word-perplexity", "topic-perplexity"]
@@ -45,6 +47,7 @@ def explore(out: Path, args) -> Path:
         f"explore.checkpoints={[c for c in (10, 20, 40, 80, 160) if c < args.steps] + [args.steps]}",
         f"explore.weight_functions={WEIGHTS}", "name=device-compare", f"label.sweeps={args.sweeps}",
         f"label.warm_sweeps={args.warm_sweeps}", f"label.batch_sweeps={args.batch_sweeps}",
+        f"label.reading={args.reading}",
     ]
     return api.explore("quick", overrides=overrides, results_dir=out, jobs=args.jobs).folder
 
@@ -197,6 +200,8 @@ def main() -> None:
     parser.add_argument("--warm-sweeps", type=int, default=4)
     parser.add_argument("--batch-sweeps", type=int, default=20)
     parser.add_argument("--jobs", type=int, default=None)
+    parser.add_argument("--reading", default="frozen", choices=LABEL_READINGS,
+                        help="how Z_p is labelled (label.reading): the masked readings take a per-chain topic mask")
     parser.add_argument("--diagnose", action="store_true", help="step 3 even if the files agree")
     parser.add_argument("--diagnose-chains", type=int, default=8)
     parser.add_argument("--diagnose-sweeps", type=int, default=3)
@@ -244,7 +249,8 @@ def compare(args) -> int:
     for line in lines[:20]:
         print(f"  {line}")
     if lines or args.diagnose:
-        print("where the devices part:", flush=True)
+        print("where the devices part" + (" (the frozen reading's chains, without the reading's masks)"
+                                          if args.reading != "frozen" else "") + ":", flush=True)
         diagnose(on[0], args)
     return 1 if lines else 0
 
