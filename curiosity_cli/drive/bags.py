@@ -153,11 +153,15 @@ class BagCamera:
     source : str
         A ROS 1 ``.bag``, a ROS 2 bag folder, or a ``.mcap`` / ``.db3`` file.
     topic : str, optional
-        The image topic; may be left out when the bag has exactly one.
+        The image topic; may be left out when the bag has exactly one other than ``outputs``.
     odom_topic : str, optional
         A ``nav_msgs/msg/Odometry`` topic (or ``foxglove.PoseInFrame``, in a Foxglove
         recording) whose nearest pose in time each frame gets; default the bag's only one,
         if it has one.
+
+    outputs : tuple of str, optional
+        Image topics a drive writes (its mission file's), never taken as the camera unless
+        ``topic`` names one: a drive's own ``mission.mcap`` replays from its camera.
 
     Attributes
     ----------
@@ -182,7 +186,9 @@ class BagCamera:
     #: What ran out when the frames do: the run's outcome is ``end of bag``.
     kind = "bag"
 
-    def __init__(self, source: str, topic: str | None = None, odom_topic: str | None = None):
+    def __init__(
+        self, source: str, topic: str | None = None, odom_topic: str | None = None, outputs: tuple[str, ...] = ()
+    ):
         try:
             from rosbags.highlevel import AnyReader
         except ImportError:
@@ -222,10 +228,11 @@ class BagCamera:
             self.close()
             topics = ", ".join(f"{name} ({kind})" for name, (kind, _) in sorted(counts.items())) or "none"
             raise CameraError(f"{where}: no image topic to replay; its topics: {topics}")
-        if topic is None and len(images) > 1:
+        cameras = [name for name in images if name not in outputs]
+        if topic is None and len(cameras) != 1:
             self.close()
             raise CameraError(f"topic: expected one of the image topics of {where}: {listed}", parameter="topic")
-        topic = topic if topic is not None else next(iter(images))
+        topic = topic if topic is not None else cameras[0]
         if topic not in counts:
             self.close()
             raise CameraError(

@@ -32,7 +32,7 @@ from curiosity_cli.drive.driver import RUN_LOG, Outcome, Outputs, StopRequest, p
 from curiosity_cli.drive.frames_table import FRAMES_CSV, FRAMES_PARQUET
 from curiosity_cli.drive.jsonlines import JsonLines
 from curiosity_cli.drive.link import LinkTiming, RobotLink
-from curiosity_cli.drive.mission import LAYOUT_FILE, MISSION_FILE, MissionFile, write_layout
+from curiosity_cli.drive.mission import LAYOUT_FILE, MISSION_FILE, PERPLEXITY, MissionFile, write_layout
 from curiosity_cli.drive.overlay import check_video_out
 from curiosity_cli.drive.pipeline import CuriosityPipeline, warm_up
 from curiosity_cli.drive.sim import Body, Pose
@@ -62,7 +62,7 @@ def open_camera(
     if is_ros2(camera):
         return Ros2Camera(camera[len(PREFIX):], odom_topic, ros_domain_id, stopped)
     if is_bag(camera):
-        return BagCamera(camera, topic, odom_topic)
+        return BagCamera(camera, topic, odom_topic, outputs=(PERPLEXITY,))
     return cameras.OpenCVCamera(camera)
 
 

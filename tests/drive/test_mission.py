@@ -378,6 +378,21 @@ def test_a_drive_folder_given_as_an_experiment_points_to_open_mission_and_force_
 
 
 @pytest.mark.slow
+def test_a_drives_own_mission_file_replays_from_its_camera_without_a_topic(replayed, tmp_path):
+    """A mission file has two image channels, the camera's and the perplexity grid the drive wrote: a replay of it
+    asked for ``--topic`` (issue 64's caveat); the drive's own outputs are never taken as the camera unless named."""
+    result = replay(replayed / "mission.mcap", tmp_path / "again")
+    assert result.exit_code == 0, result.output
+    assert "replaying /camera/image" in result.output
+    first, again = frame_records(replayed), frame_records(tmp_path / "again")
+    assert [r["header_time_ns"] for r in again] == [r["header_time_ns"] for r in first]
+    assert [r["pose"]["frame_id"] for r in again] == [r["pose"]["frame_id"] for r in first]
+    # named, the perplexity grid is taken, and its float pixels are refused as a camera's
+    named = replay(replayed / "mission.mcap", tmp_path / "grid", "--topic", "/curiosity/perplexity")
+    assert named.exit_code == 1 and "/curiosity/perplexity, message 0: encoding '32FC1': expected one of" in named.stderr
+
+
+@pytest.mark.slow
 def test_a_bags_own_transforms_link_the_frames_in_place_of_the_stated_default(tmp_path):
     """Issue 62, item 2: the mission file's transforms come from the bag's /tf_static and /tf where it has them."""
     bag = write_ros2_mission(tmp_path / "bag", mission_frames(4), transforms=True)
