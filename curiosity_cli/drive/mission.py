@@ -279,6 +279,33 @@ class MissionFile:
                 ) from None
 
 
+def check_live_port(port: int | None) -> None:
+    """Refuse a live view's ``port`` that cannot be served now (taken, or not ours to bind), before a drive loads its model.
+
+    The port is bound and let go at once; ``0`` (any free port) and None (no live view) pass.
+
+    Raises
+    ------
+    CuriosityError
+        Naming the port and the system's reason (``parameter="foxglove"``).
+    """
+    import socket
+
+    from curiosity_cli.errors import CuriosityError
+
+    if not port:
+        return
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        # as a server binds (SO_REUSEADDR): a port left in TIME_WAIT by an earlier run is free, a listening one is not
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind(("127.0.0.1", port))
+        except OSError as exc:
+            raise CuriosityError(
+                f"foxglove: cannot serve a live view on port {port} ({exc.strerror or exc})", parameter="foxglove"
+            ) from None
+
+
 def write_layout(folder: Path) -> Path:
     """Write :data:`LAYOUT_FILE` into ``folder``: a Foxglove layout for its mission file (import it with Foxglove's
     layout menu, "Import from file").

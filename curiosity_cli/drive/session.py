@@ -32,7 +32,7 @@ from curiosity_cli.drive.driver import RUN_LOG, Outcome, Outputs, StopRequest, p
 from curiosity_cli.drive.frames_table import FRAMES_CSV, FRAMES_PARQUET
 from curiosity_cli.drive.jsonlines import JsonLines
 from curiosity_cli.drive.link import LinkTiming, RobotLink
-from curiosity_cli.drive.mission import LAYOUT_FILE, MISSION_FILE, PERPLEXITY, MissionFile, write_layout
+from curiosity_cli.drive.mission import LAYOUT_FILE, MISSION_FILE, PERPLEXITY, MissionFile, check_live_port, write_layout
 from curiosity_cli.drive.overlay import check_video_out
 from curiosity_cli.drive.pipeline import CuriosityPipeline, warm_up
 from curiosity_cli.drive.sim import Body, Pose
@@ -446,7 +446,8 @@ def drive_session(
     LinkError
         The robot cannot be reached, or the link was lost (STOP was attempted).
     CuriosityError
-        A camera that cannot be opened or fails, an output that cannot be written.
+        A camera that cannot be opened or fails, an output that cannot be written, a
+        ``foxglove`` port that cannot be served (found before the model loads).
     """
     if (camera == "sim") != (sim_map is not None):
         raise ParameterError(f"camera: got {camera!r}; camera 'sim' and a sim_map go together")
@@ -465,6 +466,7 @@ def drive_session(
         check_video_out(video_out)
     check_replay_options(camera, topic=topic, odom_topic=odom_topic, strict=strict, clock=clock)
     check_run_folder(out, force=force)  # before the camera and the model: a folder in use is the only message
+    check_live_port(foxglove)
     with stopping_on_signals(StopRequest()) as stop, contextlib.ExitStack() as held:
 
         def stopped() -> bool:  # a live camera's and robot's waits end on a signal

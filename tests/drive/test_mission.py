@@ -393,6 +393,21 @@ def test_a_drives_own_mission_file_replays_from_its_camera_without_a_topic(repla
 
 
 @pytest.mark.slow
+def test_a_live_views_port_in_use_is_refused_before_the_model_loads(replayed, tmp_path):
+    """A busy ``--foxglove`` port was found only after the model had loaded (a caveat left at stop 70)."""
+    import socket
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        result = replay(replayed / "mission.mcap", tmp_path / "run", "--foxglove", str(port))
+    assert result.exit_code == 1, result.output
+    assert result.stderr.strip().splitlines() == [f"Error: --foxglove: cannot serve a live view on port {port} (Address already in use)"]
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.slow
 def test_a_bags_own_transforms_link_the_frames_in_place_of_the_stated_default(tmp_path):
     """Issue 62, item 2: the mission file's transforms come from the bag's /tf_static and /tf where it has them."""
     bag = write_ros2_mission(tmp_path / "bag", mission_frames(4), transforms=True)
