@@ -449,6 +449,11 @@ def drive_session(
         A camera that cannot be opened or fails, an output that cannot be written, a
         ``foxglove`` port that cannot be served (found before the model loads).
     """
+    if not camera.strip():  # Path('') is the working folder, which would be read as a bag folder
+        raise ParameterError(
+            f"camera: got {camera!r}; expected a device index, a video file, a stream URL, a bag, ros2:/TOPIC or 'sim'",
+            parameter="camera",
+        )
     if (camera == "sim") != (sim_map is not None):
         raise ParameterError(f"camera: got {camera!r}; camera 'sim' and a sim_map go together")
     if cmd_vel is not None and (port is not None or camera == "sim"):

@@ -81,6 +81,16 @@ def test_a_camera_that_cannot_be_opened_is_a_one_line_error(tmp_path):
     assert "none.mp4': OpenCV cannot open it; expected a device index, a video file or a stream URL" in one_line_error(result)
 
 
+@pytest.mark.parametrize("camera", ["", "  "])
+def test_an_empty_camera_is_named_as_empty_not_read_as_the_working_folder(tmp_path, camera):
+    """``--camera ''`` said ``.: not a bag folder`` (a caveat left at stop 70): an empty path is the working folder."""
+    result = runner.invoke(app, ["drive", "--dry-run", "--camera", camera, "--out", str(tmp_path / "run")])
+    assert one_line_error(result) == (
+        f"Error: --camera: got {camera!r}; expected a device index, a video file, a stream URL, a bag, ros2:/TOPIC or 'sim'"
+    )
+    assert not (tmp_path / "run").exists()
+
+
 def test_a_serial_port_that_does_not_exist_is_a_one_line_error(tmp_path):
     result = runner.invoke(
         app, ["drive", "--serial", str(tmp_path / "ttyUSB9"), "--camera", "sim", "--sim-map", "reef-mosaic", "--out", str(tmp_path / "run")]
