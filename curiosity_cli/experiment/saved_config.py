@@ -37,14 +37,25 @@ def load_saved_config(folder: str | Path, overrides: typing.Iterable[str] = ()) 
     saved = ExperimentFolder(folder).config
     if not saved.is_file():
         raise ConfigError(f"{display_path(saved)}: not found; {RERUN} makes the experiment", rerun="explore", force=False)
-    with contextlib.suppress(OSError, UnicodeDecodeError):  # an unreadable file is load_config's to name
-        if is_drive_yaml(saved.read_text()):
+    refuse_drive_folder(folder)
+    config = load_config(saved)  # the file alone first: a broken one is named, not an override that met it
+    return load_config(saved, overrides) if overrides else config
+
+
+def refuse_drive_folder(folder: str | Path) -> None:
+    """Refuse a drive's run folder given where an experiment folder is expected, pointing to what reads it.
+
+    Raises
+    ------
+    ConfigError
+        Its ``config.yaml`` is a drive's (an unreadable one passes: :func:`load_saved_config` names it).
+    """
+    with contextlib.suppress(OSError, UnicodeDecodeError):
+        if is_drive_yaml(ExperimentFolder(folder).config.read_text()):
             raise ConfigError(
                 f"{display_path(Path(folder))}: a drive's run folder, not an experiment; its frames are read with "
                 "curiosity_cli.api.open_mission (frames.parquet), its timeline drawn by curiosity drive --timeline"
             )
-    config = load_config(saved)  # the file alone first: a broken one is named, not an override that met it
-    return load_config(saved, overrides) if overrides else config
 
 
 def run_sections(config: ExperimentConfig) -> dict:

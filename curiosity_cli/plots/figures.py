@@ -170,8 +170,10 @@ def write_figures(experiment_dir: Path) -> WrittenFigures:
             f"{display_path(experiment_dir)}: no such experiment folder; {RERUN} makes it", rerun="explore", force=False
         )
     from curiosity_cli.experiment.lock import working_in
+    from curiosity_cli.experiment.saved_config import refuse_drive_folder
 
     with working_in(experiment_dir, "plot"):
+        refuse_drive_folder(experiment_dir)  # named as one, not as a folder without mi.csv
         mi = read_table(layout.table("mi"), MI_COLUMNS, error=PlotError)
         if mi.empty:
             raise PlotError(f"{display_path(layout.table('mi'))}: no rows; {RERUN} makes it", rerun="evaluate", force=False)

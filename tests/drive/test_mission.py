@@ -371,8 +371,9 @@ def test_a_drive_folder_given_as_an_experiment_points_to_open_mission_and_force_
     says = f"{replayed}: a drive's run folder, not an experiment; its frames are read with curiosity_cli.api.open_mission"
     with pytest.raises(CuriosityError, match=re.escape(says)):
         api.open_experiment(replayed)
-    evaluated = runner.invoke(app, ["evaluate", str(replayed)])
-    assert evaluated.exit_code == 1 and f"Error: {says}" in evaluated.stderr
+    for command in ("evaluate", "plot"):  # plot said `mi.csv: not found` (a caveat left at stop 70)
+        given = runner.invoke(app, [command, str(replayed)])
+        assert given.exit_code == 1 and f"Error: {says}" in given.stderr, (command, given.output)
     with pytest.raises(CuriosityError, match=r"holds an earlier run \(log.jsonl and \d+ more\); give a new folder, or `force` to "):
         api.drive(camera=str(replayed / "mission.mcap"), out=replayed, dry_run=True, max_frames=1)
 
