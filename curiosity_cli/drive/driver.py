@@ -255,6 +255,7 @@ def run(
         camera.close()
         stop_acked = robot.close() if robot is not None else None
         stats = None if robot is None else robot.stats
+        odometry = getattr(camera, "odometry_counts", None)  # a live topic's: what it left out, said nowhere else
         log.write(
             "end",
             outcome=None if outcome is None else outcome.reason,
@@ -262,6 +263,7 @@ def run(
             frames=frames,
             skipped=skipped,
             stop_acked=stop_acked,
+            **({} if odometry is None else {"odometry": odometry}),
             **({} if stats is None else {
                 "sent": stats.sent, "resent": stats.resent, "acked": stats.acked, "naks": stats.naks,
                 "refused_lines": stats.refused_lines, "states": stats.states,

@@ -192,6 +192,10 @@ class Ros2Camera:
     domain_id : int
     pose_note : str
         Where frames' poses come from, or why they have none.
+    odometry_counts : dict or None
+        With ``odom_topic``: the odometry messages ``kept``, and left out as ``damaged`` (not decoded, or a value
+        not finite) or ``senseless`` (outside physical sense), as
+        :func:`~curiosity_cli.drive.odometry.pose_problem` says; None without.
 
     Raises
     ------
@@ -319,6 +323,11 @@ class Ros2Camera:
         stamp = message.header.stamp
         header_ns = int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
         return Frame(image, captured, None, header_ns, self._pose(header_ns))
+
+    @property
+    def odometry_counts(self) -> dict | None:
+        poses = self._poses
+        return None if poses is None else {"kept": poses.kept, "damaged": poses.damaged, "senseless": poses.senseless}
 
     def _pose(self, header_ns: int):
         if self._odometry is None:

@@ -548,6 +548,13 @@ def drive_session(
                 mission=mission, on_frame=on_frame,
             )
             mission.close()
+            left_out = getattr(source, "odometry_counts", None) or {}
+            if left_out.get("damaged") or left_out.get("senseless"):
+                on_status(
+                    f"{source.odom_topic}: {left_out['damaged'] + left_out['senseless']} odometry messages left out "
+                    f"({left_out['damaged']} damaged: not decoded or a value not finite; {left_out['senseless']} "
+                    f"outside physical sense), {left_out['kept']} kept (`odometry` in the log's end)"
+                )
             # a drive stopped by a signal exits at once: its data is written, its figures left for --timeline
             drawn = outcome.reason not in _SIGNALS
             _write_tables(out, figures=drawn)

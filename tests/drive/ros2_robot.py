@@ -4,7 +4,7 @@ against an independent implementation.
 
 It publishes a camera at 10 Hz on ``/camera/image/compressed`` (``sensor_msgs/msg/CompressedImage``, JPEG) and
 ``/camera/image_raw`` (``sensor_msgs/msg/Image``, rgb8), and ``nav_msgs/msg/Odometry`` on ``/odom`` (x growing 0.1 m a
-frame, stamped as the frames), and writes every ``geometry_msgs/msg/Twist`` its ``/cmd_vel`` subscriber receives as
+frame, stamped as the frames; every third frame also a pose whose x is NaN), and writes every ``geometry_msgs/msg/Twist`` its ``/cmd_vel`` subscriber receives as
 a JSON line to TWISTS. It prints ``ready`` once its topics exist, and runs until SIGTERM or SIGINT.
 
 Usage: ``python ros2_robot.py DOMAIN TWISTS``. Its DDS stays on loopback (:data:`LOOPBACK`), whatever the environment
@@ -161,6 +161,12 @@ def main(domain: int, twists_path: str) -> None:
                 WhereUncertain(Where(Place(0.1 * frame, 0.0, 0.0), Turn(0.0, 0.0, 0.0, 1.0))),
                 VelocityUncertain(Velocity(Xyz(1.0, 0.0, 0.0), Xyz(0.0, 0.0, 0.0))),
             ))
+            if frame % 3 == 0:  # a pose that is no pose: a drive leaves it out, and counts it
+                odom.write(Odom(
+                    Head(head.stamp, "odom"), "base_link",
+                    WhereUncertain(Where(Place(float("nan"), 0.0, 0.0), Turn(0.0, 0.0, 0.0, 1.0))),
+                    VelocityUncertain(Velocity(Xyz(1.0, 0.0, 0.0), Xyz(0.0, 0.0, 0.0))),
+                ))
             frame += 1
 
 
