@@ -581,6 +581,11 @@ def drive_session(
                     _write_tables(out)
                     if hasattr(source, "messages"):
                         _draw_timeline(out, camera, source.topic, "stopped early", clock)
+            if isinstance(exc, KeyboardInterrupt) and log.ended:  # a second Ctrl-C (StopRequest): no line came
+                on_status(
+                    f"interrupted again: stopped at once, its tables and figures left out; curiosity drive --timeline "
+                    f"{display_path(out)} draws them; the session's log is kept in {display_path(out / RUN_LOG)}"
+                )
             if isinstance(exc, CuriosityError):  # the folder stays, as a log of the attempt: say where
                 kept = f"{exc.args[0]}; the session's log is kept in {display_path(out / RUN_LOG)}"
                 raise type(exc)(kept, parameter=exc.parameter, rerun=exc.rerun) from None

@@ -106,6 +106,23 @@ def test_sigint_sends_stop_and_exits_130(tmp_path, simrobot, warm_kernels):
     assert robot.process.returncode == 143 and "simrobot: stopped by SIGTERM" in robot_stderr
 
 
+def test_a_second_sigint_stops_at_once_with_stop_sent_and_says_so(tmp_path, simrobot, warm_kernels):
+    """A second Ctrl-C (for a drive stuck in a camera) exited 130 without a word (a caveat left at stop 70)."""
+    robot = simrobot()
+    out = tmp_path / "run"
+    process = subprocess.Popen(drive_command(out, "--serial", robot.port, *SIM), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    wait_for_frames(out, 3, process)
+    process.send_signal(signal.SIGINT)
+    time.sleep(0.05)  # the first one's exit takes seconds: this one comes while the drive still holds the signals
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=RUN_SECONDS)
+    assert process.returncode == 130, stderr
+    assert "Traceback" not in stderr
+    assert (f"interrupted again: stopped at once, its tables and figures left out; curiosity drive --timeline {out} "
+            f"draws them; the session's log is kept in {out / 'log.jsonl'}") in stderr
+    assert robot.received()[-1] == "STOP" and read_log(out)[-1]["outcome"] == "SIGINT", read_log(out)[-3:]
+
+
 def test_a_robot_that_disconnects_mid_run_is_a_clean_error_after_stop_was_attempted(tmp_path, simrobot, warm_kernels):
     robot = simrobot()
     out = tmp_path / "run"
