@@ -76,6 +76,7 @@ class _InFlight:
     first_sent: float
     last_sent: float
     transmissions: int
+    acked: bool = False  # a HELLO's ACK came; it stays in flight until the robot's HELLO reply
 
 
 class RobotLink:
@@ -331,9 +332,11 @@ class RobotLink:
         elif isinstance(item, Ack):
             if inflight is None or item.seq != inflight.frame.seq:
                 return  # the ACK of a frame already answered (its resend crossed the first ACK)
+            if isinstance(inflight.frame, Hello):  # answered by the robot's reply; an ACK alone: the reply was lost
+                self.stats.acked += not inflight.acked  # a resend's ACK again is not another frame ACKed
+                inflight.acked = True
+                return
             self.stats.acked += 1
-            if isinstance(inflight.frame, Hello):
-                return  # HELLO is answered by the robot's reply; an ACK alone means the reply was lost
             if isinstance(inflight.frame, Vel):
                 latencies = self.stats.ack_latencies
                 latencies[item.seq] = time.monotonic() - inflight.first_sent

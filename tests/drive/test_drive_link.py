@@ -116,6 +116,7 @@ def test_a_hello_reply_lost_after_its_ack_is_made_good_by_a_resend(robots):
     logged, log = events()
     link = RobotLink.open(robot.port, 115200, STRICT, log=log)
     assert link.robot_name == "pty-robot" and replies == [0, 0]  # the same HELLO, resent once
+    assert (link.stats.sent, link.stats.resent, link.stats.acked) == (1, 1, 1)  # one frame, ACKed (twice)
     assert [f for e, f in logged if e == "resend"] == [{"seq": 0, "frame": "HELLO"}]
     seq = link.command(0.1, 0.0, 0.0)
     assert seq == 1 and robot.wait_for(lambda: link.ack_latency(seq) is not None)
