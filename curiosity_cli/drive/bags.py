@@ -158,7 +158,6 @@ class BagCamera:
         A ``nav_msgs/msg/Odometry`` topic (or ``foxglove.PoseInFrame``, in a Foxglove
         recording) whose nearest pose in time each frame gets; default the bag's only one,
         if it has one.
-
     outputs : tuple of str, optional
         Image topics a drive writes (its mission file's), never taken as the camera unless
         ``topic`` names one: a drive's own ``mission.mcap`` replays from its camera.
