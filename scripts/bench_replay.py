@@ -98,17 +98,20 @@ def main() -> None:
         commits.append(found.stdout.strip())
     with tempfile.TemporaryDirectory(prefix="bench-replay-") as tmp:
         bag = write_bag(Path(tmp) / "bag", args.frames)
-        versions = {}
+        versions, worktrees = {}, {}
         try:
             for role, commit in zip(("reference", "candidate"), commits):
-                versions[f"{role} {commit}"] = Path(tmp) / role
+                if commit in worktrees:  # a commit against itself (the noise): one checkout, compiled once
+                    versions[f"{role} {commit}"] = worktrees[commit]
+                    continue
+                versions[f"{role} {commit}"] = worktrees[commit] = Path(tmp) / role
                 subprocess.run(["git", "worktree", "add", "--detach", str(Path(tmp) / role), commit], cwd=ROOT,
                                check=True, capture_output=True)
                 # its own configs and data: an editable install maps the shipped ones to this checkout's
                 for shipped in ("configs", "data"):
                     (Path(tmp) / role / "curiosity_cli" / "shipped" / shipped).symlink_to(Path("..", "..", shipped))
             runs = iter(range(10**6))
-            for code in versions.values():  # each version's kernels compiled, untimed
+            for code in worktrees.values():  # each checkout's kernels compiled, untimed
                 replay(code, bag, Path(tmp) / f"run-{next(runs)}", args.skip + 2, 0)
             speeds = {name: [] for name in versions}
             for repeat in range(args.repeats):
@@ -118,7 +121,7 @@ def main() -> None:
                     speeds[name].append(fps)
                     print(f"{name:<22} {fps:6.2f} frames/s", flush=True)
         finally:
-            for code in versions.values():
+            for code in worktrees.values():
                 subprocess.run(["git", "worktree", "remove", "--force", str(code)], cwd=ROOT, check=False)
     medians = {name: statistics.median(values) for name, values in speeds.items()}
     (ref_name, ref), (new_name, new) = medians.items()
