@@ -321,3 +321,17 @@ def test_a_claim_with_a_table_s_bar_keeps_sweep_md_s_table_whole(own_map, tmp_pa
     table, _ = hypothesis_table(plan, fabricated(plan, tmp_path / "results", datetime.now().astimezone()), None)
     row = next(line for line in hypothesis_lines(plan, table, Declaration(None, None, "x")) if line.startswith("| H1 |"))
     assert "| a \\| b |" in row and row.count(" | ") == 10
+
+
+def test_a_declaration_in_a_subfolder_of_its_repository_is_dated_by_its_commit():
+    """The study's own configs/confirmatory.yaml read "not committed" (git read the pathspec from configs/, where
+    the config's path from the repository's top names nothing), so the confirmatory run was reported exploratory."""
+    config = Path(__file__).resolve().parents[1] / "configs" / "confirmatory.yaml"
+    if subprocess.run(["git", "-C", str(config.parent), "rev-parse"], capture_output=True).returncode:
+        pytest.skip("not a git checkout")
+    found = declaration(config)
+    first = subprocess.run(
+        ["git", "-C", str(config.parents[1]), "log", "--format=%H", "--", "configs/confirmatory.yaml"],
+        capture_output=True, text=True, check=True,
+    ).stdout.split()
+    assert found.why is None and found.commit in first

@@ -277,13 +277,18 @@ def declaration(config_path: Path) -> Declaration:
     if git is None:
         return Declaration(None, None, "git is not installed, so when its hypotheses were declared cannot be read")
 
-    def run(*args: str) -> subprocess.CompletedProcess:
-        return subprocess.run([git, "-C", str(path.parent), *args], capture_output=True, text=True, check=False)
+    def git_in(where: Path, *args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([git, "-C", str(where), *args], capture_output=True, text=True, check=False)
 
-    top = run("rev-parse", "--show-toplevel")
+    top = git_in(path.parent, "rev-parse", "--show-toplevel")
     if top.returncode:
         return Declaration(None, None, f"{display_path(path)} is not in a git repository, so it was never committed")
-    relative = path.relative_to(Path(top.stdout.strip()).resolve()).as_posix()
+    root = Path(top.stdout.strip()).resolve()
+    relative = path.relative_to(root).as_posix()
+
+    def run(*args: str) -> subprocess.CompletedProcess:
+        # from the top: git reads a pathspec from the folder it runs in, and `relative` is the top's
+        return git_in(root, *args)
     if run("status", "--porcelain", "--", relative).stdout.strip():
         return Declaration(None, None, f"{display_path(path)} is not committed as it is now")
     now = _declared_part(read_yaml(path, "config file"))
