@@ -245,14 +245,12 @@ def run(
             frames += 1
             if max_frames is not None and frames >= max_frames:
                 outcome = Outcome("max frames", frames, "--max-frames reached", None)
-    except KeyboardInterrupt:
-        if stop.signal is None:
-            raise
-        # a second SIGINT (StopRequest) before the loop saw the first: the run was stopped by the first, at once
-        outcome = Outcome(stop.signal, frames, f"stopped by {stop.signal}, then interrupted again", None)
-        raise
     except BaseException as exc:
-        error = " ".join(str(exc).split()) or type(exc).__name__
+        if isinstance(exc, KeyboardInterrupt) and stop.signal is not None:
+            # a second SIGINT (StopRequest) before the loop saw the first: the run was stopped by the first, at once
+            outcome = Outcome(stop.signal, frames, f"stopped by {stop.signal}, then interrupted again", None)
+        else:
+            error = " ".join(str(exc).split()) or type(exc).__name__
         raise
     finally:
         _flush(pending, robot, log)
