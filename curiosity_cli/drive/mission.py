@@ -28,7 +28,8 @@ live camera. The channels, per frame:
 
 The run's config and provenance are the file's metadata (``config``, ``provenance``), and
 :func:`write_layout` writes a Foxglove layout for the file beside it. Every number comes
-from the frame's record in ``log.jsonl``, so the file and the log agree value for value.
+from the frame's record in ``log.jsonl``, so the file and the log agree value for value, but for
+a pose's quaternion of another length than 1, which the file holds scaled to unit length (:func:`_rotation`).
 """
 
 from __future__ import annotations
@@ -219,7 +220,8 @@ class MissionFile:
         pose = row.get("pose")
         if pose is not None:
             position = Vector3(x=pose["x"], y=pose["y"], z=pose["z"])
-            orientation = Quaternion(x=pose["qx"], y=pose["qy"], z=pose["qz"], w=pose["qw"])
+            qx, qy, qz, qw = _rotation(pose)
+            orientation = Quaternion(x=qx, y=qy, z=qz, w=qw)
             self._pose.log(
                 PoseInFrame(timestamp=_timestamp(at), frame_id=pose["frame_id"], pose=Pose(position=position, orientation=orientation)),
                 log_time=at,
@@ -250,7 +252,7 @@ class MissionFile:
         # a pose in no frame, or in the robot's own, places nothing (its link would have no parent, or be a loop)
         if pose is not None and ROBOT_FRAME not in self._placed and pose["frame_id"] not in ("", ROBOT_FRAME):
             position = (pose["x"], pose["y"], pose["z"])
-            links.insert(0, (pose["frame_id"], ROBOT_FRAME, position, (pose["qx"], pose["qy"], pose["qz"], pose["qw"])))
+            links.insert(0, (pose["frame_id"], ROBOT_FRAME, position, _rotation(pose)))
         return links
 
     def close(self) -> None:
@@ -348,3 +350,19 @@ def _timestamp(time_ns: int):
     from foxglove.messages import Timestamp
 
     return Timestamp(sec=time_ns // 1_000_000_000, nsec=time_ns % 1_000_000_000)
+
+
+#: How far from 1 a quaternion's length may be and still be taken as a unit one: rounding of a unit one's parts.
+_UNIT_LENGTH_TOLERANCE = 1e-9
+
+
+def _rotation(pose: dict) -> tuple[float, float, float, float]:
+    """A pose's quaternion (x, y, z, w) scaled to unit length, as a rotation must be: a recorder's need not be one
+    (the log keeps it as recorded), and one of another length, read as a rotation matrix, would scale as well as
+    turn. One of unit length to within rounding is kept as it is, value for value. A quaternion of no length never
+    gets here: such a pose is left out as senseless."""
+    quaternion = np.array([pose["qx"], pose["qy"], pose["qz"], pose["qw"]], float)
+    length = np.linalg.norm(quaternion)
+    if abs(length - 1) > _UNIT_LENGTH_TOLERANCE:
+        quaternion /= length
+    return tuple(float(v) for v in quaternion)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import base64
 import json
+import math
 import re
 import struct
 import subprocess
@@ -623,6 +624,24 @@ def test_a_drive_killed_outright_leaves_a_mission_file_read_up_to_its_last_frame
     again = replay(out / "mission.mcap", tmp_path / "again", "--topic", "/camera/image")
     assert again.exit_code == 0, again.output
     assert len(frame_records(tmp_path / "again")) >= logged - 1
+
+
+def test_a_poses_quaternion_of_another_length_is_shown_as_the_unit_rotation_it_stands_for(tmp_path):
+    """Hostile round (issue 64): odometry's quaternion of length 2 went into /pose and /tf as it was, which a viewer
+    reads as a rotation that also scales."""
+    from curiosity_cli.drive.mission import MissionFile, _rotation
+
+    unit = {"qx": 0.1, "qy": 0.2, "qz": 0.3, "qw": math.sqrt(1 - 0.14)}
+    assert _rotation(unit) == (0.1, 0.2, 0.3, unit["qw"])  # a unit one as recorded, value for value
+    half = math.radians(30) / 2
+    pose = {"frame_id": "odom", "x": 1.0, "y": 2.0, "z": 0.0, "qx": 0.0, "qy": 0.0, "qz": 2 * math.sin(half),
+            "qw": 2 * math.cos(half)}
+    mission = MissionFile(tmp_path / "mission.mcap")
+    try:
+        (_, _, _, rotation), _ = mission._links(0, pose)
+    finally:
+        mission.close()
+    np.testing.assert_allclose(rotation, (0.0, 0.0, math.sin(half), math.cos(half)), rtol=0, atol=1e-15)
 
 
 def test_a_pose_in_no_frame_or_in_the_robots_own_places_nothing(tmp_path):
